@@ -1,0 +1,89 @@
+//! Environments: the tasks the algorithms learn in, and the one door through which they
+//! touch a target task, the [`GenerativeModel`] trait.
+//!
+//! - [`PuddleWorld`]: the continuous 10×10 Puddle World of spec §2 (both dynamics variants).
+//! - [`GridWorld`]: the finite 10×10 Grid World of spec §10.4, exposed as a [`FiniteMdp`]
+//!   whose exact transition probabilities and Gaussian reward models feed the
+//!   identification scores and beliefs.
+
+mod grid;
+mod puddle;
+
+pub use grid::GridWorld;
+pub use grid::{GRID_ACTIONS, THESIS_GOALS};
+pub use puddle::*;
+
+use crate::{Real, Result};
+use rand_core::Rng;
+
+/// One sampled transition `(s, a, r, s′, ω)`: spec §1's record without its time index.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transition<S, T> {
+    /// The state the action was taken in.
+    pub state: S,
+    /// The action index.
+    pub action: usize,
+    /// The observed (noisy) reward.
+    pub reward: T,
+    /// The observed next state.
+    pub next_state: S,
+    /// `true` when the next state is absorbing (the episode ends there).
+    pub absorbing: bool,
+}
+
+/// A simulator that returns one sampled transition from *any* state-action pair.
+///
+/// This is the only access the active algorithms have to a target task (thesis §4.1.1):
+/// the budget is counted in calls to [`GenerativeModel::query`].
+pub trait GenerativeModel<T: Real> {
+    /// The state type (`[T; 2]` for Puddle World, a cell index for Grid World).
+    type State: Copy;
+
+    /// Number of actions; valid actions are `0..num_actions()`.
+    fn num_actions(&self) -> usize;
+
+    /// Samples one transition from `state` under `action`, drawing noise from `rng`.
+    ///
+    /// Errors: a non-finite or out-of-range state, or an action `>= num_actions()`.
+    fn query<R: Rng + ?Sized>(
+        &self,
+        state: Self::State,
+        action: usize,
+        rng: &mut R,
+    ) -> Result<Transition<Self::State, T>>;
+}
+
+/// A fully known finite MDP with Gaussian rewards (spec §10.1).
+///
+/// States are `0..num_states()`, actions `0..num_actions()`. Rewards are
+/// 𝒩(`reward_mean`, `reward_variance`), independent of the next state.
+pub trait FiniteMdp<T: Real> {
+    /// Number of states |𝒮|.
+    fn num_states(&self) -> usize;
+    /// Number of actions |𝒜|.
+    fn num_actions(&self) -> usize;
+    /// The deterministic initial state s₀.
+    fn initial_state(&self) -> usize;
+    /// The exact probability p(s′ | s, a).
+    ///
+    /// Errors: any index out of range ([`crate::Error::OutOfRange`]).
+    fn transition_probability(&self, state: usize, action: usize, next_state: usize) -> Result<T>;
+    /// Calls `visit(s′, p(s′ | s, a))` for every successor with non-zero probability, so
+    /// sparse models (the Grid World has one successor) cost O(successors), not O(|𝒮|).
+    ///
+    /// Errors: `state` or `action` out of range.
+    fn for_each_successor<F: FnMut(usize, T)>(
+        &self,
+        state: usize,
+        action: usize,
+        visit: F,
+    ) -> Result<()>;
+    /// The mean reward r(s, a).
+    ///
+    /// Errors: `state` or `action` out of range.
+    fn reward_mean(&self, state: usize, action: usize) -> Result<T>;
+    /// The reward variance v(s, a) (> 0).
+    ///
+    /// Errors: `state` or `action` out of range.
+    fn reward_variance(&self, state: usize, action: usize) -> Result<T>;
+}

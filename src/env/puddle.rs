@@ -1,0 +1,1 @@
+//! Puddle World (filled in by the env work).
