@@ -1,1 +1,5 @@
-//! placeholder
+//! The std side of awfqi: subcommands of the `awfqi-harness` binary and an independent
+//! reference implementation (f64, heap, written for clarity) that the core is tested against.
+
+pub mod commands;
+pub mod reference;

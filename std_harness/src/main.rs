@@ -1,1 +1,29 @@
-fn main() {}
+//! `awfqi-harness`: experiments, baselines and the reference implementation around the
+//! awfqi core. Each subcommand lives in its own module under `commands/`.
+
+use clap::{Parser, Subcommand};
+
+use awfqi_harness::commands;
+
+/// Experiments and tools for the awfqi kernel.
+#[derive(Parser)]
+#[command(name = "awfqi-harness", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// A quick demonstration: one Puddle World episode and a GP fit, written to results/demo.
+    Demo(commands::demo::Args),
+    /// Gaussian-process regression cases from a JSON file, by the core or the reference.
+    Gp(commands::gp::Args),
+}
+
+fn main() -> anyhow::Result<()> {
+    match Cli::parse().command {
+        Command::Demo(args) => commands::demo::run(&args),
+        Command::Gp(args) => commands::gp::run(&args),
+    }
+}

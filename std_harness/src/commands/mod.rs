@@ -1,0 +1,4 @@
+//! One module per subcommand of `awfqi-harness`.
+
+pub mod demo;
+pub mod gp;
