@@ -22,6 +22,8 @@ use std::fmt;
 use std::path::PathBuf;
 
 use anyhow::Context;
+use awfqi::Real;
+use awfqi::gp::{Gp, Hyperparameters};
 use serde::{Deserialize, Serialize};
 
 use crate::reference::gp::{Hyperparameters as ReferenceHyperparameters, ReferenceGp};
@@ -262,9 +264,227 @@ pub fn fit_reference(case: &Case, extra_diagonal: f64) -> Result<Fit, CaseError>
 }
 
 /// Computes a case with the core in `precision`, choosing the capacity that fits.
+///
+/// The case is checked first (dimension in `1..=MAX_DIM`, row lengths, `y` length, at most
+/// the largest of [`CAPACITIES`] points); everything else (values, hyperparameters, a
+/// matrix that is not positive definite) is left to the core, whose error is returned as
+/// [`CaseError::Core`]. With `f32` the inputs are rounded to `f32` first and the outputs
+/// widened back to `f64` exactly.
 pub fn fit_core(case: &Case, precision: Precision) -> Result<Fit, CaseError> {
-    let _ = (case, precision);
-    Err(CaseError::Unsupported(
-        "the core GP is not wired in yet".into(),
-    ))
+    check_shape(case)?;
+    let capacity = capacity_for(case.x.len())?;
+    match precision {
+        Precision::F64 => dispatch_dimension::<f64>(case, capacity),
+        Precision::F32 => dispatch_dimension::<f32>(case, capacity),
+    }
+}
+
+/// The smallest capacity of [`CAPACITIES`] that holds `n` points (an empty case takes the
+/// smallest and gets the core's `EmptyData` error).
+pub fn capacity_for(n: usize) -> Result<usize, CaseError> {
+    CAPACITIES
+        .iter()
+        .copied()
+        .find(|&capacity| capacity >= n)
+        .ok_or_else(|| {
+            CaseError::Unsupported(format!(
+                "{n} training points exceed the largest built-in capacity, {}",
+                CAPACITIES[CAPACITIES.len() - 1]
+            ))
+        })
+}
+
+/// Checks the lengths the const-generic core cannot be called with otherwise.
+fn check_shape(case: &Case) -> Result<(), CaseError> {
+    let d = case.length_scales.len();
+    if !(1..=MAX_DIM).contains(&d) {
+        return Err(CaseError::Unsupported(format!(
+            "{d} length scales: the input dimension must be 1 to {MAX_DIM}"
+        )));
+    }
+    if case.y.len() != case.x.len() {
+        return Err(CaseError::Unsupported(format!(
+            "{} training inputs but {} targets",
+            case.x.len(),
+            case.y.len()
+        )));
+    }
+    for (field, rows) in [("x", &case.x), ("x_test", &case.x_test)] {
+        if let Some((i, row)) = rows.iter().enumerate().find(|(_, row)| row.len() != d) {
+            return Err(CaseError::Unsupported(format!(
+                "{field}[{i}] has {} coordinates, expected {d} (the number of length scales)",
+                row.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn dispatch_dimension<T: Real>(case: &Case, capacity: usize) -> Result<Fit, CaseError> {
+    match case.length_scales.len() {
+        1 => dispatch_capacity::<T, 1>(case, capacity),
+        2 => dispatch_capacity::<T, 2>(case, capacity),
+        3 => dispatch_capacity::<T, 3>(case, capacity),
+        4 => dispatch_capacity::<T, 4>(case, capacity),
+        5 => dispatch_capacity::<T, 5>(case, capacity),
+        6 => dispatch_capacity::<T, 6>(case, capacity),
+        7 => dispatch_capacity::<T, 7>(case, capacity),
+        8 => dispatch_capacity::<T, 8>(case, capacity),
+        d => Err(CaseError::Unsupported(format!(
+            "input dimension {d} is not supported (1 to {MAX_DIM})"
+        ))),
+    }
+}
+
+fn dispatch_capacity<T: Real, const D: usize>(
+    case: &Case,
+    capacity: usize,
+) -> Result<Fit, CaseError> {
+    match capacity {
+        16 => on_large_stack::<T, 16, D>(case),
+        32 => on_large_stack::<T, 32, D>(case),
+        64 => on_large_stack::<T, 64, D>(case),
+        128 => on_large_stack::<T, 128, D>(case),
+        256 => on_large_stack::<T, 256, D>(case),
+        n => Err(CaseError::Unsupported(format!("no built-in capacity {n}"))),
+    }
+}
+
+/// Stack of the thread a case runs on, beyond the room for the GP itself.
+const BASE_STACK_BYTES: usize = 4 << 20;
+
+/// Runs the case on a thread whose stack holds several copies of `Gp<T, N, D>`.
+///
+/// The core's `Gp` is a plain value (up to 512 KiB of matrix for `N = 256` in f64) and
+/// `Gp::new` returns it by value, so it cannot be built straight into a `Box`; an
+/// unoptimised build moves it through several stack temporaries. Instead of relying on the
+/// optimiser, each case runs on its own thread with `BASE_STACK_BYTES` plus eight times
+/// the GP's size of stack, in debug and release alike.
+fn on_large_stack<T: Real, const N: usize, const D: usize>(case: &Case) -> Result<Fit, CaseError> {
+    let stack = BASE_STACK_BYTES + 8 * std::mem::size_of::<Gp<T, N, D>>();
+    std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .name(format!("gp-case-{N}x{D}"))
+            .stack_size(stack)
+            .spawn_scoped(scope, || fit_core_with::<T, N, D>(case))
+            .map_err(|e| CaseError::Unsupported(format!("could not start a worker thread: {e}")))?;
+        worker
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
+}
+
+/// Fits `Gp<T, N, D>` to the case and predicts at every test input.
+fn fit_core_with<T: Real, const N: usize, const D: usize>(case: &Case) -> Result<Fit, CaseError> {
+    let to_point = |row: &[f64]| -> [T; D] { std::array::from_fn(|d| T::from_f64(row[d])) };
+    let hyper = Hyperparameters {
+        signal_variance: T::from_f64(case.signal_variance),
+        length_scales: to_point(&case.length_scales),
+        noise_variance: T::from_f64(case.noise_variance),
+    };
+    let x: Vec<[T; D]> = case.x.iter().map(|row| to_point(row)).collect();
+    let y: Vec<T> = case.y.iter().map(|&v| T::from_f64(v)).collect();
+    let mut gp = Gp::<T, N, D>::new(hyper).map_err(CaseError::Core)?;
+    gp.fit(&x, &y).map_err(CaseError::Core)?;
+    let log_marginal_likelihood = gp.log_marginal_likelihood().map_err(CaseError::Core)?;
+    let mut mean = Vec::with_capacity(case.x_test.len());
+    let mut std = Vec::with_capacity(case.x_test.len());
+    for row in &case.x_test {
+        let prediction = gp.predict(&to_point(row)).map_err(CaseError::Core)?;
+        mean.push(prediction.mean.to_f64());
+        std.push(prediction.latent_variance.to_f64().max(0.0).sqrt());
+    }
+    Ok(Fit {
+        mean,
+        std,
+        log_marginal_likelihood: log_marginal_likelihood.to_f64(),
+        jitter: gp.jitter().to_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(n: usize, d: usize) -> Case {
+        let x: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..d).map(|k| (i * (k + 1)) as f64 * 0.1).collect())
+            .collect();
+        Case {
+            name: format!("{n}x{d}"),
+            y: x.iter().map(|p| p[0].cos()).collect(),
+            x,
+            signal_variance: 1.0,
+            length_scales: vec![2.0; d],
+            noise_variance: 0.1,
+            x_test: vec![vec![0.25; d]],
+        }
+    }
+
+    #[test]
+    fn capacity_is_the_smallest_that_fits() {
+        assert_eq!(capacity_for(0), Ok(16));
+        assert_eq!(capacity_for(16), Ok(16));
+        assert_eq!(capacity_for(17), Ok(32));
+        assert_eq!(capacity_for(129), Ok(256));
+        assert_eq!(capacity_for(256), Ok(256));
+        assert!(matches!(capacity_for(257), Err(CaseError::Unsupported(_))));
+    }
+
+    /// The largest GP (256 points, 8 dimensions, f64) is fitted from a thread with a small
+    /// stack: the case runs on its own big-stack thread, in debug builds too.
+    #[test]
+    fn largest_gp_runs_from_a_small_stack() {
+        let big = case(256, 8);
+        let fit = std::thread::Builder::new()
+            .stack_size(256 << 10)
+            .spawn(move || fit_core(&big, Precision::F64))
+            .unwrap()
+            .join()
+            .unwrap()
+            .unwrap();
+        let reference = fit_reference(&case(256, 8), fit.jitter).unwrap();
+        let scale = 1.0;
+        assert!((fit.mean[0] - reference.mean[0]).abs() <= 1e-9 * scale);
+        assert!((fit.std[0] - reference.std[0]).abs() <= 1e-9 * scale);
+    }
+
+    #[test]
+    fn shapes_outside_the_dispatch_are_errors() {
+        let mut c = case(3, 2);
+        c.length_scales = vec![1.0; MAX_DIM + 1];
+        c.x = vec![vec![0.0; MAX_DIM + 1]; 3];
+        c.x_test = vec![vec![0.0; MAX_DIM + 1]];
+        assert!(matches!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Unsupported(_))
+        ));
+        let mut c = case(3, 2);
+        c.x_test = vec![vec![0.0; 3]];
+        assert!(matches!(
+            fit_core(&c, Precision::F32),
+            Err(CaseError::Unsupported(_))
+        ));
+        let mut c = case(3, 2);
+        c.y.pop();
+        assert!(matches!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Unsupported(_))
+        ));
+    }
+
+    #[test]
+    fn core_errors_are_typed() {
+        let mut c = case(3, 1);
+        c.y[1] = f64::NAN;
+        assert!(matches!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Core(awfqi::Error::NonFinite { .. }))
+        ));
+        let c = case(0, 1);
+        assert_eq!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Core(awfqi::Error::EmptyData))
+        );
+    }
 }
