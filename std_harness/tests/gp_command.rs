@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde_json::{Value, json};
 
@@ -17,7 +18,11 @@ fn scratch(name: &str) -> PathBuf {
 
 /// Runs `gp --cases FILE extra…` and parses standard output.
 fn run(cases: &Value, extra: &[&str]) -> Value {
-    let file = scratch(&format!("cases-{}.json", extra.join("_")));
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
+    let file = scratch(&format!(
+        "cases-{}.json",
+        RUNS.fetch_add(1, Ordering::Relaxed)
+    ));
     std::fs::write(&file, cases.to_string()).unwrap();
     let output = binary()
         .args(["gp", "--cases"])
@@ -99,30 +104,38 @@ fn assert_close(a: f64, b: f64, tol: f64, what: &str) {
     );
 }
 
-/// The one-point case solved by hand: K = c + s2.
+/// The one-point case solved by hand: K = c + s2 + j, with j the jitter the output reports.
 #[test]
 fn one_point_case_matches_the_closed_form() {
     let (c, s2, y0, l) = (2.0f64, 0.5f64, 1.5f64, 0.8f64);
-    let k = c * (-0.5 / (l * l)).exp();
-    let mean = [k * y0 / (c + s2), c * y0 / (c + s2)];
-    let std = [(c - k * k / (c + s2)).sqrt(), (c * s2 / (c + s2)).sqrt()];
-    let lml =
-        -0.5 * y0 * y0 / (c + s2) - 0.5 * (c + s2).ln() - 0.5 * (2.0 * std::f64::consts::PI).ln();
     let input = json!({"cases": [one_point_case()]});
     for (extra, tol) in [
-        (&[][..], 1e-12),
+        (&[][..], 1e-13),
         (&["--reference"][..], 1e-14),
+        (&["--reference", "--jitter", "0.25"][..], 1e-14),
         (&["--precision", "f32"][..], 1e-6),
     ] {
         let output = run(&input, extra);
         let case = entry(&output, "one point");
-        for (i, (m, s)) in numbers(&case["mean"])
-            .iter()
-            .zip(numbers(&case["std"]))
-            .enumerate()
-        {
-            assert_close(*m, mean[i], tol, &format!("{extra:?} mean[{i}]"));
-            assert_close(s, std[i], tol, &format!("{extra:?} std[{i}]"));
+        let j = case["jitter"].as_f64().unwrap();
+        let expected_jitter = match extra {
+            [] | ["--precision", _] => awfqi::gp::BASE_JITTER,
+            ["--reference"] => 0.0,
+            _ => 0.25,
+        };
+        assert_close(j, expected_jitter, 1e-7, &format!("{extra:?} jitter"));
+        let diagonal = c + s2 + j;
+        let k = c * (-0.5 / (l * l)).exp();
+        let mean = [k * y0 / diagonal, c * y0 / diagonal];
+        let std = [(c - k * k / diagonal).sqrt(), (c - c * c / diagonal).sqrt()];
+        let lml = -0.5 * y0 * y0 / diagonal
+            - 0.5 * diagonal.ln()
+            - 0.5 * (2.0 * std::f64::consts::PI).ln();
+        let means = numbers(&case["mean"]);
+        let stds = numbers(&case["std"]);
+        for i in 0..2 {
+            assert_close(means[i], mean[i], tol, &format!("{extra:?} mean[{i}]"));
+            assert_close(stds[i], std[i], tol, &format!("{extra:?} std[{i}]"));
         }
         assert_close(
             case["log_marginal_likelihood"].as_f64().unwrap(),
@@ -139,7 +152,9 @@ fn one_point_case_matches_the_closed_form() {
 fn every_case_runs_and_bad_ones_report_an_error() {
     let input = cases();
     let core = run(&input, &[]);
-    let reference = run(&input, &["--reference"]);
+    // The reference with the core's base jitter on the diagonal: the same model.
+    let base_jitter = awfqi::gp::BASE_JITTER.to_string();
+    let reference = run(&input, &["--reference", "--jitter", &base_jitter]);
     let f32_core = run(&input, &["--precision", "f32"]);
     assert_eq!(core["cases"].as_array().unwrap().len(), 8);
 
