@@ -800,4 +800,3 @@ fn same_seed_same_episode_and_different_seed_different_episode() {
     assert_eq!(run(77), run(77));
     assert_ne!(run(77), run(78));
 }
-
