@@ -150,8 +150,9 @@ impl<T: Real> PuddleDensity<T> {
 
 /// One Puddle World instance: a goal, up to [`MAX_PUDDLES`] puddles and a dynamics variant.
 ///
-/// `Copy`, no heap: the puddles live in a fixed array. Memory: 6·[`MAX_PUDDLES`] + 4 scalars
-/// plus two words, about 240 bytes in `f32` and 450 bytes in `f64`.
+/// `Copy`, no heap: the puddles live in a fixed array. Memory: 6·[`MAX_PUDDLES`] + 3
+/// scalars plus a `usize` and a byte: 216 bytes in `f32`, 424 bytes in `f64` (x86-64 and
+/// Cortex-M alike up to padding).
 ///
 /// States are `[x, y]`. Every function that takes a state accepts exactly the closed box
 /// [0, 10]² (the set the dynamics can reach, and the generative model's domain): a NaN or
