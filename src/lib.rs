@@ -30,6 +30,7 @@ pub mod env;
 pub mod error;
 pub mod float;
 pub mod gp;
+pub mod policy;
 pub mod rng;
 
 pub use error::{Error, Result};

@@ -16,10 +16,9 @@
 //! `episode` and `policy`.
 
 mod episode;
-mod policy;
 
+pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use episode::{EpisodeRecord, Rollout};
-pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 
 use super::{GenerativeModel, Transition};
 use crate::{Error, Real, Result, rng};
