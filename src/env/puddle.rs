@@ -13,7 +13,7 @@
 //! ε_x, ε_y, η.
 //!
 //! Episodes, rollouts and the [`Policy`] trait that drives them live in the submodules
-//! `episode` and `policy`.
+//! `episode` and [`crate::policy`].
 
 mod episode;
 
