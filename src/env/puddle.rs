@@ -12,8 +12,8 @@
 //! clipping, and the three standard-normal draws of a step are taken in the order
 //! ε_x, ε_y, η.
 //!
-//! Episodes, rollouts and the [`Policy`] trait that drives them live in the submodules
-//! `episode` and [`crate::policy`].
+//! Episodes and rollouts live in the submodule `episode`; the [`Policy`] trait that drives
+//! them lives in [`crate::policy`].
 
 mod episode;
 
