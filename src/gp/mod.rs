@@ -26,7 +26,7 @@
 //! | 128 | 68 124 | 68 136 | 136 240 | 136 248 |
 //!
 //! [`Gp::predict`] uses `N · size_of::<T>()` more bytes of stack, and
-//! [`Gp::optimize_hyperparameters`] about 1.2 KiB (`f64`).
+//! [`Gp::optimize_hyperparameters`] under 1 KiB (`f64`) for its simplex and box.
 //!
 //! # Numerics
 //!

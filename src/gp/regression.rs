@@ -37,7 +37,7 @@ fn jitter_at<T: Real>(level: usize, c: T) -> T {
     jitter
 }
 
-/// Whether a prediction may escalate the jitter and from which rows it starts.
+/// Where the first factorisation attempt starts (later attempts always start from row 0).
 #[derive(Clone, Copy)]
 struct Start {
     /// Jitter level of the first attempt.
@@ -515,9 +515,11 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// likelihood (spec §4.2; see [`search`](super::search) for the method), leaves the GP
     /// fitted with the best ones and returns their log marginal likelihood.
     ///
-    /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6), no allocation, about
-    /// `1.2 KiB` of stack in `f64`. Failed factorisations count as `−∞`. The generator is
-    /// used only for the restarts: one `u64` per searched parameter per restart.
+    /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the
+    /// search's own arrays (a simplex of at most 9 points and the box) take under 1 KiB of
+    /// stack in `f64`. Each evaluation factorises in place, so the factor is rebuilt at the
+    /// end. Failed factorisations count as `−∞`. The generator is used only for the
+    /// restarts: one `u64` per searched parameter per restart.
     ///
     /// Errors: those of [`HyperparameterBounds::validate`] and [`SearchOptions::validate`];
     /// [`Error::CapacityExceeded`] for an ARD search (`isotropic == false`) with

@@ -1,5 +1,8 @@
 //! Tests of the GP against closed forms, refits and invariants.
 
+// Matrix algebra written out by index reads most like the formulas it checks.
+#![allow(clippy::needless_range_loop)]
+
 extern crate std;
 
 use super::*;
@@ -245,6 +248,14 @@ fn growth_equals_refit<T: Real>(tol: f64) {
         assert_eq!(grown.len(), k + 1);
         assert_same(&grown, &refit, &probes, tol);
         assert_eq!(grown.jitter(), refit.jitter());
+        // The extension performs the refit's arithmetic for the new row: the same bits.
+        assert_eq!(
+            grown.log_marginal_likelihood(),
+            refit.log_marginal_likelihood()
+        );
+        for x in &probes {
+            assert_eq!(grown.predict(x), refit.predict(x));
+        }
     }
 }
 
@@ -624,7 +635,7 @@ fn search_improves_the_likelihood_and_recovers_a_known_length_scale() {
         "ℓ = {}",
         h.length_scales[0]
     );
-    // The noise variance is the lower bound's neighbour (true 0.01 = the lower bound).
+    // The true noise variance, 0.01, is the lower bound.
     assert!(h.noise_variance < 0.05, "σ² = {}", h.noise_variance);
     // f32 finds a comparable optimum.
     let mut g32 = Gp::<f32, 64, 1>::empty();
