@@ -39,7 +39,8 @@ pub const MAX_DIM: usize = 8;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// JSON file with the cases: {"cases":[{"name", "x", "y", "signal_variance",
-    /// "length_scales", "noise_variance", "x_test"}, …]}.
+    /// "length_scales", "noise_variance", "x_test"}, …]}. The core takes 1 to 8 input
+    /// dimensions and at most 256 training points per case.
     #[arg(long, value_name = "FILE.json")]
     pub cases: PathBuf,
     /// Floating-point type the core computes in.
