@@ -511,31 +511,27 @@ fn f64_tiny_noise_agrees_or_is_not_positive_definite() {
     run_batch(TinyNoise, F64, 9, 60, 128);
 }
 
-// The f32 hard classes. They fail on the core as merged: its f32 Cholesky succeeds on
-// matrices whose condition ε·κ₁ is far above 1 (pivots positive by rounding) and returns
-// means and log-likelihoods off by up to 10× the data scale. Run them with
-// `cargo test --test gp_differential -- --ignored --nocapture`.
+// The f32 hard classes. Before the core's pivot guard (`cholesky::PIVOT_GUARD`), its f32
+// Cholesky succeeded on matrices whose condition ε·κ₁ is far above 1 (pivots positive by
+// rounding) and returned means and log-likelihoods off by up to 10× the data scale; these
+// tests caught it.
 
 #[test]
-#[ignore = "core GP: f32 fits of ill-conditioned matrices (ε·κ₁ > 1) return wrong numbers without escalating the jitter; enable once cholesky::factor_rows treats a pivot ≤ 10·n·ε·K_ii as a breakdown"]
 fn f32_duplicate_inputs_agree_or_are_not_positive_definite() {
     run_batch(Duplicates, F32, 6, 60, 128);
 }
 
 #[test]
-#[ignore = "core GP: f32 fits of ill-conditioned matrices (ε·κ₁ > 1) return wrong numbers without escalating the jitter; enable once cholesky::factor_rows treats a pivot ≤ 10·n·ε·K_ii as a breakdown"]
 fn f32_noiseless_duplicates_agree_or_are_not_positive_definite() {
     run_batch(NoiselessDuplicates, F32, 14, 60, 128);
 }
 
 #[test]
-#[ignore = "core GP: f32 fits of ill-conditioned matrices (ε·κ₁ > 1) return wrong numbers without escalating the jitter; enable once cholesky::factor_rows treats a pivot ≤ 10·n·ε·K_ii as a breakdown"]
 fn f32_nearly_collinear_inputs_agree_or_are_not_positive_definite() {
     run_batch(NearlyCollinear, F32, 8, 60, 128);
 }
 
 #[test]
-#[ignore = "core GP: f32 fits of ill-conditioned matrices (ε·κ₁ > 1) return wrong numbers without escalating the jitter; enable once cholesky::factor_rows treats a pivot ≤ 10·n·ε·K_ii as a breakdown"]
 fn f32_tiny_noise_agrees_or_is_not_positive_definite() {
     run_batch(TinyNoise, F32, 10, 60, 128);
 }
