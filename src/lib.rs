@@ -26,11 +26,13 @@
 )]
 #![deny(missing_docs)]
 
+pub mod alias;
 pub mod env;
 pub mod error;
 pub mod float;
 pub mod gp;
 pub mod rng;
+pub mod weights;
 
 pub use error::{Error, Result};
 pub use float::Real;
