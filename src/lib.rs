@@ -30,6 +30,7 @@ pub mod alias;
 pub mod env;
 pub mod error;
 pub mod float;
+pub mod fqi;
 pub mod gp;
 pub mod rng;
 pub mod weights;
