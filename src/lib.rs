@@ -29,10 +29,12 @@
 pub mod alias;
 pub mod env;
 pub mod error;
+pub mod evaluation;
 pub mod float;
 pub mod fqi;
 pub mod gp;
 pub mod rng;
+pub mod score;
 pub mod weights;
 
 pub use error::{Error, Result};
