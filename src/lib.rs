@@ -33,6 +33,7 @@ pub mod evaluation;
 pub mod float;
 pub mod fqi;
 pub mod gp;
+pub mod policy;
 pub mod rng;
 pub mod score;
 pub mod weights;

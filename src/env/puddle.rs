@@ -12,14 +12,13 @@
 //! clipping, and the three standard-normal draws of a step are taken in the order
 //! ε_x, ε_y, η.
 //!
-//! Episodes, rollouts and the [`Policy`] trait that drives them live in the submodules
-//! `episode` and `policy`.
+//! Episodes and rollouts live in the submodule `episode`; the [`Policy`] trait that drives
+//! them lives in [`crate::policy`].
 
 mod episode;
-mod policy;
 
+pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use episode::{EpisodeRecord, Rollout};
-pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 
 use super::{GenerativeModel, Transition};
 use crate::{Error, Real, Result, rng};
