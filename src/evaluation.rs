@@ -4,7 +4,8 @@
 //! The rollouts themselves are Puddle World's [`PuddleWorld::rollout`]; this module only
 //! fixes the protocol (5 rollouts, horizon 50, γ = 0.99) and the statistics.
 
-use crate::env::{PUDDLE_DISCOUNT, PUDDLE_HORIZON, Policy, PuddleWorld};
+use crate::env::{PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
+use crate::policy::Policy;
 use crate::fqi::TabularFqi;
 use crate::{Error, Real, Result};
 use rand_core::Rng;
@@ -87,7 +88,8 @@ pub fn evaluate_greedy<T: Real, R: Rng + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::{ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics, UniformPolicy};
+    use crate::env::{ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics};
+    use crate::policy::UniformPolicy;
     use rand_chacha::ChaCha8Rng;
     use rand_core::SeedableRng;
 
