@@ -5,8 +5,8 @@
 //! fixes the protocol (5 rollouts, horizon 50, γ = 0.99) and the statistics.
 
 use crate::env::{PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
-use crate::policy::Policy;
 use crate::fqi::TabularFqi;
+use crate::policy::Policy;
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 

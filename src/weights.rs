@@ -234,53 +234,84 @@ pub enum NoiseSubtraction {
     Off,
 }
 
+/// The map from one noisy GP predictive variance to a posterior standard deviation under a
+/// [`NoiseSubtraction`] rule, fixed for a batch (§4.2, §7.2).
+///
+/// The reference rule depends on the batch only through its smallest variance, so a batch
+/// can be processed in two streaming passes (find the smallest, then transform each) without
+/// storing it. Size: two `T` and the mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StdTransform<T> {
+    mode: NoiseSubtraction,
+    noise_variance: T,
+    shift: T,
+}
+
+impl<T: Real> StdTransform<T> {
+    /// The transform for a batch whose smallest noisy predictive variance is
+    /// `smallest_variance` (used by [`NoiseSubtraction::Reference`] only), for a GP of noise
+    /// variance `noise_variance`.
+    ///
+    /// Errors: non-finite arguments, a negative `noise_variance`.
+    pub fn new(mode: NoiseSubtraction, noise_variance: T, smallest_variance: T) -> Result<Self> {
+        ensure_finite(noise_variance, "noise_variance")?;
+        ensure_finite(smallest_variance, "variances")?;
+        if noise_variance < T::ZERO {
+            return Err(Error::InvalidParameter {
+                parameter: "noise_variance",
+            });
+        }
+        let smallest_std = smallest_variance.max(T::ZERO).sqrt();
+        let noise_std = noise_variance.sqrt();
+        let shift = if noise_std <= smallest_std {
+            noise_std
+        } else {
+            smallest_std
+        };
+        Ok(Self {
+            mode,
+            noise_variance,
+            shift,
+        })
+    }
+
+    /// The posterior std for one noisy predictive variance of the batch (negative variances
+    /// from rounding count as 0; the result is never negative).
+    pub fn apply(&self, variance: T) -> T {
+        let v = variance.max(T::ZERO);
+        match self.mode {
+            NoiseSubtraction::Off => v.sqrt(),
+            NoiseSubtraction::Principled => (v - self.noise_variance).max(T::ZERO).sqrt(),
+            // max(·, 0) only absorbs rounding: every std of the batch is ≥ the shift.
+            NoiseSubtraction::Reference => (v.sqrt() - self.shift).max(T::ZERO),
+        }
+    }
+}
+
 /// Turns a batch of noisy GP predictive variances (`v = c + σ_n² − k*ᵀK⁻¹k*`, noise
-/// included) into posterior standard deviations, in place, by `mode`.
+/// included) into posterior standard deviations, in place, by `mode` (see
+/// [`StdTransform`]).
 ///
 /// The batch matters only for [`NoiseSubtraction::Reference`], whose shift depends on the
-/// smallest std of the batch (§7.2 uses one batch per source dataset). Negative variances
-/// (rounding) count as 0. The values are checked before any is changed. Errors: a
-/// non-finite variance or `noise_variance`, a negative `noise_variance`.
+/// smallest std of the batch (§7.2 uses one batch per source dataset). The values are
+/// checked before any is changed. Errors: a non-finite variance or `noise_variance`, a
+/// negative `noise_variance`.
 pub fn predictive_stds<T: Real>(
     mode: NoiseSubtraction,
     noise_variance: T,
     variances: &mut [T],
 ) -> Result<()> {
-    ensure_finite(noise_variance, "noise_variance")?;
-    if noise_variance < T::ZERO {
-        return Err(Error::InvalidParameter {
-            parameter: "noise_variance",
-        });
-    }
     ensure_all_finite(variances, "variances")?;
-    match mode {
-        NoiseSubtraction::Off => {
-            for v in variances.iter_mut() {
-                *v = v.max(T::ZERO).sqrt();
-            }
-        }
-        NoiseSubtraction::Principled => {
-            for v in variances.iter_mut() {
-                *v = (*v - noise_variance).max(T::ZERO).sqrt();
-            }
-        }
-        NoiseSubtraction::Reference => {
-            let mut smallest = T::INFINITY;
-            for v in variances.iter_mut() {
-                *v = v.max(T::ZERO).sqrt();
-                smallest = smallest.min(*v);
-            }
-            let noise_std = noise_variance.sqrt();
-            let shift = if noise_std <= smallest {
-                noise_std
-            } else {
-                smallest
-            };
-            for s in variances.iter_mut() {
-                // max(·, 0) only absorbs rounding; by construction s ≥ shift.
-                *s = (*s - shift).max(T::ZERO);
-            }
-        }
+    let smallest = variances.iter().fold(T::INFINITY, |m, &v| m.min(v));
+    let smallest = if smallest.is_finite() {
+        smallest
+    } else {
+        T::ZERO
+    };
+    let transform = StdTransform::new(mode, noise_variance, smallest)?;
+    for v in variances.iter_mut() {
+        *v = transform.apply(*v);
     }
     Ok(())
 }

@@ -315,15 +315,28 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// weight or a weight slice whose length differs from its samples'
     /// ([`Error::InvalidParameter`]).
     pub fn fit(&mut self, sets: &[SampleSet<'_, T>], config: &FqiConfig<T>) -> Result<()> {
+        self.fit_sets(sets.iter().copied(), config)
+    }
+
+    /// [`TabularFqi::fit`] on sets produced by an iterator, so a caller can assemble them
+    /// (target samples, then one set per source) without a buffer. The iterator is cloned
+    /// once per pass over the data.
+    ///
+    /// Errors: those of [`TabularFqi::fit`].
+    pub fn fit_sets<'s, I>(&mut self, sets: I, config: &FqiConfig<T>) -> Result<()>
+    where
+        I: Iterator<Item = SampleSet<'s, T>> + Clone,
+        T: 's,
+    {
         let mut total = 0usize;
-        for set in sets {
+        for set in sets.clone() {
             set.validate(self.actions)?;
             total += set.len();
         }
         if total == 0 {
             return Err(Error::EmptyData);
         }
-        self.fit_reward_model(sets, config.empty_cells);
+        self.fit_reward_model(sets.clone(), config.empty_cells);
         for e in self.entries.iter_mut() {
             e.q = e.reward;
         }
@@ -333,14 +346,20 @@ impl<'a, T: Real> TabularFqi<'a, T> {
                 e.weight > T::ZERO
             });
             for _ in 1..config.iterations {
-                self.bellman_iteration(sets, config);
+                self.bellman_iteration(sets.clone(), config);
             }
         }
         Ok(())
     }
 
     /// Iteration 1: `R̂` into `reward`, `Σ w_s` into `weight`.
-    fn fit_reward_model(&mut self, sets: &[SampleSet<'_, T>], empty: EmptyCells<T>) {
+    fn fit_reward_model<'s>(
+        &mut self,
+        sets: impl Iterator<Item = SampleSet<'s, T>>,
+        empty: EmptyCells<T>,
+    ) where
+        T: 's,
+    {
         for e in self.entries.iter_mut() {
             *e = FqiEntry::default();
         }
@@ -365,7 +384,13 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     }
 
     /// One iteration k ≥ 2: Q ← R̂ + γ·(weighted mean of (1−ω)·V_{k−1}(s′)).
-    fn bellman_iteration(&mut self, sets: &[SampleSet<'_, T>], config: &FqiConfig<T>) {
+    fn bellman_iteration<'s>(
+        &mut self,
+        sets: impl Iterator<Item = SampleSet<'s, T>>,
+        config: &FqiConfig<T>,
+    ) where
+        T: 's,
+    {
         for e in self.entries.iter_mut() {
             e.next = T::ZERO;
         }
