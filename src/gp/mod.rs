@@ -1,1 +1,63 @@
-//! Gaussian-process regression (filled in by the gp work).
+//! Gaussian-process regression of fixed capacity (spec §4.2).
+//!
+//! [`Gp<T, N, D>`](Gp) holds up to `N` points of dimension `D` with an ARD
+//! squared-exponential kernel plus noise, zero prior mean and targets used as given. It keeps
+//! the lower Cholesky factor of the Gram matrix in place, predicts the mean, the latent
+//! variance and the noisy variance, gives the log marginal likelihood, grows by one point in
+//! O(N²), escalates the diagonal jitter when a factorisation fails, and searches its
+//! hyperparameters inside box bounds with a fixed budget of evaluations
+//! ([`Gp::optimize_hyperparameters`]).
+//!
+//! The numerical work lives in slice-based functions (`cholesky`, `kernel`), so the code is
+//! generated once per scalar type and dimension, not once per capacity `N`.
+//!
+//! # Memory
+//!
+//! `size_of::<Gp<T, N, D>>()` is
+//! `size_of::<T>() · (N² + N·(D + 2) + D + 2) + 2 · size_of::<usize>()`, rounded up to the
+//! alignment: the factor (`N²`), inputs (`N·D`), targets and `L⁻¹y` (`2N`), hyperparameters
+//! (`D + 2`), the number of points and the jitter level. For `D = 3` (spec §4.2's
+//! `z = (s_x, s_y, a)`), in bytes:
+//!
+//! | `N` | `f32`, Cortex-M (`thumbv7em`) | `f32`, 64-bit host | `f64`, Cortex-M | `f64`, 64-bit host |
+//! |----:|------:|------:|-------:|-------:|
+//! |  16 |  1 372 |  1 384 |   2 736 |   2 744 |
+//! |  64 | 17 692 | 17 704 |  35 376 |  35 384 |
+//! | 128 | 68 124 | 68 136 | 136 240 | 136 248 |
+//!
+//! [`Gp::predict`] uses `N · size_of::<T>()` more bytes of stack, and
+//! [`Gp::optimize_hyperparameters`] under 1 KiB (`f64`) for its simplex and box.
+//!
+//! # Numerics
+//!
+//! Every factorisation adds [`BASE_JITTER`] (`10⁻¹⁰`, the reference's) to the diagonal; when
+//! a pivot is not positive and finite it retries with up to [`JITTER_ESCALATIONS`] larger
+//! jitters relative to the signal variance and the precision of `T`, and otherwise returns
+//! [`Error::NotPositiveDefinite`](crate::Error::NotPositiveDefinite). [`Gp::jitter`] reports
+//! the jitter in use. Dot products are summed in the working precision (four interleaved
+//! partial sums, no wider accumulator: a Cortex-M4F has no double-precision FPU). The latent
+//! variance is clipped at 0, so it is never negative.
+//!
+//! ```
+//! use awfqi::gp::{Gp, Hyperparameters, WhenFull};
+//! # fn main() -> awfqi::Result<()> {
+//! let mut gp = Gp::<f32, 16, 1>::new(Hyperparameters::isotropic(1.0, 0.5, 0.01))?;
+//! gp.fit(&[[0.0], [1.0]], &[0.0, 1.0])?;
+//! gp.add_point([2.0], 0.5, WhenFull::DropOldest)?;
+//! let p = gp.predict(&[1.0])?;
+//! assert!((p.mean - 1.0).abs() < 0.05 && p.latent_variance < 0.02);
+//! # Ok(())
+//! # }
+//! ```
+
+mod cholesky;
+mod kernel;
+mod regression;
+pub mod search;
+
+pub use kernel::Hyperparameters;
+pub use regression::{BASE_JITTER, Gp, JITTER_ESCALATIONS, Prediction, WhenFull};
+pub use search::{HyperparameterBounds, MAX_SEARCH_PARAMETERS, SearchOptions};
+
+#[cfg(test)]
+mod tests;

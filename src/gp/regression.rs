@@ -1,0 +1,568 @@
+//! The fixed-capacity Gaussian-process regressor [`Gp`].
+
+use super::cholesky;
+use super::kernel::{self, Hyperparameters};
+use super::search::{self, HyperparameterBounds, LogBox, SearchOptions};
+use crate::{Error, Real, Result};
+use rand_core::Rng;
+
+/// Jitter always added to the training diagonal: `10⁻¹⁰`, the reference's `alpha` (spec §4.2).
+///
+/// In `f32` it is below the rounding of a diagonal near 1 and changes nothing; it matters
+/// only in `f64` or for tiny signal variances.
+pub const BASE_JITTER: f64 = 1e-10;
+
+/// How many times the jitter is escalated after a failed factorisation.
+///
+/// Escalation `k` (1 ≤ k ≤ 4) adds `max(10⁻¹⁰, c·ε) · 10ᵏ` instead of the base jitter, where
+/// `c` is the signal variance and `ε` the machine epsilon of `T`. Cholesky's backward error
+/// is of order `n·ε·c`, so the steps start just above rounding level and end at
+/// `≈ 1.2·10⁻³·c` in `f32` and `10⁻⁶` (for `c ≤ 4.5·10⁵`) in `f64`. When the last one fails
+/// too, the operation returns [`Error::NotPositiveDefinite`].
+pub const JITTER_ESCALATIONS: usize = 4;
+
+/// `ln 2π`.
+const LN_2PI: f64 = 1.837_877_066_409_345_3;
+
+/// The jitter of escalation `level` (0 = base) for signal variance `c`.
+fn jitter_at<T: Real>(level: usize, c: T) -> T {
+    let base = T::from_f64(BASE_JITTER);
+    if level == 0 {
+        return base;
+    }
+    let mut jitter = base.max(c * T::EPSILON);
+    for _ in 0..level {
+        jitter *= T::from_f64(10.0);
+    }
+    jitter
+}
+
+/// Where the first factorisation attempt starts (later attempts always start from row 0).
+#[derive(Clone, Copy)]
+struct Start {
+    /// Jitter level of the first attempt.
+    level: usize,
+    /// First row of the factor to compute in the first attempt (earlier rows are kept).
+    row: usize,
+    /// First entry of `z = L⁻¹y` to compute in the first attempt.
+    solve: usize,
+}
+
+/// One attempt: writes the kernel rows `start.row..n`, factorises them and solves for
+/// `z[start.solve..n]`, at the given jitter level. `false` on any breakdown.
+#[allow(clippy::too_many_arguments)]
+fn attempt<T: Real, const D: usize>(
+    hyper: &Hyperparameters<T, D>,
+    xs: &[[T; D]],
+    ys: &[T],
+    factor: &mut [T],
+    stride: usize,
+    z: &mut [T],
+    level: usize,
+    row: usize,
+    solve: usize,
+) -> bool {
+    let n = xs.len();
+    let jitter = jitter_at(level, hyper.signal_variance);
+    if !jitter.is_finite() || ys.len() != n {
+        return false;
+    }
+    if !(kernel::fill_rows(hyper, xs, jitter, factor, stride, row, n)
+        && cholesky::factor_rows(factor, stride, row, n))
+    {
+        return false;
+    }
+    let (Some(src), Some(dst)) = (ys.get(solve..n), z.get_mut(solve..n)) else {
+        return false;
+    };
+    dst.copy_from_slice(src);
+    cholesky::forward_solve(factor, stride, solve, n, z)
+}
+
+/// Factorises `K(xs) + (σ²ₙ + jitter) I` into `factor` and solves `z = L⁻¹ ys`, escalating
+/// the jitter after a failure (every later attempt recomputes all rows). Returns the jitter
+/// level used.
+fn factorize<T: Real, const D: usize>(
+    hyper: &Hyperparameters<T, D>,
+    xs: &[[T; D]],
+    ys: &[T],
+    factor: &mut [T],
+    stride: usize,
+    z: &mut [T],
+    start: Start,
+) -> Result<usize> {
+    if attempt(
+        hyper,
+        xs,
+        ys,
+        factor,
+        stride,
+        z,
+        start.level,
+        start.row,
+        start.solve,
+    ) {
+        return Ok(start.level);
+    }
+    for level in start.level + 1..=JITTER_ESCALATIONS {
+        if attempt(hyper, xs, ys, factor, stride, z, level, 0, 0) {
+            return Ok(level);
+        }
+    }
+    Err(Error::NotPositiveDefinite)
+}
+
+/// `−½ zᵀz − Σ ln L_ii − (n/2) ln 2π` for the first `n` points.
+fn log_marginal_likelihood<T: Real>(factor: &[T], stride: usize, z: &[T], n: usize) -> T {
+    let z = z.get(..n).unwrap_or(&[]);
+    let half = T::from_f64(0.5);
+    -half * cholesky::dot(z, z)
+        - cholesky::half_log_det(factor, stride, n)
+        - half * T::from_usize(n) * T::from_f64(LN_2PI)
+}
+
+/// What [`Gp::add_point`] does when the GP already holds `N` points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum WhenFull {
+    /// Return [`Error::CapacityExceeded`] and keep the GP as it is.
+    Refuse,
+    /// Forget the oldest point, then add the new one (a sliding window of the last `N`).
+    DropOldest,
+}
+
+/// A prediction at one input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Prediction<T> {
+    /// Posterior mean `k*ᵀ K⁻¹ y`.
+    pub mean: T,
+    /// Variance of the latent function, `c − k*ᵀ K⁻¹ k*`, clipped at 0.
+    pub latent_variance: T,
+    /// Variance of a new observation: `latent_variance + σ²ₙ` (spec §4.2's predicted
+    /// variance, which includes the noise).
+    pub noisy_variance: T,
+}
+
+/// Gaussian-process regression with room for `N` points of dimension `D`, allocation-free.
+///
+/// ARD squared-exponential kernel `c·exp(−½ Σ_d ((x_d − x′_d)/ℓ_d)²)`, noise variance `σ²ₙ`
+/// on the training diagonal only, zero prior mean, targets used as given (not centred).
+/// The lower Cholesky factor `L` of `K + (σ²ₙ + jitter) I` and `z = L⁻¹y` are kept, so a
+/// prediction costs O(n·D + n²) and the log marginal likelihood O(n).
+///
+/// **Memory** (all inline, no heap):
+/// `size_of::<T>() · (N² + N·(D + 2) + D + 2) + 2 · size_of::<usize>()`, rounded up to the
+/// alignment; see the table in the [module docs](super). [`Gp::predict`] also uses
+/// `N · size_of::<T>()` bytes of stack. For large `N` avoid moving a `Gp` through the stack
+/// of a microcontroller: build it in place in a `static` with [`Gp::empty`] and fill it with
+/// [`Gp::set_hyperparameters`] and [`Gp::fit`].
+///
+/// **State guarantee:** a method that returns an error leaves the data and hyperparameters
+/// as they were. When a factorisation failed after the old factor had been overwritten, the
+/// old one is recomputed from the kept data, which gives the same factor (to rounding, when
+/// it came from [`WhenFull::DropOldest`]'s update). Should even that fail, the GP is
+/// emptied ([`Gp::clear`]) rather than left inconsistent.
+#[derive(Debug, Clone)]
+pub struct Gp<T, const N: usize, const D: usize> {
+    hyper: Hyperparameters<T, D>,
+    inputs: [[T; D]; N],
+    targets: [T; N],
+    /// Row-major; the leading `len × len` lower triangle is `L`.
+    factor: [[T; N]; N],
+    /// `z = L⁻¹ y` (so `K⁻¹y = L⁻ᵀ z`, the mean weights, is never needed explicitly).
+    whitened: [T; N],
+    len: usize,
+    jitter_level: usize,
+}
+
+impl<T: Real, const N: usize, const D: usize> Default for Gp<T, N, D> {
+    /// [`Gp::empty`].
+    fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
+    /// The number of points the GP can hold.
+    pub const CAPACITY: usize = N;
+
+    /// An empty GP with spec §4.2's initial hyperparameters (`c = ℓ = σ²ₙ = 1`).
+    ///
+    /// `const`, so a GP can be placed in a `static` without passing through the stack.
+    pub const fn empty() -> Self {
+        Self::with(Hyperparameters::SPEC_INITIAL)
+    }
+
+    const fn with(hyper: Hyperparameters<T, D>) -> Self {
+        Self {
+            hyper,
+            inputs: [[T::ZERO; D]; N],
+            targets: [T::ZERO; N],
+            factor: [[T::ZERO; N]; N],
+            whitened: [T::ZERO; N],
+            len: 0,
+            jitter_level: 0,
+        }
+    }
+
+    /// An empty GP with the given hyperparameters.
+    ///
+    /// Errors: those of [`Hyperparameters::validate`].
+    pub fn new(hyper: Hyperparameters<T, D>) -> Result<Self> {
+        hyper.validate()?;
+        Ok(Self::with(hyper))
+    }
+
+    /// Number of points held.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// `true` when the GP holds no points.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The current hyperparameters.
+    pub fn hyperparameters(&self) -> &Hyperparameters<T, D> {
+        &self.hyper
+    }
+
+    /// The jitter added to the training diagonal by the current factor: [`BASE_JITTER`]
+    /// unless the factorisation had to escalate (see [`JITTER_ESCALATIONS`]).
+    pub fn jitter(&self) -> T {
+        jitter_at(self.jitter_level, self.hyper.signal_variance)
+    }
+
+    /// The inputs held, oldest first.
+    pub fn inputs(&self) -> &[[T; D]] {
+        self.inputs.get(..self.len).unwrap_or(&[])
+    }
+
+    /// The targets held, oldest first.
+    pub fn targets(&self) -> &[T] {
+        self.targets.get(..self.len).unwrap_or(&[])
+    }
+
+    /// Forgets every point (the hyperparameters stay).
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.jitter_level = 0;
+    }
+
+    /// Factorises the first `n` stored points from `start`; the factor and `z` change, the
+    /// data, `len` and jitter level do not.
+    fn factorize_stored(&mut self, n: usize, start: Start) -> Result<usize> {
+        let (Some(xs), Some(ys)) = (self.inputs.get(..n), self.targets.get(..n)) else {
+            return Err(Error::CapacityExceeded { capacity: N });
+        };
+        factorize(
+            &self.hyper,
+            xs,
+            ys,
+            self.factor.as_flattened_mut(),
+            N,
+            &mut self.whitened,
+            start,
+        )
+    }
+
+    /// Recomputes the factor of the stored data after a failed operation; empties the GP if
+    /// even that fails.
+    fn restore(&mut self) {
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        match self.factorize_stored(self.len, fresh) {
+            Ok(level) => self.jitter_level = level,
+            Err(_) => self.clear(),
+        }
+    }
+
+    /// Replaces the data by `x`, `y` and factorises (O(n³/6) multiply-adds and n²/2 kernel
+    /// evaluations).
+    ///
+    /// Errors: `x` and `y` of different lengths ([`Error::InvalidParameter`] naming `y`),
+    /// no points ([`Error::EmptyData`]), more than `N` ([`Error::CapacityExceeded`]), a
+    /// non-finite value ([`Error::NonFinite`] naming `x` or `y`), and
+    /// [`Error::NotPositiveDefinite`]. On error the GP keeps its previous data.
+    pub fn fit(&mut self, x: &[[T; D]], y: &[T]) -> Result<()> {
+        if x.len() != y.len() {
+            return Err(Error::InvalidParameter { parameter: "y" });
+        }
+        if x.is_empty() {
+            return Err(Error::EmptyData);
+        }
+        if x.len() > N {
+            return Err(Error::CapacityExceeded { capacity: N });
+        }
+        if !x.iter().all(|p| p.iter().all(|v| v.is_finite())) {
+            return Err(Error::NonFinite { parameter: "x" });
+        }
+        crate::error::ensure_all_finite(y, "y")?;
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        let result = factorize(
+            &self.hyper,
+            x,
+            y,
+            self.factor.as_flattened_mut(),
+            N,
+            &mut self.whitened,
+            fresh,
+        );
+        match result {
+            Ok(level) => {
+                let (Some(xs), Some(ys)) = (
+                    self.inputs.get_mut(..x.len()),
+                    self.targets.get_mut(..y.len()),
+                ) else {
+                    return Err(Error::CapacityExceeded { capacity: N });
+                };
+                xs.copy_from_slice(x);
+                ys.copy_from_slice(y);
+                self.len = x.len();
+                self.jitter_level = level;
+                Ok(())
+            }
+            Err(e) => {
+                self.restore();
+                Err(e)
+            }
+        }
+    }
+
+    /// Sets the hyperparameters and refactorises the data held (O(n³/6)).
+    ///
+    /// Errors: those of [`Hyperparameters::validate`] and [`Error::NotPositiveDefinite`];
+    /// on error the previous hyperparameters are kept.
+    pub fn set_hyperparameters(&mut self, hyper: Hyperparameters<T, D>) -> Result<()> {
+        hyper.validate()?;
+        let previous = self.hyper;
+        self.hyper = hyper;
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        match self.factorize_stored(self.len, fresh) {
+            Ok(level) => {
+                self.jitter_level = level;
+                Ok(())
+            }
+            Err(e) => {
+                self.hyper = previous;
+                self.restore();
+                Err(e)
+            }
+        }
+    }
+
+    /// Adds one observation.
+    ///
+    /// Below capacity the factor is extended by one row: O(n·D + n²) work, the same bits a
+    /// refit would give. At capacity, [`WhenFull::Refuse`] returns
+    /// [`Error::CapacityExceeded`], and [`WhenFull::DropOldest`] forgets the oldest point by
+    /// a stable rank-one update of the factor and then extends it, O(n·D + n²) in all (the
+    /// result agrees with a refit to rounding). Two cases fall back to a full refactorisation,
+    /// O(n³/6): when the extension fails and the jitter must be escalated, and when dropping
+    /// a point while the jitter is escalated (so a refit may return to the base jitter).
+    ///
+    /// Errors: [`Error::NonFinite`] naming `x` or `y`, [`Error::CapacityExceeded`] and
+    /// [`Error::NotPositiveDefinite`]; on error the GP keeps its previous data.
+    pub fn add_point(&mut self, x: [T; D], y: T, when_full: WhenFull) -> Result<()> {
+        if !x.iter().all(|v| v.is_finite()) {
+            return Err(Error::NonFinite { parameter: "x" });
+        }
+        crate::error::ensure_finite(y, "y")?;
+        let n = self.len;
+        if n < N {
+            let (Some(xs), Some(ys)) = (self.inputs.get_mut(n), self.targets.get_mut(n)) else {
+                return Err(Error::CapacityExceeded { capacity: N });
+            };
+            (*xs, *ys) = (x, y);
+            let extend = Start {
+                level: self.jitter_level,
+                row: n,
+                solve: n,
+            };
+            return match self.factorize_stored(n + 1, extend) {
+                Ok(level) => {
+                    self.len = n + 1;
+                    self.jitter_level = level;
+                    Ok(())
+                }
+                Err(e) => {
+                    self.restore();
+                    Err(e)
+                }
+            };
+        }
+        match when_full {
+            WhenFull::Refuse => Err(Error::CapacityExceeded { capacity: N }),
+            WhenFull::DropOldest => self.replace_oldest(x, y),
+        }
+    }
+
+    /// The full-capacity path of [`WhenFull::DropOldest`].
+    fn replace_oldest(&mut self, x: [T; D], y: T) -> Result<()> {
+        let (Some(&oldest_x), Some(&oldest_y)) = (self.inputs.first(), self.targets.first()) else {
+            return Err(Error::CapacityExceeded { capacity: N });
+        };
+        self.inputs.rotate_left(1);
+        self.targets.rotate_left(1);
+        if let (Some(xs), Some(ys)) = (self.inputs.last_mut(), self.targets.last_mut()) {
+            (*xs, *ys) = (x, y);
+        }
+        let updated = self.jitter_level == 0
+            && cholesky::drop_first(self.factor.as_flattened_mut(), N, N, &mut self.whitened)
+            && attempt(
+                &self.hyper,
+                &self.inputs,
+                &self.targets,
+                self.factor.as_flattened_mut(),
+                N,
+                &mut self.whitened,
+                0,
+                N - 1,
+                0,
+            );
+        if updated {
+            self.jitter_level = 0;
+            return Ok(());
+        }
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        match self.factorize_stored(N, fresh) {
+            Ok(level) => {
+                self.jitter_level = level;
+                Ok(())
+            }
+            Err(e) => {
+                self.inputs.rotate_right(1);
+                self.targets.rotate_right(1);
+                if let (Some(xs), Some(ys)) = (self.inputs.first_mut(), self.targets.first_mut()) {
+                    (*xs, *ys) = (oldest_x, oldest_y);
+                }
+                self.restore();
+                Err(e)
+            }
+        }
+    }
+
+    /// Predicts at `x`: posterior mean, latent variance and noisy variance; with no data,
+    /// the prior (`0`, `c`, `c + σ²ₙ`). O(n·D + n²) work and `N · size_of::<T>()` bytes of
+    /// stack.
+    ///
+    /// Errors: [`Error::NonFinite`] naming `x`; [`Error::NotPositiveDefinite`] when the
+    /// stored factor is too ill-conditioned to give a finite prediction in this precision
+    /// (possible only with data near the overflow limit of `T`).
+    pub fn predict(&self, x: &[T; D]) -> Result<Prediction<T>> {
+        if !x.iter().all(|v| v.is_finite()) {
+            return Err(Error::NonFinite { parameter: "x" });
+        }
+        let n = self.len;
+        let c = self.hyper.signal_variance;
+        let mut v = [T::ZERO; N];
+        for (vi, xi) in v.iter_mut().zip(self.inputs()) {
+            *vi = self.hyper.covariance(x, xi);
+        }
+        if !cholesky::forward_solve(self.factor.as_flattened(), N, 0, n, &mut v) {
+            return Err(Error::NotPositiveDefinite);
+        }
+        let (Some(v), Some(z)) = (v.get(..n), self.whitened.get(..n)) else {
+            return Err(Error::CapacityExceeded { capacity: N });
+        };
+        let mean = cholesky::dot(v, z);
+        let explained = cholesky::dot(v, v);
+        if !(mean.is_finite() && explained.is_finite()) {
+            return Err(Error::NotPositiveDefinite);
+        }
+        let latent_variance = (c - explained).max(T::ZERO);
+        Ok(Prediction {
+            mean,
+            latent_variance,
+            noisy_variance: latent_variance + self.hyper.noise_variance,
+        })
+    }
+
+    /// The log marginal likelihood `−½ yᵀK⁻¹y − Σ ln L_ii − (n/2) ln 2π` of the data held,
+    /// with `K` including noise and jitter; O(n). It is `−∞` when `yᵀK⁻¹y` overflows `T`.
+    ///
+    /// Errors: [`Error::EmptyData`] when the GP holds no points.
+    pub fn log_marginal_likelihood(&self) -> Result<T> {
+        if self.len == 0 {
+            return Err(Error::EmptyData);
+        }
+        Ok(log_marginal_likelihood(
+            self.factor.as_flattened(),
+            N,
+            &self.whitened,
+            self.len,
+        ))
+    }
+
+    /// Searches the box `bounds` for the hyperparameters that maximise the log marginal
+    /// likelihood (spec §4.2; see [`search`](super::search) for the method), leaves the GP
+    /// fitted with the best ones and returns their log marginal likelihood.
+    ///
+    /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the
+    /// search's own arrays (a simplex of at most 9 points and the box) take under 1 KiB of
+    /// stack in `f64`. Each evaluation factorises in place, so the factor is rebuilt at the
+    /// end. Failed factorisations count as `−∞`. The generator is used only for the
+    /// restarts: one `u64` per searched parameter per restart.
+    ///
+    /// Errors: those of [`HyperparameterBounds::validate`] and [`SearchOptions::validate`];
+    /// [`Error::CapacityExceeded`] for an ARD search (`isotropic == false`) with
+    /// `D + 2 >` [`MAX_SEARCH_PARAMETERS`](super::MAX_SEARCH_PARAMETERS);
+    /// [`Error::EmptyData`] without data; [`Error::NotPositiveDefinite`] when no evaluated
+    /// point could be factorised. On error the previous hyperparameters are kept.
+    pub fn optimize_hyperparameters<R: Rng + ?Sized>(
+        &mut self,
+        bounds: &HyperparameterBounds<T, D>,
+        options: &SearchOptions,
+        rng: &mut R,
+    ) -> Result<T> {
+        options.validate()?;
+        let space = LogBox::new(bounds, options.isotropic)?;
+        let n = self.len;
+        if n == 0 {
+            return Err(Error::EmptyData);
+        }
+        let previous = self.hyper;
+        let (Some(xs), Some(ys)) = (self.inputs.get(..n), self.targets.get(..n)) else {
+            return Err(Error::CapacityExceeded { capacity: N });
+        };
+        let factor = self.factor.as_flattened_mut();
+        let whitened = &mut self.whitened;
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        let mut objective = |theta: &search::Theta<T>| -> T {
+            let hyper = space.hyperparameters::<D>(theta);
+            match factorize(&hyper, xs, ys, factor, N, whitened, fresh) {
+                Ok(_) => log_marginal_likelihood(factor, N, whitened, n),
+                Err(_) => T::NEG_INFINITY,
+            }
+        };
+        let (best, value) = search::maximize(&space, options, rng, &mut objective);
+        let best_hyper = space.hyperparameters::<D>(&best);
+        if value.is_finite() && self.set_hyperparameters(best_hyper).is_ok() {
+            return self.log_marginal_likelihood();
+        }
+        self.hyper = previous;
+        self.restore();
+        Err(Error::NotPositiveDefinite)
+    }
+}
