@@ -12,6 +12,8 @@
 #![deny(missing_docs)]
 
 pub mod alias;
+pub mod awfqi;
+pub mod dataset;
 pub mod env;
 pub mod error;
 pub mod evaluation;

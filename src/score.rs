@@ -27,8 +27,10 @@
 //! when the values are large and close).
 
 use crate::alias::{AliasEntry, AliasTable};
+use crate::dataset::{INPUT_DIM, input};
 use crate::env::{PuddleWorld, Transition};
 use crate::error::ensure_finite;
+use crate::gp::Gp;
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
@@ -46,6 +48,40 @@ impl<T: Real> SourceModel<T> for PuddleWorld<T> {
     fn predict(&self, state: [T; 2], action: usize) -> Result<[T; 3]> {
         let [x, y] = self.mean_next_state(state, action)?;
         Ok([self.mean_reward(state)?, x, y])
+    }
+}
+
+/// The realistic model of one source (§11.2): the posterior means of GPs fitted on that
+/// source's records only, at `z = (s_x, s_y, a)`.
+///
+/// The next-state GPs are optional: without them `ρ_x = ρ_y = 0`, so `V_x = V_y = 0`, which
+/// saves two GP fits per source when only `V_r` drives sampling (the thesis's choice).
+/// Borrows the GPs; size: 3 pointers.
+#[derive(Debug, Clone, Copy)]
+pub struct GpSourceModel<'g, T, const N: usize> {
+    reward: &'g Gp<T, N, INPUT_DIM>,
+    next_state: Option<[&'g Gp<T, N, INPUT_DIM>; 2]>,
+}
+
+impl<'g, T: Real, const N: usize> GpSourceModel<'g, T, N> {
+    /// A model from the source's reward GP and, optionally, its next-x and next-y GPs.
+    pub fn new(
+        reward: &'g Gp<T, N, INPUT_DIM>,
+        next_state: Option<[&'g Gp<T, N, INPUT_DIM>; 2]>,
+    ) -> Self {
+        Self { reward, next_state }
+    }
+}
+
+impl<T: Real, const N: usize> SourceModel<T> for GpSourceModel<'_, T, N> {
+    fn predict(&self, state: [T; 2], action: usize) -> Result<[T; 3]> {
+        let z = input(state, action);
+        let r = self.reward.predict(&z)?.mean;
+        let (x, y) = match self.next_state {
+            Some([gx, gy]) => (gx.predict(&z)?.mean, gy.predict(&z)?.mean),
+            None => (T::ZERO, T::ZERO),
+        };
+        Ok([r, x, y])
     }
 }
 

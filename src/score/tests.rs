@@ -183,3 +183,40 @@ fn compute_reports_bad_storage_sources_and_states() {
         Some(Error::OutOfRange { parameter: "state" })
     );
 }
+
+#[test]
+fn realistic_table_uses_the_gp_posterior_means() {
+    use crate::dataset::input;
+    use crate::gp::Hyperparameters;
+    let hyper = Hyperparameters::isotropic(4.0, 2.0, 0.01);
+    let mut gp_a = Gp::<f64, 8, 3>::new(hyper).unwrap();
+    let mut gp_b = Gp::<f64, 8, 3>::new(hyper).unwrap();
+    let xs = [[1.0, 1.0, 0.0], [5.0, 5.0, 1.0], [9.0, 2.0, 2.0]];
+    gp_a.fit(&xs, &[-1.0, -20.0, -1.0]).unwrap();
+    gp_b.fit(&xs, &[-1.0, -2.0, -6.0]).unwrap();
+    let grid = PointGrid::<f64>::puddle(2.5).unwrap();
+    let rows = RowSet::grid(grid, 4).unwrap();
+    let models = [
+        GpSourceModel::new(&gp_a, None),
+        GpSourceModel::new(&gp_b, None),
+    ];
+    let mut storage = vec![Scores::default(); rows.len()];
+    let table = ScoreTable::compute(rows, &models, &mut storage).unwrap();
+    for r in 0..table.len() {
+        let row = table.row(r).unwrap();
+        let z = input(row.state, row.action);
+        let (a, b) = (
+            gp_a.predict(&z).unwrap().mean,
+            gp_b.predict(&z).unwrap().mean,
+        );
+        // Population variance of two values: ((a − b)/2)².
+        let want = ((a - b) / 2.0).powi(2);
+        assert!((row.scores.reward - want).abs() < 1e-9 * (1.0 + want));
+        assert_eq!((row.scores.next_x, row.scores.next_y), (0.0, 0.0));
+    }
+    assert!(table.values().iter().any(|v| v.reward > 1.0));
+    // The same GP for every source (and as its own next-state model): exactly 0.
+    let same = [GpSourceModel::new(&gp_a, Some([&gp_b, &gp_b])); 3];
+    let table = ScoreTable::compute(rows, &same, &mut storage).unwrap();
+    assert!(table.values().iter().all(|v| v.total() == 0.0));
+}
