@@ -18,14 +18,27 @@ const NIL: u32 = u32::MAX;
 
 /// One row of an alias table: keep the drawn row with probability `threshold`, else
 /// return row `alias`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AliasEntry<T> {
     threshold: T,
     alias: u32,
 }
 
+impl<T: Real> Default for AliasEntry<T> {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
 impl<T: Real> AliasEntry<T> {
+    /// Unused storage; `const`, so a table can live in a `static`:
+    /// `static mut ALIAS: [AliasEntry<f32>; 484] = [AliasEntry::EMPTY; 484];`.
+    pub const EMPTY: Self = Self {
+        threshold: T::ZERO,
+        alias: 0,
+    };
+
     /// Probability in `[0, 1]` of keeping this row once it is drawn uniformly.
     pub fn threshold(&self) -> T {
         self.threshold
@@ -92,7 +105,9 @@ impl<'a, T: Real> AliasTable<'a, T> {
                 parameter: "weights",
             });
         }
-        let (entries, _) = storage.split_at_mut(rows);
+        let entries = storage
+            .get_mut(..rows)
+            .ok_or(Error::CapacityExceeded { capacity })?;
         // Pass 2: scale to p_i = n·w_i/Σw (mean 1), dividing by the largest weight first
         // so the sum cannot overflow.
         let sum: T = entries.iter().map(|e| e.threshold / largest).sum();

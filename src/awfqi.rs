@@ -24,8 +24,25 @@
 //! **Memory.** The kernel borrows everything large from the caller, so it can live in
 //! statics on a microcontroller: the target-sample buffer (`K·n` records of
 //! `Transition<[T; 2], T>`), the reward-weight buffer (one `T` per source record), the
-//! target [`Gp`], the FQI table, the score sampler and the source data. The struct itself
-//! is a few hundred bytes ([`Awfqi`] docs); see the crate README for a full budget.
+//! target [`Gp`], the FQI table, the score sampler and the source data. Measured on
+//! `thumbv7em-none-eabihf` in `f32` for the configuration of the end-to-end test
+//! (`tests/awfqi_puddle.rs`: 11 × 11 cells, `N = 64`, 484 score rows, 3 steps of 50
+//! queries, 910 source records), in bytes:
+//!
+//! | part | bytes |
+//! |---|---:|
+//! | `Awfqi` itself (configuration, target model, slices) | 444 |
+//! | target GP `Gp<f32, 64, 3>` | 17 692 |
+//! | FQI table, 484 × `FqiEntry<f32>` (20) | 9 680 |
+//! | target samples, 150 × `Transition` (28) | 4 200 |
+//! | alias table, 484 × `AliasEntry<f32>` (8) | 3 872 |
+//! | reward weights, 910 × `f32` | 3 640 |
+//! | **RAM written by the loop** | **39 528** |
+//! | source records, 910 × 28 (read-only: flash) | 25 480 |
+//! | source reward posteriors, 910 × 8 (read-only: flash) | 7 280 |
+//! | score values, 484 × 12 (set-up only, then reusable) | 5 808 |
+//!
+//! plus the stack of a GP prediction (`N` floats) and of the hyperparameter search.
 //!
 //! **Errors part-way.** A step validates its capacity before drawing. If the target model,
 //! the GP or the weights fail later, the records already queried stay in `D₀` and the
@@ -62,7 +79,7 @@ impl<T: Real> AwfqiConfig<T> {
     /// The thesis configuration (§12) for a per-step budget: mean estimator with
     /// `v_r = 0.1`, `w_max = 1000`, reference noise subtraction, the reference GP training
     /// (10 restarts), γ = 0.99 with 60 iterations, nearest-cell filling — and
-    /// [`SubsetRule::Spread`] **[CHOICE]**: with a target GP far smaller than the
+    /// [`SubsetRule::Spread`] **\[CHOICE\]**: with a target GP far smaller than the
     /// reference's 4000, "the last N" would forget every earlier step's queries, while an
     /// even spread keeps them all represented.
     pub fn thesis(budget: usize) -> Self {
@@ -172,8 +189,9 @@ pub struct StepReport<T> {
 /// Generic over the scalar `T`, the target model `G` (any [`GenerativeModel`] with 2-D
 /// states, e.g. `PuddleWorld<T>`) and the target GP's capacity `N`. The struct holds the
 /// configuration, the target model by value, and slices/references to the caller's
-/// storage: `size_of::<Awfqi<f32, PuddleWorld<f32>, 64>>()` is reported by the crate's
-/// measurements (a few hundred bytes; the model alone is 216 bytes in `f32`).
+/// storage: `size_of::<Awfqi<f32, PuddleWorld<f32>, 64>>()` is 444 bytes on
+/// `thumbv7em-none-eabihf` (212 of them the Puddle World model); see the module docs for
+/// the storage it borrows.
 #[derive(Debug)]
 pub struct Awfqi<'a, T, G, const N: usize> {
     config: AwfqiConfig<T>,

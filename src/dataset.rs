@@ -64,7 +64,9 @@ impl SubsetRule {
         (0..kept).map(move |i| match self {
             SubsetRule::Last => len - kept + i,
             // i·len/kept < len, computed in u128 so it cannot overflow.
-            SubsetRule::Spread => ((i as u128 * len as u128) / kept as u128) as usize,
+            SubsetRule::Spread => (i as u128 * len as u128)
+                .checked_div(kept as u128)
+                .unwrap_or(0) as usize,
         })
     }
 }

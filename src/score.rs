@@ -15,7 +15,7 @@
 //!   source and output give the *realistic* table ([`GpSourceModel`]).
 //! - **Sampling** (§11.3): [`ScoreTable::sampler`] builds an [`AliasTable`] on one column
 //!   (the thesis uses `V_r`), so a budget of `n` rows is drawn with replacement in O(1) per
-//!   draw; a column that sums to 0 is sampled uniformly **[spec CHOICE]**.
+//!   draw; a column that sums to 0 is sampled uniformly **\[spec CHOICE\]**.
 //!
 //! The values live in caller storage, one [`Scores`] per row (3 `T`: 12 bytes in `f32`; the
 //! sum column is computed on read), so the same code fills the harness's 40 804-row table
@@ -180,8 +180,8 @@ impl<T: Real> PointGrid<T> {
         if p >= self.len() {
             return None;
         }
-        let i = p % self.points[0];
-        let j = p / self.points[0];
+        let i = p.checked_rem(self.points[0])?;
+        let j = p.checked_div(self.points[0])?;
         Some([
             self.lower[0] + self.spacing[0] * T::from_usize(i),
             self.lower[1] + self.spacing[1] * T::from_usize(j),
@@ -192,7 +192,7 @@ impl<T: Real> PointGrid<T> {
 /// The rows of a score table (§11.1).
 ///
 /// Grid rows come first: row `r < grid.len()·actions` is point `r / actions` with action
-/// `r % actions` (**[CHOICE]**: points in the order of [`PointGrid::point`], actions
+/// `r % actions` (**\[CHOICE\]**: points in the order of [`PointGrid::point`], actions
 /// fastest). Source rows follow, source by source, record by record.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RowSet<'a, T> {
@@ -276,7 +276,10 @@ impl<'a, T: Real> RowSet<'a, T> {
         let grid_rows = self.grid_rows();
         if r < grid_rows {
             let (grid, actions) = self.grid?;
-            return Some((grid.point(r / actions)?, r % actions));
+            return Some((
+                grid.point(r.checked_div(actions)?)?,
+                r.checked_rem(actions)?,
+            ));
         }
         let mut k = r - grid_rows;
         for source in self.sources {
@@ -318,6 +321,13 @@ pub struct Scores<T> {
 }
 
 impl<T: Real> Scores<T> {
+    /// All scores 0; `const`, for storage in a `static`.
+    pub const ZERO: Self = Self {
+        reward: T::ZERO,
+        next_x: T::ZERO,
+        next_y: T::ZERO,
+    };
+
     /// `V_r + V_x + V_y`, the table's fourth column.
     pub fn total(&self) -> T {
         self.reward + self.next_x + self.next_y
@@ -391,7 +401,10 @@ impl<'a, T: Real> ScoreTable<'a, T> {
                 capacity: storage.len(),
             });
         }
-        let (values, _) = storage.split_at_mut(n);
+        let capacity = storage.len();
+        let values = storage
+            .get_mut(..n)
+            .ok_or(Error::CapacityExceeded { capacity })?;
         let m = T::from_usize(sources.len());
         for (slot, (state, action)) in values.iter_mut().zip(rows.iter()) {
             // Shifted two-pass variance: d_j = ρ_j − ρ_1, Var = mean(d²) − mean(d)².
@@ -425,6 +438,29 @@ impl<'a, T: Real> ScoreTable<'a, T> {
                 next_x: var(1),
                 next_y: var(2),
             };
+        }
+        Ok(Self { rows, values })
+    }
+
+    /// A table from scores computed earlier (e.g. once per experiment and shared by all
+    /// runs, or loaded from a file): the first `rows.len()` entries of `values`.
+    ///
+    /// Errors: `values` shorter than the row count ([`Error::CapacityExceeded`] with its
+    /// length); a non-finite score ([`Error::NonFinite`] `scores`) or a negative one
+    /// ([`Error::InvalidParameter`] `scores`).
+    pub fn from_parts(rows: RowSet<'a, T>, values: &'a [Scores<T>]) -> Result<Self> {
+        let values = values.get(..rows.len()).ok_or(Error::CapacityExceeded {
+            capacity: values.len(),
+        })?;
+        for v in values {
+            for x in [v.reward, v.next_x, v.next_y] {
+                ensure_finite(x, "scores")?;
+                if x < T::ZERO {
+                    return Err(Error::InvalidParameter {
+                        parameter: "scores",
+                    });
+                }
+            }
         }
         Ok(Self { rows, values })
     }

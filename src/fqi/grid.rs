@@ -107,7 +107,11 @@ impl<T: Real> CellGrid<T> {
 
     /// The `(i, j)` coordinates of cell `cell`; `None` out of range.
     pub fn coordinates(&self, cell: usize) -> Option<[usize; 2]> {
-        (cell < self.len()).then(|| [cell % self.cells[0], cell / self.cells[0]])
+        let [nx, _] = self.cells;
+        match (cell.checked_rem(nx), cell.checked_div(nx)) {
+            (Some(i), Some(j)) if cell < self.len() => Some([i, j]),
+            _ => None,
+        }
     }
 
     /// The centre of cell `cell`; `None` out of range.

@@ -20,14 +20,32 @@
 //! [`SampleSet::unweighted`]): the weighted mean of `r̂ᵢ` is the cell's mean reward.
 //!
 //! **Pairs with no sample.** A (cell, action) pair with no sample of positive weight has no
-//! regression target. [`EmptyCells::Nearest`] (the default) gives it the fitted value of
-//! the nearest pair with data, for the same action: nearest in cell-index units
-//! (Euclidean, `Δi² + Δj²`), ties broken by the smallest cell index. This mimics what the
-//! reference's trees do (a zero-weight sample lands in the leaf of positive-weight
-//! neighbours). [`EmptyCells::Value`] gives such pairs a fixed value instead. An action
-//! with no data anywhere gets 0 under `Nearest` (as the reference's forest of total weight
-//! 0 predicts 0, §4.1). The reward model and the later iterations have their own "has
-//! data" sets (positive `w_r` and positive `w_s` respectively).
+//! regression target; [`EmptyCells`] decides what it predicts:
+//! - [`EmptyCells::Nearest`]: the fitted value of the nearest pair with data, for the same
+//!   action — nearest in cell-index units (Euclidean, `Δi² + Δj²`), ties broken by the
+//!   smallest cell index. This mimics the reference's trees, which extend a leaf's value
+//!   over the region around its samples.
+//! - [`EmptyCells::CappedNearest`] (the default, [`FqiConfig::reference`]): the same, but
+//!   never more than the lowest value of the actions that have data in the same cell.
+//!   Plain nearest filling is optimistic for actions never tried where the data lie: with
+//!   the narrow paths of source data and AWFQI's scattered queries, a greedy policy would
+//!   pick an untried action whose value was copied from a cell near the goal — e.g. "up"
+//!   at the top border, which loops in place — and never learn otherwise. The cap makes
+//!   tried actions win in visited cells and keeps nearest filling where nothing was tried.
+//! - [`EmptyCells::Value`]: a fixed value.
+//!
+//! **Near-zero weights.** A pair "has data" when the total weight of its samples reaches
+//! [`FqiConfig::with_min_weight`] (0.5 in [`FqiConfig::reference`], i.e. half a target
+//! sample's worth). A weighted mean over samples whose weights are all tiny is still their
+//! plain mean, so without this threshold a cell holding only source records that the
+//! weights all but discard (e.g. weight 10⁻²⁰ where the target has a puddle) would keep
+//! their reward. The reference's trees avoid this by merging near-zero-weight samples into
+//! the leaves of positive-weight neighbours (§4.1 notes, §14.9); the threshold is the
+//! tabular counterpart, and the fill rule then supplies the value.
+//!
+//! An action with no data anywhere gets 0 under the nearest rules (as the reference's
+//! forest of total weight 0 predicts 0, §4.1). The reward model and the later iterations
+//! have their own "has data" sets (positive `w_r` and positive `w_s` respectively).
 //!
 //! **Memory.** All state lives in one caller slice of [`FqiEntry`], one per (cell, action)
 //! pair (index `cell·actions + action`): 4 `T` and a `u32` = 20 bytes in `f32`, 40 in
@@ -57,17 +75,23 @@ pub struct FqiEntry<T> {
 
 impl<T: Real> Default for FqiEntry<T> {
     fn default() -> Self {
-        Self {
-            q: T::ZERO,
-            reward: T::ZERO,
-            weight: T::ZERO,
-            next: T::ZERO,
-            donor: NIL,
-        }
+        Self::EMPTY
     }
 }
 
 impl<T: Real> FqiEntry<T> {
+    /// An entry of a fresh table (Q = 0, no data); `const` and all-zero, so storage can be
+    /// a zero-initialised `static` (`.bss`, no flash image):
+    /// `static mut TABLE: [FqiEntry<f32>; 484] = [FqiEntry::EMPTY; 484];`.
+    /// (The donor field is only read during a fit, after it has been computed.)
+    pub const EMPTY: Self = Self {
+        q: T::ZERO,
+        reward: T::ZERO,
+        weight: T::ZERO,
+        next: T::ZERO,
+        donor: 0,
+    };
+
     /// The fitted Q-value.
     pub fn q(&self) -> T {
         self.q
@@ -82,6 +106,12 @@ impl<T: Real> FqiEntry<T> {
     pub fn transition_weight(&self) -> T {
         self.weight
     }
+
+    /// `true` when the last fit had a sample of positive transition weight for this pair
+    /// (its Q-value is fitted, not filled).
+    pub fn has_data(&self) -> bool {
+        self.weight > T::ZERO
+    }
 }
 
 /// What a (cell, action) pair with no sample of positive weight predicts.
@@ -91,6 +121,10 @@ pub enum EmptyCells<T> {
     /// The value of the nearest pair with data, same action (ties: smallest cell index);
     /// 0 when the action has no data at all.
     Nearest,
+    /// As [`EmptyCells::Nearest`], but never more than the lowest value among the actions
+    /// that do have data in the same cell: an action never tried in a visited cell is not
+    /// preferred to the tried ones (pessimism for unseen actions; the default).
+    CappedNearest,
     /// This fixed value.
     Value(T),
 }
@@ -103,6 +137,7 @@ pub struct FqiConfig<T> {
     discount: T,
     iterations: usize,
     empty_cells: EmptyCells<T>,
+    min_weight: T,
 }
 
 impl<T: Real> FqiConfig<T> {
@@ -129,15 +164,34 @@ impl<T: Real> FqiConfig<T> {
             discount,
             iterations,
             empty_cells,
+            min_weight: T::ZERO,
         })
     }
 
-    /// The reference settings (§5, §13): γ = 0.99, 60 iterations, nearest-cell filling.
+    /// The same settings with pairs whose total sample weight is below `min_weight`
+    /// counted as having no data (see the module docs); 0, the default of
+    /// [`FqiConfig::new`], counts any positive weight.
+    ///
+    /// Errors: a non-finite or negative `min_weight`.
+    pub fn with_min_weight(self, min_weight: T) -> Result<Self> {
+        ensure_finite(min_weight, "min_weight")?;
+        if min_weight < T::ZERO {
+            return Err(Error::InvalidParameter {
+                parameter: "min_weight",
+            });
+        }
+        Ok(Self { min_weight, ..self })
+    }
+
+    /// The reference settings (§5, §13): γ = 0.99, 60 iterations, and for pairs without
+    /// data [`EmptyCells::CappedNearest`] with a minimum total weight of 0.5
+    /// (**\[CHOICE\]**: half a target sample's worth; unweighted data are unaffected).
     pub fn reference() -> Self {
         Self {
             discount: T::from_f64(0.99),
             iterations: 60,
-            empty_cells: EmptyCells::Nearest,
+            empty_cells: EmptyCells::CappedNearest,
+            min_weight: T::from_f64(0.5),
         }
     }
 
@@ -154,6 +208,11 @@ impl<T: Real> FqiConfig<T> {
     /// The handling of pairs without data.
     pub fn empty_cells(&self) -> EmptyCells<T> {
         self.empty_cells
+    }
+
+    /// The total weight below which a pair counts as having no data.
+    pub fn min_weight(&self) -> T {
+        self.min_weight
     }
 }
 
@@ -278,8 +337,10 @@ impl<'a, T: Real> TabularFqi<'a, T> {
                 capacity: storage.len(),
             });
         }
-        let (entries, _) = storage.split_at_mut(needed);
-        entries.fill(FqiEntry::default());
+        let entries = storage
+            .get_mut(..needed)
+            .ok_or(Error::CapacityExceeded { capacity: needed })?;
+        entries.fill(FqiEntry::EMPTY);
         Ok(Self {
             grid,
             actions,
@@ -336,7 +397,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
         if total == 0 {
             return Err(Error::EmptyData);
         }
-        self.fit_reward_model(sets.clone(), config.empty_cells);
+        self.fit_reward_model(sets.clone(), config);
         for e in self.entries.iter_mut() {
             e.q = e.reward;
         }
@@ -356,7 +417,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     fn fit_reward_model<'s>(
         &mut self,
         sets: impl Iterator<Item = SampleSet<'s, T>>,
-        empty: EmptyCells<T>,
+        config: &FqiConfig<T>,
     ) where
         T: 's,
     {
@@ -375,12 +436,25 @@ impl<'a, T: Real> TabularFqi<'a, T> {
             }
         }
         for e in self.entries.iter_mut() {
+            // Totals below the minimum weight count as no data.
+            if e.next < config.min_weight {
+                e.next = T::ZERO;
+            }
+            if e.weight < config.min_weight {
+                e.weight = T::ZERO;
+            }
             if e.next > T::ZERO {
                 e.reward /= e.next;
             }
         }
         nearest_donors(&self.grid, self.actions, self.entries, |e| e.next > T::ZERO);
-        fill_empty(self.entries, empty, |e| e.next > T::ZERO, |e| &mut e.reward);
+        fill_empty(
+            self.entries,
+            self.actions,
+            config.empty_cells,
+            |e| e.next > T::ZERO,
+            |e| &mut e.reward,
+        );
     }
 
     /// One iteration k ≥ 2: Q ← R̂ + γ·(weighted mean of (1−ω)·V_{k−1}(s′)).
@@ -414,6 +488,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
         }
         fill_empty(
             self.entries,
+            self.actions,
             config.empty_cells,
             |e| e.weight > T::ZERO,
             |e| &mut e.q,
@@ -459,18 +534,26 @@ impl<'a, T: Real> TabularFqi<'a, T> {
         Ok(self.max_value_finite(state))
     }
 
-    /// The greedy action `argmaxₐ Q(state, a)`, ties broken by the smallest action index
-    /// (§3.1).
+    /// The greedy action `argmaxₐ Q(state, a)`. Ties go first to an action that has data in
+    /// the state's cell, then to the smallest action index (§3.1).
+    ///
+    /// The first rule only matters for filled values: under [`EmptyCells::CappedNearest`]
+    /// an untried action can equal the worst tried one, and must not win the tie by its
+    /// index alone (a source dataset from a deterministic policy tries one action per cell).
     ///
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; 2]) -> Result<usize> {
         self.grid.cell_of(state)?;
         let mut best = 0;
         let mut best_q = T::NEG_INFINITY;
+        let mut best_has_data = false;
         for (a, e) in self.row(state).iter().enumerate() {
-            if a == 0 || e.q > best_q {
+            let has_data = e.has_data();
+            let better = a == 0 || e.q > best_q || (e.q == best_q && has_data && !best_has_data);
+            if better {
                 best = a;
                 best_q = e.q;
+                best_has_data = has_data;
             }
         }
         Ok(best)
@@ -520,8 +603,9 @@ fn nearest_visited(
     ny: usize,
     visited: impl Fn(usize) -> bool,
 ) -> Option<usize> {
-    let cx = (cell % nx) as isize;
-    let cy = (cell / nx) as isize;
+    // nx ≥ 1 (a grid has cells); the checked forms only keep a panic path out of the code.
+    let cx = cell.checked_rem(nx).unwrap_or(0) as isize;
+    let cy = cell.checked_div(nx).unwrap_or(0) as isize;
     let (w, h) = (nx as isize, ny as isize);
     let max_radius = w.max(h);
     let mut best: Option<(isize, usize)> = None;
@@ -564,6 +648,7 @@ fn nearest_visited(
 /// or 0 when there is no donor).
 fn fill_empty<T: Real>(
     entries: &mut [FqiEntry<T>],
+    actions: usize,
     empty: EmptyCells<T>,
     has_data: impl Fn(&FqiEntry<T>) -> bool,
     field: impl Fn(&mut FqiEntry<T>) -> &mut T,
@@ -573,11 +658,23 @@ fn fill_empty<T: Real>(
         if has_data(e) {
             continue;
         }
+        let donor = e.donor as usize;
         let value = match empty {
             EmptyCells::Value(v) => v,
-            EmptyCells::Nearest => {
-                let donor = e.donor as usize;
-                entries.get_mut(donor).map_or(T::ZERO, |d| *field(d))
+            EmptyCells::Nearest => entries.get_mut(donor).map_or(T::ZERO, |d| *field(d)),
+            EmptyCells::CappedNearest => {
+                let nearest = entries.get_mut(donor).map_or(T::ZERO, |d| *field(d));
+                // The lowest value among the actions with data in the same cell, if any.
+                let start = i - i.checked_rem(actions).unwrap_or(0);
+                let mut cap = T::INFINITY;
+                for j in start..start + actions {
+                    if let Some(other) = entries.get_mut(j) {
+                        if has_data(other) {
+                            cap = cap.min(*field(other));
+                        }
+                    }
+                }
+                nearest.min(cap)
             }
         };
         if let Some(e) = entries.get_mut(i) {

@@ -253,11 +253,27 @@ fn empty_cells_fixed_value_and_actions_without_data() {
     assert_eq!(fqi.value(at(2), 0).unwrap(), -20.0);
     assert_eq!(fqi.value(at(0), 1).unwrap(), -20.0);
     // Nearest: action 1 has no data anywhere → 0.
-    fqi.fit(&[SampleSet::unweighted(&samples)], &FqiConfig::reference())
+    let nearest = FqiConfig::new(0.9, 3, EmptyCells::Nearest).unwrap();
+    fqi.fit(&[SampleSet::unweighted(&samples)], &nearest)
         .unwrap();
     assert_eq!(fqi.value(at(2), 0).unwrap(), -1.0);
     assert_eq!(fqi.value(at(1), 1).unwrap(), 0.0);
     // Greedy: action 1 (0) beats action 0 (−1); a tie goes to the smaller index.
+    assert_eq!(fqi.greedy_action(at(0)).unwrap(), 1);
+    // Capped: in cell 0, the untried action 1 is capped at the tried action's −1; in the
+    // unvisited cells 1 and 2 nothing caps it.
+    fqi.fit(&[SampleSet::unweighted(&samples)], &FqiConfig::reference())
+        .unwrap();
+    assert_eq!(fqi.value(at(0), 1).unwrap(), -1.0);
+    assert_eq!(fqi.value(at(1), 1).unwrap(), 0.0);
+    assert_eq!(fqi.greedy_action(at(0)).unwrap(), 0);
+    // A tie between a filled value and a fitted one goes to the fitted one, whatever the
+    // index: only action 1 was tried, action 0 is capped at its value.
+    let only_1 = vec![sample(at(0), 1, -1.0, at(0), true)];
+    fqi.fit(&[SampleSet::unweighted(&only_1)], &FqiConfig::reference())
+        .unwrap();
+    assert_eq!(fqi.value(at(0), 0).unwrap(), -1.0);
+    assert!(fqi.entries()[1].has_data() && !fqi.entries()[0].has_data());
     assert_eq!(fqi.greedy_action(at(0)).unwrap(), 1);
     let tie = vec![
         sample(at(0), 0, -1.0, at(0), true),
@@ -266,6 +282,36 @@ fn empty_cells_fixed_value_and_actions_without_data() {
     fqi.fit(&[SampleSet::unweighted(&tie)], &FqiConfig::reference())
         .unwrap();
     assert_eq!(fqi.greedy_action(at(0)).unwrap(), 0);
+}
+
+#[test]
+fn capped_nearest_keeps_an_untried_action_from_looping_at_a_border() {
+    // A 3-cell corridor, goal beyond cell 2. Action 0 moves right (tried everywhere); action
+    // 1 "stays" (tried only in cell 2, where it is absorbing with reward 0 — the goal's
+    // neighbourhood). Plain nearest filling copies that 0 to cells 0 and 1, so the greedy
+    // policy would stay forever; the cap keeps "stay" below "right" where right was tried.
+    let samples = vec![
+        sample(at(0), 0, -1.0, at(1), false),
+        sample(at(1), 0, -1.0, at(2), false),
+        sample(at(2), 0, -1.0, at(2), true),
+        sample(at(2), 1, 0.0, at(2), true),
+    ];
+    let mut s = [FqiEntry::default(); 6];
+    let mut fqi = TabularFqi::new(line(3), 2, &mut s).unwrap();
+    let nearest = FqiConfig::new(0.9, 20, EmptyCells::Nearest).unwrap();
+    fqi.fit(&[SampleSet::unweighted(&samples)], &nearest)
+        .unwrap();
+    assert_eq!(fqi.value(at(0), 1).unwrap(), 0.0);
+    assert_eq!(fqi.greedy_action(at(0)).unwrap(), 1);
+    let capped = FqiConfig::new(0.9, 20, EmptyCells::CappedNearest).unwrap();
+    fqi.fit(&[SampleSet::unweighted(&samples)], &capped)
+        .unwrap();
+    // V(2) = max(−1, 0) = 0, so Q(1, right) = −1 + 0.9·0 = −1; "stay" in cell 1 is capped
+    // at −1, so V(1) = −1 and Q(0, right) = −1 + 0.9·(−1) = −1.9, which caps "stay" in 0.
+    assert!((fqi.value(at(0), 0).unwrap() + 1.9).abs() < 1e-12);
+    assert!((fqi.value(at(0), 1).unwrap() + 1.9).abs() < 1e-12);
+    assert_eq!(fqi.greedy_action(at(0)).unwrap(), 0);
+    assert_eq!(fqi.value(at(2), 1).unwrap(), 0.0);
 }
 
 #[test]

@@ -220,3 +220,24 @@ fn realistic_table_uses_the_gp_posterior_means() {
     let table = ScoreTable::compute(rows, &same, &mut storage).unwrap();
     assert!(table.values().iter().all(|v| v.total() == 0.0));
 }
+
+#[test]
+fn a_table_can_be_rebuilt_from_stored_scores() {
+    let rows = RowSet::grid(PointGrid::<f64>::puddle(5.0).unwrap(), 4).unwrap();
+    let mut storage = vec![Scores::default(); rows.len()];
+    let sources = PuddleWorld::sources(Dynamics::Shared);
+    let table = ScoreTable::compute(rows, &sources, &mut storage).unwrap();
+    let copy: Vec<Scores<f64>> = table.values().to_vec();
+    let again = ScoreTable::from_parts(rows, &copy).unwrap();
+    assert_eq!(again.values(), table.values());
+    assert_eq!(again.row(7), table.row(7));
+    assert_eq!(
+        ScoreTable::from_parts(rows, &copy[..3]).err(),
+        Some(Error::CapacityExceeded { capacity: 3 })
+    );
+    let mut bad = copy.clone();
+    bad[2].next_y = -1.0;
+    assert!(ScoreTable::from_parts(rows, &bad).is_err());
+    bad[2].next_y = f64::NAN;
+    assert!(ScoreTable::from_parts(rows, &bad).is_err());
+}
