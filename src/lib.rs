@@ -30,6 +30,8 @@ pub mod env;
 pub mod error;
 pub mod float;
 pub mod gp;
+pub mod identify;
+pub mod planning;
 pub mod rng;
 
 pub use error::{Error, Result};
