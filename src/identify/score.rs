@@ -367,6 +367,24 @@ fn rewards_identical<T: Real, M: FiniteMdp<T>>(
     Ok(true)
 }
 
+/// θ ~ b for a checked belief with total `total`: one `u64`, as [`rng::categorical`] but
+/// without re-validating the weights on every draw (this is the estimator's inner loop).
+fn pick<T: Real, R: Rng + ?Sized>(belief: &[T], total: T, rng: &mut R) -> usize {
+    let target = rng::uniform::<T, R>(rng) * total;
+    let mut cumulative = T::ZERO;
+    let mut last_positive = 0;
+    for (k, &b) in belief.iter().enumerate() {
+        if b > T::ZERO {
+            cumulative += b;
+            last_positive = k;
+            if target < cumulative {
+                return k;
+            }
+        }
+    }
+    last_positive
+}
+
 /// The binned Monte-Carlo estimate of the reward mutual information at one pair.
 #[allow(clippy::too_many_arguments)]
 fn reward_information<T: Real, M: FiniteMdp<T>, R: Rng + ?Sized>(
@@ -385,15 +403,17 @@ fn reward_information<T: Real, M: FiniteMdp<T>, R: Rng + ?Sized>(
         .ok_or(Error::CapacityExceeded { capacity: MAX_BINS })?;
     let last = T::from_usize(config.bins - 1);
     for _ in 0..config.samples {
-        let k = rng::categorical(rng, belief)?;
-        let mdp = candidates.get(k).ok_or(Error::OutOfRange {
-            parameter: "belief",
-        })?;
+        let mdp = candidates
+            .get(pick(belief, total, rng))
+            .ok_or(Error::OutOfRange {
+                parameter: "belief",
+            })?;
         let mean = mdp.reward_mean(s, a)?;
         let sd = positive_variance(mdp.reward_variance(s, a)?)?.sqrt();
         let r = rng::normal(rng, mean, sd)?;
-        // Samples outside the range go to the edge bins.
-        let position = ((r - lo) / width).floor().clamp_to(T::ZERO, last);
+        // Samples outside the range go to the edge bins. Clamping before the cast makes
+        // the truncation a floor (the value is non-negative) without libm's `floor`.
+        let position = ((r - lo) / width).clamp_to(T::ZERO, last);
         let bin = position.to_f64() as usize;
         if let Some(c) = counts.get_mut(bin) {
             *c += 1;
@@ -429,8 +449,8 @@ fn reward_information<T: Real, M: FiniteMdp<T>, R: Rng + ?Sized>(
 /// `config.samples` draws and `config.bins` common bins.
 ///
 /// Randomness: pairs are visited in index order; at each, unless skipped (see
-/// [`MiConfig::skip_identical_rewards`]), `samples` times one
-/// [`rng::categorical`] draw of θ from the belief then one [`rng::normal`] reward.
+/// [`MiConfig::skip_identical_rewards`]), `samples` times one `u64` for a draw of θ from
+/// the belief then one [`rng::normal`] reward.
 /// So the same generator state gives the same score.
 ///
 /// Errors: see [`compute_score`].

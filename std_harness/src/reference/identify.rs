@@ -3,6 +3,9 @@
 //! that the core's incremental, sparse, log-space and shifted computations can be checked
 //! against something obviously right.
 
+// Index loops mirror the subscripts of the spec's formulas; that is the point here.
+#![allow(clippy::needless_range_loop)]
+
 use awfqi::env::FiniteMdp;
 
 /// A finite MDP copied into dense tables: `p[s][a][s′]`, `r[s][a]`, `v[s][a]`.
