@@ -16,6 +16,34 @@
 //!   [`Belief::map`] followed by [`crate::planning::value_iteration`]).
 //!
 //! All candidates must share |𝒮| and |𝒜|.
+//!
+//! ```
+//! use awfqi::env::{FiniteMdp, GridWorld};
+//! use awfqi::identify::{Belief, Criterion, Scoring, compute_score, run_queries};
+//! use awfqi::planning::{StoppingRule, greedy_policy, value_iteration};
+//! use rand_chacha::ChaCha8Rng;
+//! use rand_core::SeedableRng;
+//!
+//! // The thesis's four Grid World candidates; the target is secretly number 2.
+//! let candidates = GridWorld::<f32>::thesis_candidates(false);
+//! let target = &candidates[2];
+//! let mut rng = ChaCha8Rng::seed_from_u64(0);
+//!
+//! // One-shot design: the variance score from the uniform prior, then 16 queries.
+//! let mut belief = Belief::<f32, 4>::uniform(4)?;
+//! let mut score = [0.0f32; 400];
+//! compute_score(&Criterion::Variance, &candidates, &[0.25; 4], &mut rng, &mut score)?;
+//! run_queries(&candidates, target, &Scoring::Fixed, 16, &mut belief, &mut score, &mut rng,
+//!     |_, _| {})?;
+//! let guess = belief.map();
+//! assert_eq!(guess, 2);
+//!
+//! // Plan in the MAP candidate: Q* and its greedy policy, all in caller storage.
+//! let (mut v, mut q, mut policy) = ([0.0f32; 100], [0.0f32; 400], [0usize; 100]);
+//! value_iteration(&candidates[guess], 0.9, StoppingRule::default(), &mut v, &mut q)?;
+//! greedy_policy(&q, 4, &mut policy)?;
+//! # Ok::<(), awfqi::Error>(())
+//! ```
 
 mod belief;
 mod draw;
