@@ -2,9 +2,9 @@
 //! evaluation and greedy policies.
 //!
 //! Every function works on storage the caller provides, so a controller decides where the
-//! tables live: `values` has one entry per state (|𝒮|·size_of::<T>() bytes), `q` one entry
-//! per state-action pair laid out state-major, index `s·|𝒜| + a` (|𝒮|·|𝒜|·size_of::<T>()
-//! bytes), and a policy one action index per state (|𝒮|·size_of::<usize>() bytes).
+//! tables live: `values` has one entry per state (|𝒮|·`size_of::<T>()` bytes), `q` one entry
+//! per state-action pair laid out state-major, index `s·|𝒜| + a` (|𝒮|·|𝒜|·`size_of::<T>()`
+//! bytes), and a policy one action index per state (|𝒮|·`size_of::<usize>()` bytes).
 //!
 //! Nothing here allocates or panics; the models are read through [`FiniteMdp`], so sparse
 //! models cost O(successors) per backup rather than O(|𝒮|).

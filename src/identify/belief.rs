@@ -55,7 +55,7 @@ pub(crate) fn positive_variance<T: Real>(v: T) -> Result<T> {
 /// log-probabilities so that products of thousands of likelihoods neither underflow nor
 /// overflow.
 ///
-/// Memory: `2·K·size_of::<T>()` bytes plus two words (the prior is kept for resets and
+/// Memory: `2·K·size_of::<T>()` bytes plus two words and a flag (the prior is kept for resets and
 /// for the spec's fall-back). Capacity is the const generic `K`; more candidates than `K`
 /// is [`Error::CapacityExceeded`].
 ///
