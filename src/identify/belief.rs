@@ -242,7 +242,7 @@ impl<T: Real, const K: usize> Belief<T, K> {
             *slot = log_likelihood(mdp, state, action, next_state, reward)?;
         }
         if self.contradicted {
-            self.observations += 1;
+            self.observations = self.observations.saturating_add(1);
             return Ok(());
         }
         // Shift the log-likelihoods by their maximum first: only ratios matter, and
@@ -288,7 +288,7 @@ impl<T: Real, const K: usize> Belief<T, K> {
                 parameter: "log_likelihood",
             });
         }
-        self.observations += 1;
+        self.observations = self.observations.saturating_add(1);
         Ok(())
     }
 
