@@ -20,7 +20,12 @@ pub mod evaluation;
 pub mod float;
 pub mod fqi;
 pub mod gp;
+<<<<<<< HEAD
 pub mod policy;
+=======
+pub mod identify;
+pub mod planning;
+>>>>>>> identify
 pub mod rng;
 pub mod score;
 pub mod weights;
