@@ -20,12 +20,9 @@ pub mod evaluation;
 pub mod float;
 pub mod fqi;
 pub mod gp;
-<<<<<<< HEAD
-pub mod policy;
-=======
 pub mod identify;
 pub mod planning;
->>>>>>> identify
+pub mod policy;
 pub mod rng;
 pub mod score;
 pub mod weights;
