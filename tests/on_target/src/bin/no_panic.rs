@@ -1,2 +1,314 @@
+//! The no-panic proof: an image that calls every public entry point of the core, in `f32`
+//! and `f64`, with inputs the optimiser cannot see through (`black_box`), linked with a
+//! panic handler that calls a symbol defined nowhere. If any panic path of the core
+//! survives optimisation (release, LTO, opt-level s), the handler is live and the link
+//! fails naming `awfqi_core_has_a_reachable_panic_path`. Built by `scripts/no-panic`; it
+//! is never run.
+//!
+//! Keep it complete: a new public function of the core gets a call here.
 #![no_std]
 #![no_main]
+
+use core::hint::black_box as opaque;
+
+use awfqi::Real;
+use awfqi::env::{
+    Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld,
+};
+use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+use cortex_m_rt::entry;
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+/// A value of `T` the optimiser cannot know.
+fn num<T: Real>(x: f64) -> T {
+    opaque(T::from_f64(opaque(x)))
+}
+
+fn index(i: usize) -> usize {
+    opaque(i)
+}
+
+fn keep<V>(v: V) {
+    opaque(v);
+}
+
+fn error_and_float<T: Real>() {
+    // `Error`'s Display goes through core::fmt; it is covered by writing into a sink.
+    struct Sink;
+    impl core::fmt::Write for Sink {
+        fn write_str(&mut self, s: &str) -> core::fmt::Result {
+            opaque(s);
+            Ok(())
+        }
+    }
+    let errors = [
+        awfqi::Error::CapacityExceeded { capacity: index(3) },
+        awfqi::Error::NonFinite { parameter: "x" },
+        awfqi::Error::InvalidParameter { parameter: "y" },
+        awfqi::Error::OutOfRange { parameter: "z" },
+        awfqi::Error::EmptyData,
+        awfqi::Error::NotPositiveDefinite,
+    ];
+    let e = errors
+        .get(index(2))
+        .copied()
+        .unwrap_or(awfqi::Error::EmptyData);
+    keep(core::fmt::write(&mut Sink, format_args!("{e}")));
+
+    let x: T = num(0.3);
+    keep((x.sqrt(), x.exp(), x.ln(), x.ln_1p(), x.abs(), x.floor()));
+    keep((x.max(num(0.1)), x.min(num(0.1)), x.is_finite(), x.is_nan()));
+    keep((
+        x.squared(),
+        x.clamp_to(num(0.0), num(1.0)),
+        x.to_f64(),
+        T::from_usize(index(7)),
+    ));
+    keep(awfqi::float::log_add_exp(x, num(2.0)));
+    keep(awfqi::float::log_sum_exp(opaque(
+        &[x, num(1.0), num(-3.0)][..],
+    )));
+}
+
+fn rng_and_policy<T: Real>(rng: &mut ChaCha8Rng) {
+    keep(awfqi::rng::uniform_f64(rng));
+    keep(awfqi::rng::uniform::<T, _>(rng));
+    keep(awfqi::rng::uniform_in::<T, _>(rng, num(-1.0), num(2.0)));
+    keep(awfqi::rng::standard_normal::<T, _>(rng));
+    keep(awfqi::rng::normal::<T, _>(rng, num(1.0), num(0.5)));
+    let weights: [T; 4] = [num(0.0), num(1.0), num(2.0), num(0.5)];
+    keep(awfqi::rng::categorical(rng, opaque(&weights[..])));
+
+    if let Ok(mut uniform) = UniformPolicy::new(index(4)) {
+        keep(uniform.num_actions());
+        keep(Policy::<[T; 2]>::action(
+            &mut uniform,
+            &[num(1.0), num(2.0)],
+            rng,
+        ));
+    }
+    let greedy = |s: &[T; 2]| -> awfqi::Result<usize> { Ok(usize::from(s[0] > s[1])) };
+    if let Ok(mut policy) = EpsilonGreedyPolicy::new(greedy, num::<T>(0.3), index(4)) {
+        keep(policy.epsilon());
+        keep(policy.action(&[num(1.0), num(2.0)], rng));
+        keep(policy.greedy());
+        keep(policy.greedy_mut());
+        let inner = policy.into_greedy();
+        keep(inner(&[num(1.0), num(0.0)]));
+    }
+}
+
+fn grid<T: Real>(rng: &mut ChaCha8Rng) {
+    let candidates = GridWorld::<T>::thesis_candidates(opaque(true));
+    let world = match GridWorld::<T>::new(
+        index(10),
+        index(10),
+        (index(3), index(4)),
+        num(0.25),
+        opaque(false),
+    ) {
+        Ok(w) => w,
+        Err(_) => candidates[0],
+    };
+    keep(GridWorld::<T>::thesis(index(2), opaque(false)));
+    keep((
+        world.width(),
+        world.height(),
+        world.goal(),
+        world.absorbing_goal(),
+    ));
+    keep(world.state_of(index(3), index(5)));
+    keep(world.cell_of(index(37)));
+    keep(world.next_state(index(37), index(2)));
+    keep((
+        FiniteMdp::num_states(&world),
+        FiniteMdp::num_actions(&world),
+        world.initial_state(),
+    ));
+    keep(world.transition_probability(index(3), index(1), index(2)));
+    let mut total = T::ZERO;
+    keep(world.for_each_successor(index(5), index(0), |s, p| {
+        total += p * T::from_usize(s);
+    }));
+    keep(total);
+    keep(world.reward_mean(index(99), index(0)));
+    keep(world.reward_variance(index(9), index(3)));
+    keep(GenerativeModel::num_actions(&world));
+    keep(world.query(index(44), index(1), rng));
+}
+
+fn puddle<T: Real>(rng: &mut ChaCha8Rng) {
+    let dynamics = if opaque(true) {
+        Dynamics::PuddleBased
+    } else {
+        Dynamics::Shared
+    };
+    keep(dynamics.slow_down());
+    let puddles = [
+        Puddle::new([num::<T>(1.0), num(4.0)], num(0.7)),
+        Puddle::new([num(6.0), num(6.0)], num(0.8)),
+    ];
+    let custom = PuddleWorld::new([num(5.0), num(10.0)], opaque(&puddles[..]), dynamics);
+    let [s1, s2, s3] = PuddleWorld::<T>::sources(dynamics);
+    let worlds = [
+        PuddleWorld::<T>::target(dynamics),
+        s1,
+        s2,
+        s3,
+        PuddleWorld::source_1(dynamics),
+    ];
+    keep((
+        PuddleWorld::<T>::source_2(dynamics),
+        PuddleWorld::<T>::source_3(dynamics),
+    ));
+    let world = match custom {
+        Ok(w) => w,
+        Err(_) => worlds[index(3) % 5],
+    };
+    keep((
+        world.goal(),
+        world.dynamics(),
+        world.slow_down(),
+        world.num_puddles(),
+    ));
+    let mut sum = T::ZERO;
+    for p in world.puddles() {
+        sum += p.variance + p.mean[0];
+    }
+    keep(sum);
+    let s = [num::<T>(3.0), num(4.5)];
+    keep(world.initial_state());
+    keep(world.check_state(s));
+    keep(world.puddle_weight(s));
+    keep(world.step_length(s));
+    keep(world.in_goal(s));
+    keep(world.mean_reward(s));
+    keep(world.mean_next_state(s, index(2)));
+    keep(world.step(s, index(1), rng));
+    keep(GenerativeModel::num_actions(&world));
+    keep(world.query(s, index(3), rng));
+
+    let mut uniform = UniformPolicy::new(4).unwrap_or_else(|_| loop {});
+    let mut count = 0usize;
+    keep(world.run_episode_with(&mut uniform, index(50), rng, |r| {
+        count += r.t;
+        Ok(())
+    }));
+    keep(count);
+    let mut records = [EpisodeRecord::<T>::default(); 50];
+    keep(world.run_episode(&mut uniform, index(50), &mut records, rng));
+    keep(&records);
+    keep(world.rollout(&mut uniform, index(50), num(0.99), rng));
+}
+
+fn gp<T: Real>(rng: &mut ChaCha8Rng) {
+    let hyper = Hyperparameters::<T, 3> {
+        signal_variance: num(2.0),
+        length_scales: [num(1.5), num(2.0), num(1.0)],
+        noise_variance: num(0.05),
+    };
+    keep(Hyperparameters::<T, 3>::SPEC_INITIAL);
+    keep(Hyperparameters::<T, 3>::isotropic(
+        num(1.0),
+        num(2.0),
+        num(0.1),
+    ));
+    keep(hyper.validate());
+    let a = [num::<T>(1.0), num(2.0), num(0.0)];
+    let b = [num::<T>(0.5), num(2.5), num(1.0)];
+    keep(hyper.covariance(&a, &b));
+
+    let mut gp = match Gp::<T, 16, 3>::new(hyper) {
+        Ok(gp) => gp,
+        Err(_) => Gp::empty(),
+    };
+    keep(Gp::<T, 16, 3>::default().len());
+    keep(Gp::<T, 16, 3>::CAPACITY);
+    let mut x = [[T::ZERO; 3]; 12];
+    let mut y = [T::ZERO; 12];
+    for (i, (xi, yi)) in x.iter_mut().zip(y.iter_mut()).enumerate() {
+        let t = T::from_usize(i);
+        *xi = [t * num(0.7), num::<T>(10.0) - t, T::from_usize(i % 4)];
+        *yi = (t * num(0.3)).exp();
+    }
+    let n = index(10).min(12);
+    keep(gp.fit(opaque(&x[..n]), opaque(&y[..n])));
+    keep(gp.add_point(
+        b,
+        num(0.5),
+        if opaque(true) {
+            WhenFull::DropOldest
+        } else {
+            WhenFull::Refuse
+        },
+    ));
+    keep(gp.predict(&a));
+    keep(gp.log_marginal_likelihood());
+    keep((gp.len(), gp.is_empty(), gp.hyperparameters(), gp.jitter()));
+    keep((gp.inputs().len(), gp.targets().len()));
+    keep(gp.set_hyperparameters(Hyperparameters::isotropic(num(1.0), num(1.0), num(0.1))));
+    let bounds = HyperparameterBounds::<T, 3>::spec_default();
+    keep(bounds.validate());
+    keep(bounds.contains(gp.hyperparameters()));
+    let options = SearchOptions {
+        max_evaluations: index(30),
+        restarts: index(2),
+        isotropic: opaque(false),
+    };
+    keep(options.validate());
+    keep(SearchOptions::default());
+    keep(gp.optimize_hyperparameters(&bounds, &options, rng));
+    // Fill to capacity so the sliding-window path of `add_point` is live too.
+    for i in 0..index(20) {
+        let t = T::from_usize(i);
+        keep(gp.add_point([t, t * num(0.5), num(1.0)], t, WhenFull::DropOldest));
+    }
+    keep(gp.predict(&b));
+    gp.clear();
+    keep(gp.len());
+}
+
+fn exercise<T: Real>(seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    error_and_float::<T>();
+    rng_and_policy::<T>(&mut rng);
+    grid::<T>(&mut rng);
+    puddle::<T>(&mut rng);
+    gp::<T>(&mut rng);
+}
+
+#[entry]
+fn main() -> ! {
+    exercise::<f32>(opaque(1));
+    exercise::<f64>(opaque(2));
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[cfg(not(feature = "diagnose"))]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    unsafe extern "C" {
+        fn awfqi_core_has_a_reachable_panic_path() -> !;
+    }
+    // SAFETY: never linked; the link fails if this handler is reachable.
+    unsafe { awfqi_core_has_a_reachable_panic_path() }
+}
+
+/// `scripts/no-panic --diagnose`: links with a looping handler so the surviving panic
+/// calls can be listed from the disassembly with their source lines.
+#[cfg(feature = "diagnose")]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    extern "C" fn awfqi_core_has_a_reachable_panic_path() -> ! {
+        loop {
+            cortex_m::asm::nop();
+        }
+    }
+    awfqi_core_has_a_reachable_panic_path()
+}
