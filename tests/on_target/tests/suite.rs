@@ -416,4 +416,13 @@ mod tests {
             EpsilonGreedyPolicy::new(|_: &[f32; 2]| awfqi::Result::Ok(0usize), 1.5f32, 4).is_err()
         );
     }
+
+    /// The footprint images' GP workload runs to completion on the target (a footprint of
+    /// code that fails would mean nothing) and gives a finite result.
+    #[test]
+    fn footprint_gp_workload_runs() {
+        let mut gp = Gp::<f32, 16, 3>::empty();
+        let total = awfqi_on_target::workloads::gp_reward_model(&mut gp, 7).unwrap();
+        assert!(total.is_finite() && gp.len() == 16, "total {}", total);
+    }
 }
