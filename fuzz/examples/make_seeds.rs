@@ -289,8 +289,345 @@ fn env_seeds() {
     }
 }
 
+/// One FQI sample: state, action, reward, next state, absorbing.
+fn sample(s: &mut Seed, state: [f64; 2], action: u8, reward: f64, next: [f64; 2], absorbing: bool) {
+    s.nums(&state)
+        .u8(action)
+        .num(reward)
+        .nums(&next)
+        .bool(absorbing);
+}
+
+fn fqi_seeds() {
+    for (f32, p) in [(true, "f32"), (false, "f64")] {
+        let walk: Vec<([f64; 2], u8, f64, [f64; 2], bool)> = (0..12)
+            .map(|i| {
+                let x = (i % 10) as f64;
+                let y = (i / 3) as f64 * 2.5;
+                let up = i % 2 == 0;
+                let next = if up {
+                    [x, (y + 1.0).min(10.0)]
+                } else {
+                    [(x + 1.0).min(10.0), y]
+                };
+                (
+                    [x, y],
+                    if up { 2 } else { 0 },
+                    -1.0 - (i as f64) * 0.5,
+                    next,
+                    i == 11,
+                )
+            })
+            .collect();
+        let write_set = |s: &mut Seed,
+                         rows: &[([f64; 2], u8, f64, [f64; 2], bool)],
+                         rw: Option<&[f64]>,
+                         tw: Option<&[f64]>| {
+            s.u8(rows.len() as u8);
+            for &(st, a, r, n, ab) in rows {
+                sample(s, st, a, r, n, ab);
+            }
+            for w in [rw, tw] {
+                match w {
+                    Some(w) => {
+                        s.bool(true)
+                            .u8(if w.len() == rows.len() { 0 } else { 0xff })
+                            .nums(w);
+                    }
+                    None => {
+                        s.bool(false);
+                    }
+                }
+            }
+        };
+        // Header: precision, square grid of 5 cells, 4 actions, discount 0.99, 10 iterations,
+        // capped-nearest, no min weight, two sets.
+        let header = |s: &mut Seed, empty: u8, discount: f64, iterations: u8| {
+            s.bool(f32)
+                .bool(false)
+                .u8(4)
+                .u8(4)
+                .bool(true)
+                .num(discount)
+                .u8(iterations)
+                .u8(empty);
+            if empty == 2 {
+                s.num(-3.0);
+            }
+            s.bool(false);
+        };
+        let queries = |s: &mut Seed| {
+            for (st, a) in [
+                ([0.0, 0.0], 0u8),
+                ([10.0, 10.0], 3),
+                ([-5.0, 20.0], 1),
+                ([NAN, 1.0], 2),
+                ([5.0, 5.0], 4),
+            ] {
+                s.nums(&st).u8(a);
+            }
+        };
+        let w: Vec<f64> = (0..12).map(|i| [0.0, 1.0, 1000.0, 1e-9][i % 4]).collect();
+        for (name, empty) in [("nearest", 0u8), ("capped", 1), ("value", 2)] {
+            let mut s = Seed::new();
+            header(&mut s, empty, 0.99, 10);
+            s.u8(1);
+            write_set(&mut s, &walk[..6], None, None);
+            write_set(&mut s, &walk[6..], Some(&w[6..]), Some(&w[..6]));
+            queries(&mut s);
+            write("weighted_fqi", &format!("two_sets_{name}_{p}"), &s);
+        }
+        // All weights zero: no pair has data.
+        let mut s = Seed::new();
+        header(&mut s, 1, 1.0, 11);
+        s.u8(0);
+        write_set(&mut s, &walk, Some(&[0.0; 12]), Some(&[0.0; 12]));
+        queries(&mut s);
+        write("weighted_fqi", &format!("zero_weights_{p}"), &s);
+        // Huge rewards with discount 1 and many iterations (overflow of the sums).
+        let big = if f32 { 3e38 } else { 1e307 };
+        let huge: Vec<_> = walk
+            .iter()
+            .map(|&(st, a, _, n, _)| (st, a, -big, n, false))
+            .collect();
+        let mut s = Seed::new();
+        header(&mut s, 0, 1.0, 11);
+        s.u8(0);
+        write_set(&mut s, &huge, Some(&[1e30; 12]), None);
+        queries(&mut s);
+        write("weighted_fqi", &format!("huge_rewards_{p}"), &s);
+        // Bad samples: NaN reward, action out of range, negative weight, wrong weight length.
+        for (name, bad) in [
+            ("nan_reward", (walk[0].0, 0u8, NAN, walk[0].3, false)),
+            ("bad_action", (walk[0].0, 5, -1.0, walk[0].3, false)),
+            ("inf_next_state", (walk[0].0, 1, -1.0, [INF, 0.0], false)),
+            ("outside_box", ([-100.0, 1e6], 1, -1.0, [20.0, -3.0], true)),
+        ] {
+            let mut rows = walk[..4].to_vec();
+            rows.push(bad);
+            let mut s = Seed::new();
+            header(&mut s, 1, 0.9, 3);
+            s.u8(0);
+            write_set(&mut s, &rows, None, None);
+            queries(&mut s);
+            write("weighted_fqi", &format!("{name}_{p}"), &s);
+        }
+        let mut s = Seed::new();
+        header(&mut s, 1, 0.9, 3);
+        s.u8(1);
+        write_set(&mut s, &walk[..4], Some(&[1.0, -1.0, 1.0, 1.0]), None);
+        write_set(&mut s, &walk[4..6], Some(&[1.0, 1.0, 1.0]), None);
+        queries(&mut s);
+        write("weighted_fqi", &format!("bad_weights_{p}"), &s);
+        // A custom grid with inverted bounds, and one of a single cell with a NaN bound.
+        let mut s = Seed::new();
+        s.bool(f32)
+            .bool(true)
+            .nums(&[10.0, 0.0, 0.0, 10.0])
+            .u8(3)
+            .u8(3);
+        write("weighted_fqi", &format!("inverted_grid_{p}"), &s);
+        let mut s = Seed::new();
+        s.bool(f32)
+            .bool(true)
+            .nums(&[0.0, 0.0, NAN, 1.0])
+            .u8(1)
+            .u8(1);
+        write("weighted_fqi", &format!("nan_grid_{p}"), &s);
+        // Bad settings: discount outside [0, 1], zero iterations, zero actions.
+        let mut s = Seed::new();
+        s.bool(f32)
+            .bool(false)
+            .u8(4)
+            .u8(4)
+            .bool(true)
+            .num(1.5)
+            .u8(3)
+            .u8(1);
+        write("weighted_fqi", &format!("bad_discount_{p}"), &s);
+        let mut s = Seed::new();
+        s.bool(f32).bool(false).u8(4).u8(0);
+        write("weighted_fqi", &format!("zero_actions_{p}"), &s);
+    }
+}
+
+fn score_seeds() {
+    for (mode, p) in [(0u8, "f32"), (1, "f64")] {
+        for (name, weights) in [
+            ("alias_mixed", vec![0.0, 1.0, 2.0, 0.0, 1e-30, 5.0]),
+            ("alias_zero", vec![0.0, 0.0, 0.0]),
+            ("alias_single", vec![3.0]),
+            ("alias_huge", vec![3e38, 3e38, 1e-38, 0.0]),
+            ("alias_nan", vec![1.0, NAN]),
+            ("alias_negative", vec![1.0, -1e-30]),
+            ("alias_tiny", vec![5e-324, 5e-324, 1e-300]),
+        ] {
+            let mut s = Seed::new();
+            s.u8(mode).u8(weights.len() as u8).nums(&weights).u8(40);
+            write("score_draw", &format!("{name}_{p}"), &s);
+        }
+        let mut s = Seed::new();
+        s.u8(mode).u8(3).nums(&[1.0, 2.0, 3.0]).u8(2);
+        write("score_draw", &format!("alias_short_storage_{p}"), &s);
+    }
+    for (mode, p) in [(2u8, "f32"), (3, "f64")] {
+        let records = |s: &mut Seed| {
+            s.u8(2);
+            s.u8(3)
+                .nums(&[0.0, 0.0])
+                .u8(0)
+                .nums(&[5.0, 9.0])
+                .u8(2)
+                .nums(&[10.0, 10.0])
+                .u8(3);
+            s.u8(2).nums(&[1.0, 4.0]).u8(1).nums(&[6.0, 6.0]).u8(4);
+        };
+        // Oracle tables on the puddle grid (d = 2.5 and 5), every row-set mode and column.
+        for (rowset, column) in [(0u8, 0u8), (1, 3), (2, 1)] {
+            let mut s = Seed::new();
+            s.u8(mode).bool(false).num(2.5);
+            records(&mut s);
+            s.u8(4)
+                .u8(rowset)
+                .u8(0)
+                .u8(0)
+                .bool(true)
+                .u8(3)
+                .u8(column)
+                .u8(1);
+            write("score_draw", &format!("oracle_rowset{rowset}_{p}"), &s);
+        }
+        // Fuzzed sources: agreeing (all scores 0: uniform sampling), overflowing, NaN, a
+        // failing model, a single source.
+        for (name, values, count) in [
+            ("agree", vec![[1.0, 2.0, 3.0]], 3u8),
+            (
+                "disagree",
+                vec![[1.0, 2.0, 3.0], [-20.0, 2.5, 3.0], [0.5, 1.0, 9.0]],
+                3,
+            ),
+            (
+                "overflow",
+                vec![[3e38, -3e38, 1e308], [-1e308, 1e308, 0.0]],
+                2,
+            ),
+            ("nan", vec![[NAN, 0.0, 0.0]], 2),
+            ("single", vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], 1),
+        ] {
+            let mut s = Seed::new();
+            s.u8(mode)
+                .bool(true)
+                .nums(&[0.0, 0.0, 2.0, 2.0])
+                .u8(3)
+                .u8(3);
+            records(&mut s);
+            s.u8(4).u8(0).u8(0).u8(0).bool(false).u8(count);
+            for k in 0..count as usize {
+                let v = &values[k % values.len()];
+                let rotated: Vec<[f64; 3]> = (0..values.len())
+                    .map(|i| values[(i + k) % values.len()])
+                    .collect();
+                let _ = v;
+                s.u8((rotated.len() - 1) as u8);
+                for t in &rotated {
+                    s.nums(t);
+                }
+                s.u8(0);
+            }
+            s.u8(3).u8(2);
+            write("score_draw", &format!("fuzzed_{name}_{p}"), &s);
+        }
+        let mut s = Seed::new();
+        s.u8(mode)
+            .bool(true)
+            .nums(&[0.0, 0.0, 1.0, 1.0])
+            .u8(2)
+            .u8(2);
+        records(&mut s);
+        s.u8(4).u8(0).u8(0).u8(0).bool(false).u8(2);
+        s.u8(0).nums(&[1.0, 1.0, 1.0]).u8(0xff).u8(5);
+        s.u8(0).nums(&[2.0, 1.0, 1.0]).u8(0);
+        s.u8(0).u8(0);
+        write("score_draw", &format!("failing_model_{p}"), &s);
+        // Bad grids: zero spacing, NaN lower corner, a spacing that does not divide 10.
+        for (name, custom, nums) in [
+            ("zero_spacing", true, vec![0.0, 0.0, 0.0, 1.0]),
+            ("nan_corner", true, vec![NAN, 0.0, 1.0, 1.0]),
+            ("puddle_0_3", false, vec![0.3]),
+            ("puddle_negative", false, vec![-1.0]),
+        ] {
+            let mut s = Seed::new();
+            s.u8(mode).bool(custom).nums(&nums);
+            if custom {
+                s.u8(2).u8(2);
+            }
+            s.u8(0).u8(4).u8(2).u8(0).u8(0).bool(true).u8(3).u8(0).u8(0);
+            write("score_draw", &format!("{name}_{p}"), &s);
+        }
+    }
+}
+
+fn weights_seeds() {
+    for (f32, p) in [(true, "f32"), (false, "f64")] {
+        for (estimator, e) in [(true, "mean"), (false, "heuristic")] {
+            let mut s = Seed::new();
+            s.bool(f32).bool(estimator).num(0.1).num(1000.0).u8(5);
+            s.nums(&[-1.0, -20.0, 0.0, 3.0, -1.1]);
+            for (m, sd) in [
+                (-1.0, 0.1),
+                (-22.0, 0.5),
+                (0.0, 0.0),
+                (1e30, 1.0),
+                (-1.0, 0.3),
+            ] {
+                s.nums(&[m, sd]);
+            }
+            for (m, sd) in [
+                (-1.0, 0.2),
+                (-1.0, 0.31),
+                (0.0, 1.0),
+                (-1e30, 0.0),
+                (-1.0, 0.3162),
+            ] {
+                s.nums(&[m, sd]);
+            }
+            s.u8(0).u8(2);
+            s.u8(0).num(0.1).u8(4).nums(&[0.5, 0.01, 0.0, -1e-9]);
+            s.num(0.01).num(0.2);
+            s.nums(&[1.0, 0.0, 1.0, 0.1]);
+            s.u8(5).nums(&[1.0, 1.0, 0.5, 0.0, 2.0]);
+            write("weights", &format!("{e}_{p}"), &s);
+        }
+        // Hard cases: zero noise variance, huge and tiny posteriors, NaN, negative std,
+        // lengths that differ, every noise-subtraction mode, ideal weight overflow.
+        for (k, noise) in [0.0, 1e-300, 3e38, NAN].into_iter().enumerate() {
+            let mut s = Seed::new();
+            s.bool(f32)
+                .bool(k % 2 == 0)
+                .num(noise)
+                .num(if k == 1 { 1e300 } else { 1.0 })
+                .u8(3);
+            s.nums(&[1e300, -1e-300, NAN]);
+            s.nums(&[0.0, 1e150, 1.0, -1.0, 0.0, 0.0]);
+            s.nums(&[1e-300, 0.0, 1.0, 1e200, 5.0, 1.0]);
+            s.u8(0xff)
+                .u8(k as u8)
+                .num(noise)
+                .u8(3)
+                .nums(&[1e300, 0.0, 1e-300]);
+            s.num(1e308).num(-1.0);
+            s.nums(&[1e300, -1e300, 1e300, 1e-300]);
+            s.u8(3).nums(&[0.0, 0.0, 0.0]);
+            write("weights", &format!("hard{k}_{p}"), &s);
+        }
+    }
+}
+
 fn main() {
     gp_seeds();
     env_seeds();
+    fqi_seeds();
+    score_seeds();
+    weights_seeds();
     println!("seeds written under fuzz/seeds/");
 }

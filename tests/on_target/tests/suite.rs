@@ -425,4 +425,264 @@ mod tests {
         let total = awfqi_on_target::workloads::gp_reward_model(&mut gp, 7).unwrap();
         assert!(total.is_finite() && gp.len() == 16, "total {}", total);
     }
+
+    /// The AWFQI loop for a small budget on the target (f32): 6 × 6 cells, a 16-point GP,
+    /// 100 score rows, 2 steps of 20 queries, sources of 2 episodes. Checks the step report
+    /// against the run's own sizes and that every output is finite and in range.
+    #[test]
+    fn awfqi_loop_small_budget() {
+        use awfqi_on_target::workloads::{KernelRun, KernelStorage, awfqi_puddle};
+        use core::mem::MaybeUninit;
+        static mut STORAGE: MaybeUninit<KernelStorage<100, 100, 144, 40, 16>> =
+            MaybeUninit::zeroed();
+        // SAFETY: the only reference; all-zero bits are valid for every field.
+        let storage = unsafe { (*core::ptr::addr_of_mut!(STORAGE)).assume_init_mut() };
+        let run = KernelRun {
+            cells: 6,
+            spacing: 2.5,
+            budget: 20,
+            steps: 2,
+            episodes: 2,
+            search: (40, 1),
+        };
+        let (report, evaluation) = awfqi_puddle(storage, run, 3).unwrap();
+        assert!(
+            report.step == 2 && report.n_target_samples == 40,
+            "step {} samples {}",
+            report.step,
+            report.n_target_samples
+        );
+        assert!(report.n_source_samples > 0 && report.n_source_samples <= 300);
+        assert!(report.gp_points == 16 && report.gp_log_likelihood.is_finite());
+        assert!(report.wr_mean.is_finite() && report.wr_mean >= 0.0);
+        let total = (report.n_target_samples + report.n_source_samples) as f32;
+        assert!(
+            report.wr_eff > 0.0 && report.wr_eff <= total * 1.0001,
+            "ess {}",
+            report.wr_eff
+        );
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(
+            evaluation.mean_steps >= 1.0
+                && evaluation.mean_steps <= 50.0
+                && evaluation.reached_goal <= 5
+        );
+        // Every drawn query lies on the score grid (spacing 2.5) with a valid action.
+        for t in storage.samples.iter() {
+            for c in t.state {
+                assert!(c % 2.5 == 0.0 && (0.0..=10.0).contains(&c));
+            }
+            assert!(t.action < 4 && t.reward.is_finite());
+        }
+    }
+
+    /// Spec §7.3's golden weights (both estimators), the ESS example and §7.7's ideal weight,
+    /// in f32.
+    #[test]
+    fn weights_match_spec_golden_values() {
+        use awfqi::weights::{
+            Estimator, Posterior, WeightParams, effective_sample_size, ideal_weight,
+        };
+        // y, μt, σt, μs, σs, v, mean, heuristic
+        const TABLE: [[f64; 8]; 5] = [
+            [
+                -1.0,
+                -1.2,
+                0.1,
+                -1.0,
+                0.05,
+                0.1,
+                0.805079404153,
+                0.804827777517,
+            ],
+            [
+                -1.3,
+                -1.0,
+                0.2,
+                -1.25,
+                0.03,
+                0.1,
+                0.623422515078,
+                0.623257005989,
+            ],
+            [
+                -5.0,
+                -1.0,
+                0.05,
+                -5.1,
+                0.04,
+                0.1,
+                1.33061875955e-34,
+                1.32832086981e-34,
+            ],
+            [
+                2.3,
+                2.0,
+                0.1,
+                2.2,
+                0.02,
+                0.2,
+                0.808455457025,
+                0.808372998447,
+            ],
+            [0.0, 0.0, 0.1, 0.0, 0.4, 0.1, 0.0, 1.53741222957],
+        ];
+        for row in TABLE.iter() {
+            let f = |i: usize| row[i] as f32;
+            let (t, s) = (Posterior::new(f(1), f(2)), Posterior::new(f(3), f(4)));
+            for (estimator, expected) in [(Estimator::Mean, row[6]), (Estimator::Heuristic, row[7])]
+            {
+                let params = WeightParams::new(estimator, f(5), 1000.0).unwrap();
+                let w = params.weight(f(0), t, s).unwrap() as f64;
+                assert!(
+                    close(w, expected, 0.0, 2e-4),
+                    "weight {} vs {}",
+                    w,
+                    expected
+                );
+            }
+        }
+        let ess = effective_sample_size(&[1.0f32, 1.0, 0.5, 0.0, 2.0]).unwrap();
+        assert!(close(ess as f64, 3.24, 0.0, 1e-6), "ess {}", ess);
+        let w = ideal_weight(-1.05f32, -1.0, -1.2, 0.01).unwrap();
+        assert!(
+            close(w as f64, core::f64::consts::E, 0.0, 2e-5),
+            "ideal {}",
+            w
+        );
+    }
+
+    /// Oracle score table over the three sources on the 3 × 3 puddle grid (spacing 5):
+    /// `V_r` at (0, 0) and (5, 5) from spec §2.7's mean rewards, `V_x = V_y = 0` (shared
+    /// dynamics), and draws whose frequencies follow `V_r / Σ V_r` (never a zero row).
+    #[test]
+    fn score_table_and_draws() {
+        use awfqi::alias::AliasEntry;
+        use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+        let worlds = PuddleWorld::<f32>::sources(Dynamics::Shared);
+        let rows = RowSet::grid(PointGrid::puddle(5.0).unwrap(), 4).unwrap();
+        assert!(rows.len() == 36);
+        let mut storage = [Scores::<f32>::ZERO; 36];
+        let table = ScoreTable::compute(rows, &worlds, &mut storage).unwrap();
+        let variance = |v: [f64; 3]| {
+            let m = (v[0] + v[1] + v[2]) / 3.0;
+            v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0
+        };
+        let expected_00 = variance([-1.000000, -1.134130, -1.000000]);
+        let expected_55 = variance([-12.399667, -6.748596, -12.399726]);
+        let mut sum = 0.0f64;
+        for r in 0..36 {
+            let row = table.row(r).unwrap();
+            assert!(
+                row.scores.get(ScoreColumn::NextX) == 0.0
+                    && row.scores.get(ScoreColumn::NextY) == 0.0
+            );
+            let v = row.scores.get(ScoreColumn::Reward) as f64;
+            if row.state == [0.0, 0.0] {
+                assert!(
+                    close(v, expected_00, 1e-5, 1e-3),
+                    "V_r(0,0) {} vs {}",
+                    v,
+                    expected_00
+                );
+            }
+            if row.state == [5.0, 5.0] {
+                assert!(
+                    close(v, expected_55, 1e-4, 1e-4),
+                    "V_r(5,5) {} vs {}",
+                    v,
+                    expected_55
+                );
+            }
+            sum += v;
+        }
+        let mut alias = [AliasEntry::<f32>::EMPTY; 36];
+        let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut counts = [0u32; 36];
+        const DRAWS: u32 = 4000;
+        for _ in 0..DRAWS {
+            let (r, state, action) = sampler.draw(&mut rng);
+            assert!(table.rows().row(r) == Some((state, action)));
+            counts[r] += 1;
+        }
+        for r in 0..36 {
+            let p = table.row(r).unwrap().scores.get(ScoreColumn::Reward) as f64 / sum;
+            let n = DRAWS as f64;
+            let sd = libm::sqrt(n * p * (1.0 - p));
+            let c = counts[r] as f64;
+            assert!(
+                (c - n * p).abs() <= 5.0 * sd + 1.0,
+                "row {}: {} draws, expected {}",
+                r,
+                c,
+                n * p
+            );
+            if p == 0.0 {
+                assert!(counts[r] == 0);
+            }
+        }
+    }
+
+    /// Weighted FQI on a two-cell chain, hand-computed: target samples c0 → c1 (r = 0) and
+    /// c1 absorbing (r = 1); a source sample c0 → c0 with r = −10, reward weight 0.25 and
+    /// transition weight 0.5. Then R̂(c0) = (0 + 0.25·(−10))/1.25 = −2 and
+    /// Q(c0) = −2 + 0.9·(1·Q(c1) + 0.5·Q(c0))/1.5, whose fixed point is −2; Q(c1) = 1.
+    #[test]
+    fn weighted_fqi_sweep_on_a_chain() {
+        use awfqi::env::Transition;
+        use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+        let t = |s: [f32; 2], r: f32, n: [f32; 2], absorbing: bool| Transition {
+            state: s,
+            action: 0,
+            reward: r,
+            next_state: n,
+            absorbing,
+        };
+        let target = [
+            t([0.5, 0.5], 0.0, [1.5, 0.5], false),
+            t([1.5, 0.5], 1.0, [1.5, 0.5], true),
+        ];
+        let source = [t([0.5, 0.5], -10.0, [0.5, 0.5], false)];
+        let (rw, tw) = ([0.25f32], [0.5f32]);
+        let grid = CellGrid::new([0.0, 0.0], [2.0, 1.0], [2, 1]).unwrap();
+        let mut storage = [FqiEntry::<f32>::EMPTY; 2];
+        let mut fqi = TabularFqi::new(grid, 1, &mut storage).unwrap();
+        let config = FqiConfig::new(0.9f32, 40, EmptyCells::Value(0.0))
+            .unwrap()
+            .with_min_weight(0.0)
+            .unwrap();
+        let sets = [
+            SampleSet::unweighted(&target),
+            SampleSet::weighted(&source, Some(&rw), Some(&tw)),
+        ];
+        fqi.fit(&sets, &config).unwrap();
+        let e = fqi.entries();
+        assert!(
+            close(e[0].reward_model() as f64, -2.0, 1e-6, 1e-6),
+            "R̂(c0) {}",
+            e[0].reward_model()
+        );
+        assert!(
+            close(e[0].q() as f64, -2.0, 1e-5, 1e-6),
+            "Q(c0) {}",
+            e[0].q()
+        );
+        assert!(
+            close(e[1].q() as f64, 1.0, 1e-6, 1e-6),
+            "Q(c1) {}",
+            e[1].q()
+        );
+        assert!(close(e[0].transition_weight() as f64, 1.5, 1e-6, 0.0));
+        assert!(fqi.value([0.2, 0.9], 0) == Ok(e[0].q()) && fqi.greedy_action([1.9, 0.1]) == Ok(0));
+        // Bad input leaves the table unchanged.
+        let before = [e[0], e[1]];
+        let bad = [t([0.5, 0.5], f32::NAN, [1.5, 0.5], false)];
+        assert!(matches!(
+            fqi.fit(&[SampleSet::unweighted(&bad)], &config),
+            Err(Error::NonFinite { .. })
+        ));
+        assert!(fqi.entries() == &before[..]);
+        assert!(fqi.fit(&[], &config) == Err(Error::EmptyData));
+    }
 }
