@@ -12,11 +12,26 @@
 use core::hint::black_box as opaque;
 
 use awfqi::Real;
+use awfqi::alias::{AliasEntry, AliasTable};
+use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
+use awfqi::dataset::{
+    GpTraining, Output, SubsetRule, batch_transform, fit_gp, input, predict_posteriors,
+};
+use awfqi::env::Transition;
 use awfqi::env::{
     Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld,
 };
+use awfqi::evaluation::{evaluate, evaluate_greedy};
+use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+use awfqi::score::{
+    GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceModel,
+};
+use awfqi::weights::{
+    Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
+    effective_sample_size, ideal_weight, predictive_stds,
+};
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -270,6 +285,305 @@ fn gp<T: Real>(rng: &mut ChaCha8Rng) {
     keep(gp.len());
 }
 
+fn record<T: Real>(i: usize) -> Transition<[T; 2], T> {
+    let t = T::from_usize(i % 10);
+    Transition {
+        state: [t, num::<T>(9.0) - t],
+        action: i % 4,
+        reward: num::<T>(-1.0) - t,
+        next_state: [t + num(1.0), num::<T>(9.0) - t],
+        absorbing: i % 7 == 6,
+    }
+}
+
+fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
+    // alias
+    let mut entries = [AliasEntry::<T>::EMPTY; 8];
+    let weights: [T; 5] = [num(0.0), num(1.0), num(2.5), num(0.1), num(3.0)];
+    if let Ok(table) = AliasTable::build(opaque(weights).into_iter().take(index(5)), &mut entries) {
+        keep((
+            table.len(),
+            table.is_empty(),
+            table.probability(index(2)),
+            table.sample(rng),
+        ));
+        let mut out = [0usize; 4];
+        table.sample_into(rng, &mut out);
+        keep(out);
+        if let Some(e) = table.entries().get(index(1)) {
+            keep((e.threshold(), e.alias()));
+        }
+    }
+
+    // weights
+    let params = WeightParams::new(
+        if opaque(true) {
+            Estimator::Mean
+        } else {
+            Estimator::Heuristic
+        },
+        num::<T>(0.1),
+        num(1000.0),
+    )
+    .unwrap_or_else(|_| WeightParams::reference_reward());
+    keep((
+        params.estimator(),
+        params.noise_variance(),
+        params.max_weight(),
+    ));
+    let (pt, ps) = (
+        Posterior::new(num::<T>(-1.2), num(0.1)),
+        Posterior::new(num::<T>(-1.0), num(0.05)),
+    );
+    keep(params.weight(num(-1.0), pt, ps));
+    let ys: [T; 3] = [num(-1.0), num(-2.0), num(0.5)];
+    let mut out = [T::ZERO; 3];
+    keep(params.weights_into(&ys, &[pt; 3], &[ps; 3], &mut out));
+    let mut variances: [T; 3] = [num(0.5), num(0.2), num(0.3)];
+    let mode = [
+        NoiseSubtraction::Reference,
+        NoiseSubtraction::Principled,
+        NoiseSubtraction::Off,
+    ][index(1) % 3];
+    keep(predictive_stds(mode, num::<T>(0.1), &mut variances));
+    if let Ok(transform) = StdTransform::new(mode, num::<T>(0.1), num(0.2)) {
+        keep(transform.apply(num(0.4)));
+    }
+    keep(ideal_weight(
+        num::<T>(-1.05),
+        num(-1.0),
+        num(-1.2),
+        num(0.01),
+    ));
+    let mut summary = WeightSummary::<T>::new();
+    keep(summary.add(&out));
+    summary.add_ones(index(3));
+    keep((
+        summary.count(),
+        summary.mean(),
+        summary.effective_sample_size(),
+    ));
+    keep(effective_sample_size(opaque(&out[..])));
+
+    // dataset
+    let records: [Transition<[T; 2], T>; 12] = core::array::from_fn(record::<T>);
+    let z = input(records[index(3) % 12].state, index(2));
+    keep(z);
+    let output = [Output::Reward, Output::NextX, Output::NextY][index(2) % 3];
+    keep(output.of(&records[index(4) % 12]));
+    let rule = if opaque(true) {
+        SubsetRule::Spread
+    } else {
+        SubsetRule::Last
+    };
+    keep(rule.indices(index(12), index(5)).fold(0, |a, i| a + i));
+    let mut training = GpTraining::<T>::reference();
+    training.search.max_evaluations = index(20);
+    training.search.restarts = index(1);
+    let mut gp = Gp::<T, 8, 3>::empty();
+    keep(fit_gp(
+        &mut gp,
+        opaque(&records[..]),
+        output,
+        rule,
+        &training,
+        rng,
+    ));
+    let mut posteriors = [Posterior::<T>::default(); 12];
+    keep(predict_posteriors(&gp, &records, mode, &mut posteriors));
+    keep(batch_transform(&gp, &records, mode));
+
+    // fqi
+    let grid = CellGrid::new(
+        [num::<T>(0.0), num(0.0)],
+        [num(10.0), num(10.0)],
+        [index(3), index(3)],
+    )
+    .or_else(|_| CellGrid::square(num::<T>(0.0), num(10.0), index(3)));
+    if let Ok(grid) = grid {
+        keep((
+            grid.cells(),
+            grid.len(),
+            grid.is_empty(),
+            grid.lower(),
+            grid.upper(),
+        ));
+        keep((
+            grid.cell_of([num(3.3), num(7.1)]),
+            grid.coordinates(index(4)),
+            grid.center(index(4)),
+        ));
+        keep(TabularFqi::<T>::required_entries(&grid, index(4)));
+        let mut storage = [FqiEntry::<T>::EMPTY; 36];
+        if let Ok(mut fqi) = TabularFqi::new(grid, index(4), &mut storage) {
+            let empty = match index(1) {
+                0 => EmptyCells::Nearest,
+                1 => EmptyCells::CappedNearest,
+                _ => EmptyCells::Value(num(-1.0)),
+            };
+            let config = FqiConfig::new(num::<T>(0.9), index(5), empty)
+                .and_then(|c| c.with_min_weight(num(0.5)))
+                .unwrap_or_else(|_| FqiConfig::reference());
+            keep((
+                config.discount(),
+                config.iterations(),
+                config.empty_cells(),
+                config.min_weight(),
+            ));
+            let w = [num::<T>(0.5); 12];
+            let sets = [
+                SampleSet::unweighted(&records[..6]),
+                SampleSet::weighted(&records[6..], Some(&w[6..]), None),
+            ];
+            keep((sets[0].len(), sets[1].is_empty()));
+            keep(fqi.fit(&sets, &config));
+            keep(fqi.fit_sets(sets.iter().copied(), &config));
+            keep((fqi.grid().len(), fqi.actions()));
+            if let Some(e) = fqi.entries().get(index(5)) {
+                keep((e.q(), e.reward_model(), e.transition_weight(), e.has_data()));
+            }
+            keep(fqi.value([num(2.0), num(3.0)], index(1)));
+            keep(fqi.max_value([num(2.0), num(3.0)]));
+            keep(fqi.greedy_action([num(2.0), num(3.0)]));
+            let target = PuddleWorld::<T>::target(Dynamics::Shared);
+            keep(evaluate_greedy(&target, &fqi, rng));
+            let mut uniform = UniformPolicy::new(4).unwrap_or_else(|_| loop {});
+            keep(evaluate(&target, &mut uniform, index(2), rng));
+            fqi.clear();
+        }
+    }
+
+    // score
+    let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
+    let point_grid = PointGrid::new(
+        [num::<T>(0.0), num(0.0)],
+        [num(5.0), num(5.0)],
+        [index(3), index(3)],
+    )
+    .or_else(|_| PointGrid::puddle(num::<T>(5.0)));
+    let source_sets: [&[Transition<[T; 2], T>]; 2] = [&records[..4], &records[4..9]];
+    if let Ok(point_grid) = point_grid {
+        keep((
+            point_grid.points(),
+            point_grid.len(),
+            point_grid.is_empty(),
+            point_grid.spacing(),
+            point_grid.point(index(4)),
+        ));
+        let rows = match index(2) {
+            0 => RowSet::grid(point_grid, 4),
+            1 => RowSet::source_data(&source_sets),
+            _ => RowSet::both(point_grid, 4, &source_sets),
+        };
+        if let Ok(rows) = rows {
+            keep((
+                rows.len(),
+                rows.is_empty(),
+                rows.row(index(7)),
+                rows.iter().count(),
+            ));
+            let mut scores = [Scores::<T>::ZERO; 64];
+            let models = [
+                GpSourceModel::new(&gp, None),
+                GpSourceModel::new(&gp, Some([&gp, &gp])),
+            ];
+            keep(models[index(1) % 2].predict([num(1.0), num(2.0)], index(1)));
+            let computed = if opaque(true) {
+                ScoreTable::compute(rows, &worlds, &mut scores)
+            } else {
+                ScoreTable::compute(rows, &models, &mut scores)
+            };
+            if let Ok(table) = computed {
+                keep((
+                    table.len(),
+                    table.is_empty(),
+                    table.rows().len(),
+                    table.values().len(),
+                ));
+                if let Some(row) = table.row(index(3)) {
+                    keep((
+                        row.state,
+                        row.action,
+                        row.scores.total(),
+                        row.scores.get(ScoreColumn::NextY),
+                    ));
+                }
+                keep(ScoreTable::from_parts(rows, table.values()).map(|t| t.len()));
+                let mut alias = [AliasEntry::<T>::EMPTY; 64];
+                let column = [
+                    ScoreColumn::Reward,
+                    ScoreColumn::NextX,
+                    ScoreColumn::NextY,
+                    ScoreColumn::Total,
+                ][index(3) % 4];
+                if let Ok(sampler) = table.sampler(column, &mut alias) {
+                    keep((
+                        sampler.draw(rng),
+                        sampler.rows().len(),
+                        sampler.alias().len(),
+                    ));
+                    kernel::<T>(sampler, &records, &posteriors, rng);
+                }
+            }
+        }
+    }
+}
+
+/// `Awfqi` itself: construction, a step, every accessor and `reset`.
+fn kernel<T: Real>(
+    sampler: RowSampler<'_, T>,
+    records: &[Transition<[T; 2], T>],
+    posteriors: &[Posterior<T>],
+    rng: &mut ChaCha8Rng,
+) {
+    let mut config = AwfqiConfig::<T>::thesis(index(4));
+    config.gp_training.search.max_evaluations = index(10);
+    config.gp_training.search.restarts = index(1);
+    keep(config.validate());
+    let Ok(source) = SourceData::new(records, posteriors) else {
+        return;
+    };
+    keep((source.records().len(), source.reward_posteriors().len()));
+    let sources = [source];
+    let blank = record::<T>(0);
+    let mut samples = [blank; 8];
+    let mut weights = [T::ZERO; 12];
+    let mut gp = Gp::<T, 8, 3>::empty();
+    let mut storage = [FqiEntry::<T>::EMPTY; 36];
+    let Ok(grid) = CellGrid::square(num::<T>(0.0), num(10.0), index(3)) else {
+        return;
+    };
+    let Ok(fqi) = TabularFqi::new(grid, 4, &mut storage) else {
+        return;
+    };
+    let target = PuddleWorld::<T>::target(Dynamics::Shared);
+    if let Ok(mut kernel) = Awfqi::new(
+        config,
+        target,
+        sampler,
+        &sources,
+        &mut samples,
+        &mut weights,
+        &mut gp,
+        fqi,
+    ) {
+        keep(kernel.step(rng));
+        keep((
+            kernel.config().budget,
+            kernel.steps(),
+            kernel.target_samples().len(),
+            kernel.reward_weights().len(),
+        ));
+        keep((
+            kernel.q().actions(),
+            kernel.gp().len(),
+            kernel.target().num_puddles(),
+        ));
+        kernel.reset();
+        keep(kernel.steps());
+    }
+}
+
 fn exercise<T: Real>(seed: u64) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     error_and_float::<T>();
@@ -277,6 +591,7 @@ fn exercise<T: Real>(seed: u64) {
     grid::<T>(&mut rng);
     puddle::<T>(&mut rng);
     gp::<T>(&mut rng);
+    transfer::<T>(&mut rng);
 }
 
 #[entry]
