@@ -40,3 +40,42 @@ fn gp_hyperparameters_whose_sum_overflows_are_rejected() {
     let prior = gp.predict(&[0.0]).unwrap();
     assert_eq!(prior.noisy_variance, 2.0e38);
 }
+
+/// Target `weighted_fqi` (its own seed `huge_rewards_f64`): rewards of −10³⁰⁷ with reward
+/// weights 10³⁰, γ = 1 and 11 iterations overflowed the weighted sums, and the fit returned
+/// Q = −∞ as a success. Fix: `TabularFqi::fit` bounds the magnitudes before it touches the
+/// table and refuses inputs whose values could overflow (`InvalidParameter { reward }`),
+/// leaving the table as it was.
+#[test]
+fn fqi_refuses_rewards_whose_values_would_overflow() {
+    use awfqi::env::Transition;
+    use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+    let step = |i: usize| {
+        let (x, y) = ((i % 10) as f64, (i / 3) as f64 * 2.5);
+        let up = i % 2 == 0;
+        Transition {
+            state: [x, y],
+            action: if up { 2 } else { 0 },
+            reward: -1e307,
+            next_state: if up { [x, (y + 1.0).min(10.0)] } else { [(x + 1.0).min(10.0), y] },
+            absorbing: false,
+        }
+    };
+    let samples: Vec<_> = (0..12).map(step).collect();
+    let weights = [1e30; 12];
+    let grid = CellGrid::square(0.0, 10.0, 5).unwrap();
+    let mut storage = vec![FqiEntry::<f64>::EMPTY; 100];
+    let mut fqi = TabularFqi::new(grid, 4, &mut storage).unwrap();
+    let config = FqiConfig::new(1.0, 11, EmptyCells::Nearest).unwrap();
+    let sets = [SampleSet::weighted(&samples, Some(&weights), None)];
+    assert_eq!(
+        fqi.fit(&sets, &config),
+        Err(Error::InvalidParameter { parameter: "reward" })
+    );
+    assert!(fqi.entries().iter().all(|e| e.q() == 0.0), "table changed");
+    // The same data at ordinary magnitudes fit, with every value finite.
+    let ordinary: Vec<_> = samples.iter().map(|s| Transition { reward: -1.0, ..*s }).collect();
+    let sets = [SampleSet::weighted(&ordinary, Some(&[2.0; 12]), None)];
+    fqi.fit(&sets, &config).unwrap();
+    assert!(fqi.entries().iter().all(|e| e.q().is_finite()));
+}
