@@ -2,4 +2,5 @@
 //! reference implementation (f64, heap, written for clarity) that the core is tested against.
 
 pub mod commands;
+pub mod plot;
 pub mod reference;
