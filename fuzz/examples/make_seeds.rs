@@ -623,11 +623,135 @@ fn weights_seeds() {
     }
 }
 
+fn belief_seeds() {
+    // Grid World candidates (K = 4): uniform prior, observations at and away from goals,
+    // then each score criterion.
+    let grid = |s: &mut Seed, updates: &[(u8, u8, u8, f64)]| {
+        for &(st, a, n, r) in updates {
+            s.u8(st).u8(a).u8(n).num(r);
+        }
+    };
+    let goal_obs = [
+        (99, 1, 98, 1.2),
+        (98, 0, 99, 0.1),
+        (0, 0, 1, -0.3),
+        (9, 2, 19, 0.9),
+        (90, 3, 80, 0.0),
+        (55, 0, 56, 1.1),
+    ];
+    for (criterion, name) in [(0u8, "uniform"), (1, "variance"), (2, "mi")] {
+        let mut s = Seed::new();
+        s.bool(true).bool(false).u8(4).u8(1).bool(false).u8(0);
+        grid(&mut s, &goal_obs);
+        s.u8(criterion);
+        if criterion == 2 {
+            s.u8(10).u8(16).bool(true).bool(true);
+        }
+        s.u8(0);
+        write("belief", &format!("grid_{name}"), &s);
+    }
+    // A prior with zero mass, an impossible transition (contradiction), huge and non-finite
+    // rewards, out-of-range indices, a candidate list of the wrong length.
+    let mut s = Seed::new();
+    s.bool(true)
+        .bool(true)
+        .u8(4)
+        .nums(&[1.0, 0.0, 0.0, 2.0])
+        .u8(2)
+        .bool(true)
+        .u8(0);
+    grid(
+        &mut s,
+        &[
+            (0, 0, 55, 0.0),
+            (99, 0, 99, 1e300),
+            (99, 0, 99, NAN),
+            (100, 0, 0, 0.0),
+            (0, 4, 1, 0.0),
+            (0, 0, 1, -INF),
+        ],
+    );
+    s.u8(2).u8(0).u8(200).bool(false).bool(false).u8(0);
+    write("belief", "grid_contradictions", &s);
+    let mut s = Seed::new();
+    s.bool(true).bool(false).u8(3).u8(3).bool(false).u8(0xff);
+    grid(&mut s, &goal_obs);
+    s.u8(1).u8(0);
+    write("belief", "grid_wrong_candidate_count", &s);
+    // Priors: empty, too many, NaN, negative, all zero.
+    for (name, weights) in [
+        ("prior_empty", vec![]),
+        ("prior_five", vec![1.0; 5]),
+        ("prior_nan", vec![1.0, NAN]),
+        ("prior_negative", vec![1.0, -1.0]),
+        ("prior_zero", vec![0.0, 0.0]),
+        ("prior_tiny", vec![5e-324, 1e300]),
+    ] {
+        let mut s = Seed::new();
+        s.bool(true)
+            .bool(true)
+            .u8(weights.len() as u8)
+            .nums(&weights)
+            .u8(1)
+            .bool(false)
+            .u8(0);
+        grid(&mut s, &goal_obs[..2]);
+        s.u8(1).u8(0);
+        write("belief", name, &s);
+    }
+    // Fuzzed candidate models (K = 2): deterministic moves, then raw probabilities with
+    // negative, NaN and > 1 entries, zero / negative / NaN variances.
+    let model = |s: &mut Seed, raw: bool, variance: f64| {
+        s.bool(raw);
+        for i in 0..6u8 {
+            if raw {
+                s.nums(&[
+                    0.5,
+                    if i == 3 { -0.5 } else { 0.25 },
+                    if i == 5 { NAN } else { 0.25 },
+                ]);
+            } else {
+                s.u8(i % 3);
+            }
+            s.num(f64::from(i) - 2.0).bool(true).num(variance);
+        }
+    };
+    for (name, raw, variance) in [
+        ("models_ok", false, 0.25),
+        ("models_zero_variance", false, 0.0),
+        ("models_negative_variance", false, -1.0),
+        ("models_nan_variance", false, NAN),
+        ("models_raw_probabilities", true, 0.25),
+        ("models_tiny_variance", false, 1e-300),
+    ] {
+        let mut s = Seed::new();
+        s.bool(false).bool(false).u8(2).u8(5);
+        model(&mut s, raw, variance);
+        model(&mut s, false, 0.5);
+        for _ in 0..2 {
+            s.u8(0).u8(1).u8(1).num(-1.0);
+        }
+        for (st, a, n, r) in [
+            (0u8, 0u8, 0u8, -2.0),
+            (1, 1, 1, 1.0),
+            (2, 0, 2, 0.5),
+            (3, 0, 0, 0.0),
+            (0, 2, 0, 0.0),
+            (1, 0, 1, 1e10),
+        ] {
+            s.u8(st).u8(a).u8(n).num(r);
+        }
+        s.u8(2).u8(8).u8(32).bool(false).bool(false).u8(0);
+        write("belief", name, &s);
+    }
+}
+
 fn main() {
     gp_seeds();
     env_seeds();
     fqi_seeds();
     score_seeds();
     weights_seeds();
+    belief_seeds();
     println!("seeds written under fuzz/seeds/");
 }
