@@ -1212,3 +1212,381 @@ fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
     assert!(kernel.q().entries() == &q[..]);
     assert_eq!(kernel.reward_weights(), &w[..]);
 }
+
+// ----------------------------------------------------------- identification, planning ---
+
+fn identify_calls<T: Real>() {
+    use awfqi::identify::{
+        Belief, Criterion, MiConfig, Scoring, StateAction, belief_weighted_policy,
+        belief_weighted_q, compute_score, draw_pair, draw_pairs, log_likelihood, run_queries,
+    };
+    let candidates = GridWorld::<T>::thesis_candidates(false);
+    assert_eq!(err(Belief::<T, 4>::uniform(0)), Error::EmptyData);
+    assert_eq!(
+        err(Belief::<T, 4>::uniform(5)),
+        Error::CapacityExceeded { capacity: 4 }
+    );
+    assert_eq!(err(Belief::<T, 4>::from_weights(&[])), Error::EmptyData);
+    assert!(matches!(
+        err(Belief::<T, 4>::from_weights(&[t(1.0); 5])),
+        Error::CapacityExceeded { .. }
+    ));
+    for x in non_finite::<T>() {
+        assert!(matches!(
+            err(Belief::<T, 4>::from_weights(&[t(1.0), x])),
+            Error::NonFinite { .. }
+        ));
+        assert_eq!(
+            err(log_likelihood(&candidates[0], 0, 0, 1, x)),
+            nf("reward")
+        );
+    }
+    assert!(matches!(
+        err(Belief::<T, 4>::from_weights(&[t(1.0), t(-1.0)])),
+        Error::InvalidParameter { .. }
+    ));
+    assert!(matches!(
+        err(Belief::<T, 4>::from_weights(&[t(0.0), t(0.0)])),
+        Error::InvalidParameter { .. }
+    ));
+    assert_eq!(
+        err(log_likelihood(&candidates[0], 100, 0, 1, t(0.0))),
+        oor("state")
+    );
+
+    let mut belief = Belief::<T, 4>::uniform(4).unwrap();
+    belief.update(&candidates, 99, 1, 98, t(1.0)).unwrap();
+    let before = belief;
+    assert_eq!(
+        belief.update(&candidates[..3], 0, 0, 1, t(0.0)),
+        Err(inv("candidates"))
+    );
+    assert_eq!(
+        belief.update(&candidates, 100, 0, 0, t(0.0)),
+        Err(oor("state"))
+    );
+    assert_eq!(
+        belief.update(&candidates, 0, 4, 0, t(0.0)),
+        Err(oor("action"))
+    );
+    assert_eq!(
+        belief.update(&candidates, 0, 0, 100, t(0.0)),
+        Err(oor("next_state"))
+    );
+    for x in non_finite::<T>() {
+        assert_eq!(belief.update(&candidates, 0, 0, 1, x), Err(nf("reward")));
+    }
+    assert_eq!(belief, before, "a rejected update changed the belief");
+    let mut short = [T::ZERO; 3];
+    assert!(belief.probabilities(&mut short).is_err());
+
+    // Scores: bad beliefs, storage, configurations; `out` untouched for those.
+    let mut rng = rng();
+    let sentinel = t::<T>(-3.0);
+    let mut out = vec![sentinel; 400];
+    let p = belief.probability_array();
+    let mi = |samples, bins| {
+        Criterion::MutualInformation(MiConfig {
+            samples,
+            bins,
+            ..MiConfig::default()
+        })
+    };
+    for criterion in [Criterion::Uniform, Criterion::Variance, mi(10, 8)] {
+        assert_eq!(
+            err(compute_score::<T, GridWorld<T>, _>(
+                &criterion,
+                &[],
+                &p,
+                &mut rng,
+                &mut out
+            )),
+            Error::EmptyData
+        );
+        assert!(matches!(
+            err(compute_score(
+                &criterion,
+                &candidates,
+                &p[..3],
+                &mut rng,
+                &mut out
+            )),
+            Error::InvalidParameter { .. }
+        ));
+        let mut bad = p;
+        bad[1] = T::from_f64(f64::NAN);
+        assert_eq!(
+            err(compute_score(
+                &criterion,
+                &candidates,
+                &bad,
+                &mut rng,
+                &mut out
+            )),
+            nf("belief")
+        );
+        bad[1] = t(-0.5);
+        assert_eq!(
+            err(compute_score(
+                &criterion,
+                &candidates,
+                &bad,
+                &mut rng,
+                &mut out
+            )),
+            inv("belief")
+        );
+        assert_eq!(
+            err(compute_score(
+                &criterion,
+                &candidates,
+                &[T::ZERO; 4],
+                &mut rng,
+                &mut out
+            )),
+            inv("belief")
+        );
+        assert!(matches!(
+            err(compute_score(
+                &criterion,
+                &candidates,
+                &p,
+                &mut rng,
+                &mut out[..399]
+            )),
+            Error::CapacityExceeded { .. }
+        ));
+        let mut long = vec![sentinel; 401];
+        assert_eq!(
+            err(compute_score(
+                &criterion,
+                &candidates,
+                &p,
+                &mut rng,
+                &mut long
+            )),
+            inv("scores")
+        );
+        assert!(long.iter().all(|&v| v == sentinel));
+    }
+    for (samples, bins, e) in [
+        (0, 8, inv("samples")),
+        (10, 0, inv("bins")),
+        (10, 129, Error::CapacityExceeded { capacity: 128 }),
+    ] {
+        assert_eq!(
+            err(compute_score(
+                &mi(samples, bins),
+                &candidates,
+                &p,
+                &mut rng,
+                &mut out
+            )),
+            e
+        );
+    }
+    assert!(
+        out.iter().all(|&v| v == sentinel),
+        "a rejected score wrote its output"
+    );
+
+    // Draws from a score.
+    let score = [t::<T>(1.0), t(0.0), t(2.0), t(1.0)];
+    assert_eq!(err(draw_pair(&score, 0, &mut rng)), inv("num_actions"));
+    assert_eq!(err(draw_pair::<T, _>(&[], 2, &mut rng)), Error::EmptyData);
+    assert_eq!(err(draw_pair(&score, 3, &mut rng)), inv("scores"));
+    assert_eq!(
+        err(draw_pair(&[t::<T>(1.0), t(-1.0)], 2, &mut rng)),
+        inv("scores")
+    );
+    for x in non_finite::<T>() {
+        assert_eq!(err(draw_pair(&[t::<T>(1.0), x], 2, &mut rng)), nf("scores"));
+    }
+    let marker = StateAction {
+        state: 7,
+        action: 7,
+    };
+    let mut pairs = [marker; 3];
+    assert!(draw_pairs(&[t::<T>(1.0), t(-1.0)], 2, &mut rng, &mut pairs).is_err());
+    assert!(pairs.iter().all(|p| *p == marker));
+
+    // The query loop: wrong score storage, a belief over other candidates, a bad fixed score.
+    let model = candidates[2];
+    let mut score = vec![T::ZERO; 399];
+    let mut b = Belief::<T, 4>::uniform(4).unwrap();
+    let fresh = b;
+    assert!(
+        run_queries(
+            &candidates,
+            &model,
+            &Scoring::Adaptive(Criterion::Variance),
+            5,
+            &mut b,
+            &mut score,
+            &mut rng,
+            |_, _| {}
+        )
+        .is_err()
+    );
+    let mut score = vec![T::ZERO; 400];
+    let mut b3 = Belief::<T, 4>::uniform(3).unwrap();
+    assert!(
+        run_queries(
+            &candidates,
+            &model,
+            &Scoring::Fixed,
+            5,
+            &mut b3,
+            &mut score,
+            &mut rng,
+            |_, _| {}
+        )
+        .is_err()
+    );
+    score[5] = t(-1.0);
+    assert!(
+        run_queries(
+            &candidates,
+            &model,
+            &Scoring::Fixed,
+            5,
+            &mut b,
+            &mut score,
+            &mut rng,
+            |_, _| {}
+        )
+        .is_err()
+    );
+    assert_eq!(b, fresh);
+
+    // Belief-weighted Q and policy.
+    let q = vec![t::<T>(0.5); 4 * 8];
+    let mut q_out = [sentinel; 8];
+    assert_eq!(
+        belief_weighted_q(&q[..31], &p, &mut q_out),
+        Err(inv("q_tables"))
+    );
+    assert_eq!(belief_weighted_q(&q, &p, &mut []), Err(Error::EmptyData));
+    let mut bad_q = q.clone();
+    bad_q[3] = T::INFINITY;
+    assert!(matches!(
+        belief_weighted_q(&bad_q, &p, &mut q_out),
+        Err(Error::NonFinite { .. })
+    ));
+    let mut policy = [9usize; 2];
+    assert!(belief_weighted_policy(&q, &p, 0, &mut q_out, &mut policy).is_err());
+    assert!(belief_weighted_policy(&q, &p, 4, &mut q_out, &mut policy[..1]).is_err());
+    assert!(q_out.iter().all(|&v| v == sentinel) && policy == [9, 9]);
+}
+
+fn planning_calls<T: Real>() {
+    use awfqi::planning::{
+        StoppingRule, backup, evaluate_policy, greedy_action, greedy_policy, q_from_values,
+        value_iteration,
+    };
+    let grid = GridWorld::<T>::thesis(1, false).unwrap();
+    let rule = StoppingRule {
+        tolerance: t::<T>(1e-6),
+        max_sweeps: 100,
+    };
+    let (mut values, mut q) = (vec![T::ZERO; 100], vec![T::ZERO; 400]);
+    for g in non_finite::<T>() {
+        assert!(matches!(
+            err(value_iteration(&grid, g, rule, &mut values, &mut q)),
+            Error::NonFinite { .. }
+        ));
+        let bad = StoppingRule {
+            tolerance: g,
+            max_sweeps: 10,
+        };
+        assert_eq!(
+            err(value_iteration(&grid, t(0.9), bad, &mut values, &mut q)),
+            nf("tolerance")
+        );
+    }
+    for g in [-0.1, 1.5] {
+        assert!(value_iteration(&grid, t::<T>(g), rule, &mut values, &mut q).is_err());
+    }
+    let bad = StoppingRule {
+        tolerance: t::<T>(-1.0),
+        max_sweeps: 10,
+    };
+    assert_eq!(
+        err(value_iteration(&grid, t(0.9), bad, &mut values, &mut q)),
+        inv("tolerance")
+    );
+    let bad = StoppingRule {
+        tolerance: t::<T>(1e-6),
+        max_sweeps: 0,
+    };
+    assert_eq!(
+        err(value_iteration(&grid, t(0.9), bad, &mut values, &mut q)),
+        inv("max_sweeps")
+    );
+    assert!(matches!(
+        err(value_iteration(
+            &grid,
+            t(0.9),
+            rule,
+            &mut values[..99],
+            &mut q
+        )),
+        Error::CapacityExceeded { .. }
+    ));
+    assert!(matches!(
+        err(q_from_values(&grid, t(0.9), &values, &mut q[..399])),
+        Error::CapacityExceeded { .. }
+    ));
+    let mut long = vec![T::ZERO; 401];
+    assert!(matches!(
+        err(q_from_values(&grid, t(0.9), &values, &mut long)),
+        Error::InvalidParameter { .. }
+    ));
+    assert!(
+        values.iter().chain(&q).all(|&v| v == T::ZERO),
+        "a rejected solve wrote"
+    );
+    assert!(matches!(
+        err(backup(&grid, t(0.9), &values, 100, 0)),
+        Error::OutOfRange { .. }
+    ));
+    assert!(backup(&grid, t(0.9), &values[..10], 95, 0).is_err());
+
+    assert_eq!(err(greedy_action::<T>(&[])), Error::EmptyData);
+    assert_eq!(
+        err(greedy_action(&[t::<T>(1.0), T::from_f64(f64::NAN)])),
+        nf("q")
+    );
+    let mut policy = [7usize; 100];
+    assert_eq!(greedy_policy(&q, 0, &mut policy), Err(inv("num_actions")));
+    assert_eq!(greedy_policy(&q[..399], 4, &mut policy), Err(inv("q")));
+    assert!(greedy_policy(&q, 4, &mut policy[..99]).is_err());
+    let mut nan_q = q.clone();
+    nan_q[17] = T::from_f64(f64::NAN);
+    assert_eq!(greedy_policy(&nan_q, 4, &mut policy), Err(nf("q")));
+    assert!(
+        policy.iter().all(|&a| a == 7),
+        "a rejected greedy_policy wrote"
+    );
+    let mut bad_policy = [0usize; 100];
+    bad_policy[3] = 4;
+    assert!(matches!(
+        err(evaluate_policy(
+            &grid,
+            &bad_policy,
+            t(0.9),
+            rule,
+            &mut values
+        )),
+        Error::OutOfRange { .. }
+    ));
+    assert!(evaluate_policy(&grid, &bad_policy[..99], t(0.9), rule, &mut values).is_err());
+}
+
+#[test]
+fn identification_and_planning_reject_bad_input_and_keep_their_state() {
+    identify_calls::<f32>();
+    identify_calls::<f64>();
+    planning_calls::<f32>();
+    planning_calls::<f64>();
+}

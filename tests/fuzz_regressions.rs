@@ -57,7 +57,11 @@ fn fqi_refuses_rewards_whose_values_would_overflow() {
             state: [x, y],
             action: if up { 2 } else { 0 },
             reward: -1e307,
-            next_state: if up { [x, (y + 1.0).min(10.0)] } else { [(x + 1.0).min(10.0), y] },
+            next_state: if up {
+                [x, (y + 1.0).min(10.0)]
+            } else {
+                [(x + 1.0).min(10.0), y]
+            },
             absorbing: false,
         }
     };
@@ -70,11 +74,16 @@ fn fqi_refuses_rewards_whose_values_would_overflow() {
     let sets = [SampleSet::weighted(&samples, Some(&weights), None)];
     assert_eq!(
         fqi.fit(&sets, &config),
-        Err(Error::InvalidParameter { parameter: "reward" })
+        Err(Error::InvalidParameter {
+            parameter: "reward"
+        })
     );
     assert!(fqi.entries().iter().all(|e| e.q() == 0.0), "table changed");
     // The same data at ordinary magnitudes fit, with every value finite.
-    let ordinary: Vec<_> = samples.iter().map(|s| Transition { reward: -1.0, ..*s }).collect();
+    let ordinary: Vec<_> = samples
+        .iter()
+        .map(|s| Transition { reward: -1.0, ..*s })
+        .collect();
     let sets = [SampleSet::weighted(&ordinary, Some(&[2.0; 12]), None)];
     fqi.fit(&sets, &config).unwrap();
     assert!(fqi.entries().iter().all(|e| e.q().is_finite()));

@@ -685,4 +685,51 @@ mod tests {
         assert!(fqi.entries() == &before[..]);
         assert!(fqi.fit(&[], &config) == Err(Error::EmptyData));
     }
+
+    /// Belief updates by hand: from a uniform prior over the four thesis candidates, one
+    /// observation at the goal of candidate 0 (reward 1 at state 99, whose mean is 1 under
+    /// candidate 0 and 0 under the others, variance 0.25) multiplies candidate 0's odds by
+    /// exp((1 − 0)²/(2·0.25)) = e² against each other one. Then the identification workload
+    /// (50 adaptive queries) finds the true candidate.
+    #[test]
+    fn belief_update_and_identification() {
+        use awfqi::identify::Belief;
+        let candidates = awfqi::env::GridWorld::<f32>::thesis_candidates(false);
+        let mut belief = Belief::<f32, 4>::uniform(4).unwrap();
+        belief.update(&candidates, 99, 1, 98, 1.0).unwrap();
+        let p = belief.probability_array();
+        let e2 = libm::exp(2.0);
+        let expected0 = e2 / (e2 + 3.0);
+        assert!(
+            close(p[0] as f64, expected0, 1e-6, 1e-5),
+            "p0 {} vs {}",
+            p[0],
+            expected0
+        );
+        for &q in &p[1..] {
+            assert!(close(q as f64, 1.0 / (e2 + 3.0), 1e-6, 1e-5), "p {}", q);
+        }
+        assert!(belief.map() == 0 && belief.observations() == 1);
+        let before = belief;
+        assert!(belief.update(&candidates, 100, 0, 0, 1.0).is_err() && belief == before);
+        assert!(belief.update(&candidates, 0, 0, 1, f32::NAN).is_err() && belief == before);
+
+        let found = awfqi_on_target::workloads::grid_identification(2, 50, 200, 5).unwrap();
+        assert!(
+            found.map == 2 && found.map_probability > 0.99,
+            "map {} p {}",
+            found.map,
+            found.map_probability
+        );
+        // Candidate 2's goal is (0, 9): from state 0 the optimal first move is up (action 2),
+        // and the value is γ⁹/(1 − γ) (9 steps up, then reward 1 every step: moving up at the top
+        // border stays put).
+        let v = libm::pow(0.9, 9.0) / 0.1;
+        assert!(
+            found.initial_action == 2 && close(found.initial_value as f64, v, 1e-3, 1e-4),
+            "v {} vs {}",
+            found.initial_value,
+            v
+        );
+    }
 }
