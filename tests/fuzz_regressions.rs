@@ -88,3 +88,46 @@ fn fqi_refuses_rewards_whose_values_would_overflow() {
     fqi.fit(&sets, &config).unwrap();
     assert!(fqi.entries().iter().all(|e| e.q().is_finite()));
 }
+
+/// Target `score_draw`: a source-data row set built from records whose state was NaN was
+/// accepted, and the sampler then drew the row `([NaN, 0], 0)` as a query point (a success
+/// carrying a non-finite value). Fix: `RowSet::source_data` / `both` refuse a record with a
+/// non-finite state (`NonFinite { state }`); `PointGrid::new` likewise refuses a spacing
+/// whose last point overflows (`InvalidParameter { spacing }`), which made `+∞` states.
+#[test]
+fn score_rows_are_always_finite_query_points() {
+    use awfqi::env::Transition;
+    use awfqi::score::{PointGrid, RowSet};
+    let record = |x: f64| Transition {
+        state: [x, 0.0],
+        action: 0,
+        reward: 0.0,
+        next_state: [0.0, 0.0],
+        absorbing: false,
+    };
+    let good = [record(1.0), record(2.0)];
+    let bad = [record(1.0), record(f64::NAN)];
+    let sources: [&[Transition<[f64; 2], f64>]; 2] = [&good, &bad];
+    assert_eq!(
+        RowSet::source_data(&sources).err(),
+        Some(Error::NonFinite { parameter: "state" })
+    );
+    let grid = PointGrid::puddle(5.0).unwrap();
+    assert_eq!(
+        RowSet::both(grid, 4, &sources).err(),
+        Some(Error::NonFinite { parameter: "state" })
+    );
+    let rows = RowSet::source_data(&sources[..1]).unwrap();
+    assert!(rows.iter().all(|(s, _)| s.iter().all(|c| c.is_finite())));
+
+    assert_eq!(
+        PointGrid::new([0.0, 0.0], [1e308, 1.0], [3, 1]).err(),
+        Some(Error::InvalidParameter { parameter: "spacing" })
+    );
+    assert_eq!(
+        PointGrid::<f32>::new([3e38, 0.0], [1e38, 1.0], [2, 2]).err(),
+        Some(Error::InvalidParameter { parameter: "spacing" })
+    );
+    let ok = PointGrid::new([0.0, 0.0], [1e307, 1.0], [3, 2]).unwrap();
+    assert!((0..ok.len()).all(|p| ok.point(p).unwrap().iter().all(|c| c.is_finite())));
+}
