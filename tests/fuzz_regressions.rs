@@ -122,12 +122,16 @@ fn score_rows_are_always_finite_query_points() {
 
     assert_eq!(
         PointGrid::new([0.0, 0.0], [1e308, 1.0], [3, 1]).err(),
-        Some(Error::InvalidParameter { parameter: "spacing" })
+        Some(Error::InvalidParameter {
+            parameter: "spacing"
+        })
     );
     assert_eq!(
         PointGrid::<f32>::new([3e38, 0.0], [1e38, 1.0], [2, 2]).err(),
-        Some(Error::InvalidParameter { parameter: "spacing" })
+        Some(Error::InvalidParameter {
+            parameter: "spacing"
+        })
     );
-    let ok = PointGrid::new([0.0, 0.0], [1e307, 1.0], [3, 2]).unwrap();
+    let ok = PointGrid::<f64>::new([0.0, 0.0], [1e307, 1.0], [3, 2]).unwrap();
     assert!((0..ok.len()).all(|p| ok.point(p).unwrap().iter().all(|c| c.is_finite())));
 }
