@@ -223,24 +223,42 @@ pub struct Identified {
     pub initial_action: usize,
 }
 
+/// Caller storage of [`grid_identification`]: 4 KiB in `f32` on a 32-bit target.
+pub struct IdentificationStorage {
+    /// One score per state-action pair.
+    pub score: [f32; 400],
+    /// State values of the MAP candidate.
+    pub values: [f32; 100],
+    /// Q-table of the MAP candidate.
+    pub q: [f32; 400],
+    /// Its greedy policy.
+    pub policy: [usize; 100],
+}
+
 /// Finite-MDP identification on the thesis Grid World (spec §10.4): K = 4 candidates,
 /// 100 states × 4 actions = 400 state-action pairs, the true MDP being candidate `truth`.
 /// `budget` queries drawn adaptively from the inter-MDP variance score with Bayesian belief
 /// updates, one mutual-information score (`mi_samples` samples, 30 bins) of the final
 /// belief, then value iteration (γ = 0.9) on the MAP candidate and its greedy policy.
 pub fn grid_identification(
+    storage: &mut IdentificationStorage,
     truth: usize,
     budget: usize,
     mi_samples: usize,
     seed: u64,
 ) -> Result<Identified> {
+    let IdentificationStorage {
+        score,
+        values,
+        q,
+        policy,
+    } = storage;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let candidates = GridWorld::<f32>::thesis_candidates(false);
     let model = *candidates
         .get(truth)
         .ok_or(awfqi::Error::OutOfRange { parameter: "truth" })?;
     let mut belief = Belief::<f32, 4>::uniform(4)?;
-    let mut score = [0.0f32; 400];
     let scoring = Scoring::Adaptive(Criterion::Variance);
     run_queries(
         &candidates,
@@ -248,7 +266,7 @@ pub fn grid_identification(
         &scoring,
         budget,
         &mut belief,
-        &mut score,
+        score,
         &mut rng,
         |_, _| {},
     )?;
@@ -257,18 +275,17 @@ pub fn grid_identification(
         samples: mi_samples,
         ..MiConfig::default()
     });
-    compute_score(&mi, &candidates, &probabilities, &mut rng, &mut score)?;
+    compute_score(&mi, &candidates, &probabilities, &mut rng, score)?;
     let map = belief.map();
     let chosen = candidates
         .get(map)
         .ok_or(awfqi::Error::OutOfRange { parameter: "map" })?;
-    let (mut values, mut q, mut policy) = ([0.0f32; 100], [0.0f32; 400], [0usize; 100]);
     let rule = StoppingRule {
         tolerance: 1e-5,
         max_sweeps: 1000,
     };
-    value_iteration(chosen, 0.9, rule, &mut values, &mut q)?;
-    greedy_policy(&q, 4, &mut policy)?;
+    value_iteration(chosen, 0.9, rule, values, q)?;
+    greedy_policy(q, 4, policy)?;
     Ok(Identified {
         map,
         map_probability: probabilities.get(map).copied().unwrap_or(0.0),

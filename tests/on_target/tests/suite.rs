@@ -714,7 +714,12 @@ mod tests {
         assert!(belief.update(&candidates, 100, 0, 0, 1.0).is_err() && belief == before);
         assert!(belief.update(&candidates, 0, 0, 1, f32::NAN).is_err() && belief == before);
 
-        let found = awfqi_on_target::workloads::grid_identification(2, 50, 200, 5).unwrap();
+        use awfqi_on_target::workloads::{IdentificationStorage, grid_identification};
+        use core::mem::MaybeUninit;
+        static mut STORAGE: MaybeUninit<IdentificationStorage> = MaybeUninit::zeroed();
+        // SAFETY: the only reference; all-zero bits are valid.
+        let storage = unsafe { (*core::ptr::addr_of_mut!(STORAGE)).assume_init_mut() };
+        let found = grid_identification(storage, 2, 50, 200, 5).unwrap();
         assert!(
             found.map == 2 && found.map_probability > 0.99,
             "map {} p {}",
