@@ -119,9 +119,12 @@ fn scores<T: Real>(b: &mut Bytes) {
         (0, Some(g)) => (RowSet::grid(g, actions), &[Kind::Invalid, Kind::Capacity]),
         (1, Some(g)) => (
             RowSet::both(g, actions, &slices),
-            &[Kind::Invalid, Kind::Capacity],
+            &[Kind::Invalid, Kind::Capacity, Kind::NonFinite],
         ),
-        _ => (RowSet::source_data(&slices), &[Kind::Empty]),
+        _ => (
+            RowSet::source_data(&slices),
+            &[Kind::Empty, Kind::NonFinite],
+        ),
     };
     let rows = match rows {
         Ok(r) => r,
