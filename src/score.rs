@@ -400,8 +400,9 @@ impl<'a, T: Real> ScoreTable<'a, T> {
     /// ([`Error::EmptyData`]); `storage` shorter than the row count
     /// ([`Error::CapacityExceeded`] with its length), checked before anything is computed;
     /// the first error of a model (e.g. a state outside its domain) or a non-finite value
-    /// triple ([`Error::NonFinite`] naming `source value`). On error the storage's contents
-    /// are unspecified.
+    /// triple ([`Error::NonFinite`] naming `source value`); finite values whose variance
+    /// overflows `T` ([`Error::InvalidParameter`] naming `source value`). On error the
+    /// storage's contents are unspecified.
     pub fn compute<S: SourceModel<T>>(
         rows: RowSet<'a, T>,
         sources: &[S],
@@ -448,11 +449,18 @@ impl<'a, T: Real> ScoreTable<'a, T> {
                 let mean = s / m;
                 (q / m - mean * mean).max(T::ZERO)
             };
-            *slot = Scores {
+            let scores = Scores {
                 reward: var(0),
                 next_x: var(1),
                 next_y: var(2),
             };
+            // Finite values so far apart that their variance (or the sum column) overflows.
+            if !scores.total().is_finite() {
+                return Err(Error::InvalidParameter {
+                    parameter: "source value",
+                });
+            }
+            *slot = scores;
         }
         Ok(Self { rows, values })
     }

@@ -135,3 +135,30 @@ fn score_rows_are_always_finite_query_points() {
     let ok = PointGrid::<f64>::new([0.0, 0.0], [1e307, 1.0], [3, 2]).unwrap();
     assert!((0..ok.len()).all(|p| ok.point(p).unwrap().iter().all(|c| c.is_finite())));
 }
+
+/// Target `score_draw`: two sources whose finite next-x values differ by 2.7·10¹⁵⁴ (f64)
+/// gave a variance of +∞, returned in a successfully computed score table. Fix:
+/// `ScoreTable::compute` refuses values whose variance overflows
+/// (`InvalidParameter { source value }`).
+#[test]
+fn score_variance_overflow_is_an_error() {
+    use awfqi::score::{PointGrid, RowSet, ScoreTable, Scores, SourceModel};
+    struct Constant([f64; 3]);
+    impl SourceModel<f64> for Constant {
+        fn predict(&self, _: [f64; 2], _: usize) -> awfqi::Result<[f64; 3]> {
+            Ok(self.0)
+        }
+    }
+    let rows = RowSet::grid(PointGrid::new([0.0, 0.0], [2.0, 2.0], [3, 3]).unwrap(), 4).unwrap();
+    let mut storage = vec![Scores::ZERO; rows.len()];
+    let sources = [Constant([1.0, 2.0, 3.0]), Constant([0.0, -2.68e154, 0.0])];
+    assert_eq!(
+        ScoreTable::compute(rows, &sources, &mut storage).err(),
+        Some(Error::InvalidParameter {
+            parameter: "source value"
+        })
+    );
+    let sources = [Constant([1.0, 2.0, 3.0]), Constant([0.0, -2.68e150, 0.0])];
+    let table = ScoreTable::compute(rows, &sources, &mut storage).unwrap();
+    assert!(table.values().iter().all(|s| s.total().is_finite()));
+}

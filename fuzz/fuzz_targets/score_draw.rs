@@ -173,7 +173,7 @@ fn scores<T: Real>(b: &mut Bytes) {
                     Kind::Capacity,
                     Kind::NonFinite,
                     Kind::OutOfRange,
-                ],
+                , Kind::Invalid],
             );
             return;
         }
