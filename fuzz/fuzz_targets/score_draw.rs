@@ -173,7 +173,8 @@ fn scores<T: Real>(b: &mut Bytes) {
                     Kind::Capacity,
                     Kind::NonFinite,
                     Kind::OutOfRange,
-                , Kind::Invalid],
+                    Kind::Invalid,
+                ],
             );
             return;
         }
