@@ -237,7 +237,7 @@ impl<const D: usize> Forest<D> {
         self.values.clear();
         self.roots.clear();
         let total_weight: f64 = weights.iter().sum();
-        if !(total_weight > 0.0) {
+        if total_weight <= 0.0 {
             return;
         }
         let ws = &mut self.workspace;
@@ -469,9 +469,9 @@ impl Tree<'_> {
             let value = if st.w > 0.0 { st.s / st.w } else { 0.0 };
             self.values[node] = value;
             let impurity = st.q / st.w - value * value;
-            // `!(impurity > MIN)` also makes a leaf of a zero-weight node (impurity NaN),
-            // which only a degenerate root could be; the forest never grows one.
-            if !(impurity > MIN_IMPURITY) {
+            // A zero-weight node (impurity NaN) is a leaf too; only a degenerate root could
+            // be one, and the forest never grows it.
+            if impurity <= MIN_IMPURITY || impurity.is_nan() {
                 continue;
             }
             if let [a, b] = src {

@@ -92,12 +92,12 @@ impl GpHyperparameters {
                 return Err(Error::NonFinite { parameter });
             }
         }
-        if !(self.signal_variance > 0.0) {
+        if self.signal_variance <= 0.0 {
             return Err(Error::InvalidParameter {
                 parameter: "signal_variance",
             });
         }
-        if !(self.length_scale > 0.0) {
+        if self.length_scale <= 0.0 {
             return Err(Error::InvalidParameter {
                 parameter: "length_scale",
             });
