@@ -475,10 +475,13 @@ impl Tree<'_> {
                 continue;
             }
             if let [a, b] = src {
-                // Two samples with impurity > 0 both have positive weight, so every
-                // candidate separates them with the same score (the same two terms, added
-                // in either order): the first non-constant feature in the random order wins.
-                self.split_pair(node, [a, b], &st, rng);
+                // Two samples: unless one has weight 0 (no valid candidate then; impurity
+                // > 0 is possible through subnormal rounding), every candidate separates them
+                // with the same score (the same two terms, added in either order), so the
+                // first non-constant feature in the random order wins.
+                if a.w > 0.0 && b.w > 0.0 {
+                    self.split_pair(node, [a, b], &st, rng);
+                }
                 continue;
             }
             let Some((feature, threshold)) = best_split(src, &st, rng) else {
@@ -511,7 +514,8 @@ impl Tree<'_> {
 }
 
 impl Tree<'_> {
-    /// Grows node `node` holding exactly the two records `pair`, both of positive weight:
+    /// Grows node `node` holding exactly the two records `pair`, both of positive weight
+    /// (the caller checks):
     /// a split on the first non-constant feature in random order with its two leaves, or a
     /// leaf (already written by the caller) when both features are constant.
     fn split_pair<const D: usize>(
