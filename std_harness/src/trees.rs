@@ -25,7 +25,7 @@
 //!   `Σwy²/W − (Σwy/W)²` is `≤ 10⁻⁷` ([`MIN_IMPURITY`]), or when no candidate is valid. No
 //!   depth limit, minimum leaf size 1.
 //! * Leaf value `Σwy/W`; forest prediction = unweighted mean of its trees.
-//! * A forest whose training set has total weight 0 (or no samples) predicts 0 **[CHOICE]**.
+//! * A forest whose training set has total weight 0 (or no samples) predicts 0 (the spec's **CHOICE**).
 //!
 //! # Randomness and threads
 //!
@@ -37,12 +37,16 @@
 //!
 //! # Speed
 //!
-//! A fit copies the samples into one array of records `{x, w, y}` and grows each tree by
-//! partitioning a copy of that array in place (no index indirection, no allocation in the
-//! inner loops; buffers are reused across refits with [`Forest::refit`]). Nodes of all trees
-//! live in one flat arena of 16-byte nodes with the two children of a split adjacent, and
-//! batch prediction ([`Forest::predict_into`]) walks one tree at a time over all queries so
-//! the tree stays in cache.
+//! A fit copies the samples into one array of records `{x, w, y}`; each tree partitions
+//! them between two buffers (a node's records in one, its children's in the other), with
+//! branch-free passes: one for the node's sums and ranges, one for both candidates' child
+//! sums, one to partition. No index indirection and no allocation in the inner loops;
+//! buffers are reused across refits ([`Forest::refit`]). Nodes of all trees live in one flat
+//! arena of 16-byte nodes, the two children of a split adjacent and a leaf pointing to
+//! itself, so batch prediction ([`Forest::predict_into`]) walks 8 queries through one tree
+//! in lockstep without a branch per level, one tree at a time so it stays in cache.
+//! Measured on the reference machine (one core, shared): 50 trees on 450 records in
+//! ≈ 1.8 ms, prediction ≈ 13 ns per query and tree (`examples/tree_timing.rs`).
 
 use awfqi::{Error, Result};
 use rand_chacha::ChaCha8Rng;
