@@ -90,6 +90,41 @@ fn split_with_a_zero_weight_child_is_never_chosen() {
 }
 
 #[test]
+fn subnormal_weights_never_make_a_zero_weight_leaf() {
+    // With a subnormal weight, w·y·y/w and (w·y/w)² round differently and the impurity of
+    // {subnormal, zero} can exceed 10⁻⁷; the zero-weight sample must still not get a leaf.
+    let xs = [[0.0, 0.0], [1.0, 1.0]];
+    let ys = [-1.3, 5.0];
+    let ws = [4.4e-323, 0.0];
+    let forest = Forest::fit(&xs, &ys, &ws, 10, &mut rng(30)).unwrap();
+    let value = forest.predict(&xs[0]);
+    assert!(value.is_finite());
+    assert_eq!(forest.predict(&xs[1]), value);
+    assert_eq!(forest.n_nodes(), 10);
+    // Many subnormal and zero weights: every leaf has positive weight, every value finite.
+    let (xs, ys, mut ws) = random_set(200, 31);
+    for (i, w) in ws.iter_mut().enumerate() {
+        *w = if i % 2 == 0 {
+            0.0
+        } else {
+            f64::from_bits(1 + (i as u64 % 17))
+        };
+    }
+    let forest = Forest::fit(&xs, &ys, &ws, 10, &mut rng(32)).unwrap();
+    for t in 0..forest.n_trees() {
+        for members in leaves_of(&forest, t, &xs).values() {
+            assert!(members.iter().any(|&i| ws[i] > 0.0));
+            assert!(
+                forest
+                    .tree_prediction(t, &xs[members[0]])
+                    .unwrap()
+                    .is_finite()
+            );
+        }
+    }
+}
+
+#[test]
 fn best_candidate_is_chosen() {
     // y = 10·x₀ on the corners of the unit square. Any threshold on x₀ separates perfectly
     // (score 0²/2 + 20²/2 = 200), any threshold on x₁ mixes (score 10²/2 + 10²/2 = 100): every
