@@ -2,4 +2,6 @@
 //! reference implementation (f64, heap, written for clarity) that the core is tested against.
 
 pub mod commands;
+pub mod fqi;
 pub mod reference;
+pub mod trees;
