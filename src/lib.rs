@@ -20,6 +20,8 @@ pub mod evaluation;
 pub mod float;
 pub mod fqi;
 pub mod gp;
+pub mod identify;
+pub mod planning;
 pub mod policy;
 pub mod rng;
 pub mod score;

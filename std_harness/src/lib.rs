@@ -3,5 +3,6 @@
 
 pub mod commands;
 pub mod fqi;
+pub mod plot;
 pub mod reference;
 pub mod trees;

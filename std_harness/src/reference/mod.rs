@@ -2,3 +2,4 @@
 //! never optimised. The core's differential tests compare against these.
 
 pub mod gp;
+pub mod identify;
