@@ -474,10 +474,16 @@ impl Tree<'_> {
             if !(impurity > MIN_IMPURITY) {
                 continue;
             }
-            if let [a, b] = src {
-                // Two samples with impurity > 0 both have positive weight, so every
-                // candidate separates them with the same score (the same two terms, added
-                // in either order): the first non-constant feature in the random order wins.
+            if let [a, b] = src
+                && a.w > 0.0
+                && b.w > 0.0
+            {
+                // Two samples of positive weight: every candidate separates them with the
+                // same score (the same two terms, added in either order), so the first
+                // non-constant feature in the random order wins. (A pair with a zero weight
+                // can still show impurity > 10⁻⁷ when the other weight is subnormal, whose
+                // products lose precision; it goes through `best_split`, where no split is
+                // valid, and becomes a leaf.)
                 self.split_pair(node, [a, b], &st, rng);
                 continue;
             }

@@ -133,7 +133,7 @@ pub struct Args {
 }
 
 fn default_algorithms() -> Vec<Algorithm> {
-    Algorithm::ALL.to_vec()
+    Algorithm::DEFAULT.to_vec()
 }
 
 /// The configuration every run of a file shares (runs merge only when it is equal).
@@ -445,24 +445,56 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
             args.episodes_per_step,
             files.values().map(|f| f.n_runs).max().unwrap_or(0)
         );
-        let curves: Vec<(String, usize, Vec<SummaryRow>)> = summaries
-            .iter()
-            .map(|(a, rows)| (a.name().to_string(), a.color(), rows.clone()))
-            .collect();
-        figures::learning_curves(&title, &curves).save(&args.out.join("learning_curves"))?;
-        let samples: Vec<(String, usize, Vec<[f64; 3]>)> = files
+        let curve = |keep: &dyn Fn(Algorithm) -> bool| -> Vec<(String, usize, Vec<SummaryRow>)> {
+            summaries
+                .iter()
+                .filter(|(a, _)| keep(*a))
+                .map(|(a, rows)| (a.name().to_string(), a.color(), rows.clone()))
+                .collect()
+        };
+        let std_path = curve(&|a| a != Algorithm::AwfqiKernel);
+        let embedded = curve(&|a| {
+            matches!(
+                a,
+                Algorithm::Fqi | Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiKernel
+            )
+        });
+        figures::learning_curves(&title, &std_path, &embedded)
+            .save(&args.out.join("learning_curves"))?;
+        let samples: Vec<(Algorithm, String, usize, Vec<[f64; 3]>)> = files
             .iter()
             .filter_map(|(a, f)| {
                 let run = f.runs.iter().find(|r| !r.samples.is_empty())?;
                 Some((
+                    *a,
                     format!("{} run {}", a.name(), run.run),
                     a.color(),
                     run.samples.clone(),
                 ))
             })
             .collect();
-        if !samples.is_empty() {
-            figures::sample_scatter(&experiment.sources, &samples)
+        let dir = args.out.join("samples");
+        std::fs::create_dir_all(&dir)?;
+        for (a, name, color, pts) in &samples {
+            figures::sample_scatter(&experiment.sources, &[(name.clone(), *color, pts.clone())])
+                .save(&dir.join(a.name()))?;
+        }
+        let overview: Vec<(String, usize, Vec<[f64; 3]>)> = samples
+            .iter()
+            .filter(|(a, ..)| {
+                matches!(
+                    a,
+                    Algorithm::Fqi
+                        | Algorithm::Iwfqi
+                        | Algorithm::AwfqiOracle
+                        | Algorithm::Awfqi
+                        | Algorithm::AwfqiKernel
+                )
+            })
+            .map(|(_, name, color, pts)| (name.clone(), *color, pts.clone()))
+            .collect();
+        if !overview.is_empty() {
+            figures::sample_scatter(&experiment.sources, &overview)
                 .save(&args.out.join("target_samples"))?;
         }
     }

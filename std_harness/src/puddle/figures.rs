@@ -8,8 +8,10 @@ use crate::plot::{Figure, LegendPosition, Panel, Series, SeriesStyle, XScale};
 use super::results::SummaryRow;
 use super::sources::SourceSet;
 
-/// The learning curves of all algorithms in one panel.
-pub fn learning_curves(title: &str, curves: &[(String, usize, Vec<SummaryRow>)]) -> Figure {
+/// Curves as `(label, colour, summary rows)`.
+pub type Curves = [(String, usize, Vec<SummaryRow>)];
+
+fn curve_panel(title: String, curves: &Curves) -> Panel {
     let series = curves
         .iter()
         .map(|(name, color, rows)| Series {
@@ -20,23 +22,36 @@ pub fn learning_curves(title: &str, curves: &[(String, usize, Vec<SummaryRow>)])
             color: *color,
         })
         .collect();
+    Panel {
+        title,
+        x_label: "episodes (equivalent episodes for the active algorithms)".into(),
+        y_label: "discounted greedy return".into(),
+        x_scale: XScale::Linear,
+        y_range: None,
+        series,
+        references: vec![],
+        legend: LegendPosition::LowerRight,
+    }
+}
+
+/// Learning curves: the faithful std algorithms in the left panel; FQI, AWFQI,
+/// AWFQI_oracle and the kernel's embedded AWFQI in the right one (omitted when empty).
+pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Figure {
+    let mut panels = vec![curve_panel(title.to_string(), std_path)];
+    if embedded.iter().any(|(name, ..)| name == "awfqi-kernel") {
+        panels.push(curve_panel(
+            "embedded kernel path vs std AWFQI".into(),
+            embedded,
+        ));
+    }
     Figure {
-        panels: vec![Panel {
-            title: title.to_string(),
-            x_label: "episodes (equivalent episodes for the active algorithms)".into(),
-            y_label: "discounted greedy return".into(),
-            x_scale: XScale::Linear,
-            y_range: None,
-            series,
-            references: vec![],
-            legend: LegendPosition::LowerRight,
-        }],
-        panel_width: 900,
+        panels,
+        panel_width: 820,
         height: 560,
     }
 }
 
-/// One panel per algorithm: the source states (grey) and the target states the algorithm
+/// One panel per algorithm: the source states (yellow) and the target states the algorithm
 /// collected in one run over all steps (coloured).
 pub fn sample_scatter(sources: &SourceSet, samples: &[(String, usize, Vec<[f64; 3]>)]) -> Figure {
     let source_points: Vec<(f64, f64)> = sources
@@ -58,7 +73,7 @@ pub fn sample_scatter(sources: &SourceSet, samples: &[(String, usize, Vec<[f64; 
                     points: source_points.clone(),
                     errors: None,
                     style: SeriesStyle::Points,
-                    color: 7,
+                    color: 6,
                 },
                 Series {
                     label: "target samples".into(),
