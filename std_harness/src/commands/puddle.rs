@@ -368,11 +368,13 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
         bar.finish();
     }
     let compute_seconds = wall.elapsed().as_secs_f64();
+    let finished = finished.into_inner().map_err(|_| anyhow!("poisoned"))?;
+    let timing = timing_report(args, &finished, compute_seconds)?;
 
     // Write (merging with runs already in --out) and summarise.
     let config = experiment_json(args, &experiment);
     let mut by_algorithm: BTreeMap<Algorithm, Vec<RunRecord>> = BTreeMap::new();
-    for (a, r) in finished.into_inner().map_err(|_| anyhow!("poisoned"))? {
+    for (a, r) in finished {
         by_algorithm.entry(a).or_default().push(r);
     }
     let mut files: BTreeMap<Algorithm, ResultFile> = BTreeMap::new();
@@ -422,14 +424,7 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
         .iter()
         .filter_map(|(a, rows)| transfer_metrics(a.name(), rows, baseline, args.threshold))
         .collect();
-    let report = report_markdown(
-        args,
-        &experiment,
-        &files,
-        &summaries,
-        &metrics,
-        compute_seconds,
-    );
+    let report = report_markdown(args, &experiment, &summaries, &metrics);
     std::fs::write(args.out.join("report.md"), &report)?;
     let mut w = csv::Writer::from_path(args.out.join("transfer_metrics.csv"))?;
     for m in &metrics {
@@ -499,18 +494,65 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
         }
     }
     println!("{report}");
+    println!("{timing}");
     println!("outputs in {}", args.out.display());
     Ok(())
 }
 
-/// The Markdown report: per-step means ± s.e., wall times and transfer metrics.
+/// Appends this invocation's wall times to `timing.csv` (`algorithm,run,step,seconds`, one
+/// row per step and one with step 0 for the whole run) and returns a Markdown table of the
+/// mean time per run. Wall times are the only output that differs between identical
+/// invocations, so they stay out of every other file.
+fn timing_report(
+    args: &Args,
+    finished: &[(Algorithm, RunRecord)],
+    compute_seconds: f64,
+) -> anyhow::Result<String> {
+    use std::fmt::Write as _;
+    use std::io::Write as _;
+    let path = args.out.join("timing.csv");
+    let new = !path.exists();
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)?;
+    if new {
+        writeln!(file, "algorithm,run,step,seconds,threads")?;
+    }
+    let threads = rayon::current_num_threads();
+    let mut per_algorithm: BTreeMap<Algorithm, Vec<f64>> = BTreeMap::new();
+    for (a, r) in finished {
+        for s in &r.steps {
+            writeln!(
+                file,
+                "{},{},{},{:.3},{threads}",
+                a.name(),
+                r.run,
+                s.step,
+                s.seconds
+            )?;
+        }
+        writeln!(file, "{},{},0,{:.3},{threads}", a.name(), r.run, r.seconds)?;
+        per_algorithm.entry(*a).or_default().push(r.seconds);
+    }
+    let mut out = String::from("| algorithm | runs | wall time per run (s) |\n|---|---:|---:|\n");
+    for (a, secs) in &per_algorithm {
+        let mean = secs.iter().sum::<f64>() / secs.len() as f64;
+        let _ = writeln!(out, "| {} | {} | {mean:.1} |", a.name(), secs.len());
+    }
+    let _ = writeln!(
+        out,
+        "\nThis invocation: {compute_seconds:.1} s on {threads} thread(s) (runs in parallel; a run uses one thread)."
+    );
+    Ok(out)
+}
+
+/// The Markdown report: per-step means ± s.e. and transfer metrics.
 fn report_markdown(
     args: &Args,
     experiment: &Experiment,
-    files: &BTreeMap<Algorithm, ResultFile>,
     summaries: &[(Algorithm, Vec<SummaryRow>)],
     metrics: &[TransferMetrics],
-    compute_seconds: f64,
 ) -> String {
     use std::fmt::Write as _;
     let p = &experiment.protocol;
@@ -544,25 +586,22 @@ fn report_markdown(
     for k in 1..=steps {
         let _ = write!(out, " step {k} ({} ep.) |", k * p.episodes_per_step);
     }
-    let _ = write!(out, " s/run |\n|---|---:|");
+    let _ = write!(out, "\n|---|---:|");
     for _ in 0..steps {
         let _ = write!(out, "---:|");
     }
-    out.push_str("---:|\n");
+    out.push('\n');
     for (a, rows) in summaries {
         let runs = rows.first().map_or(0, |r| r.runs);
         let _ = write!(out, "| {} | {} |", a.name(), runs);
         for r in rows {
             let _ = write!(out, " {:.2} ± {:.2} |", r.mean, r.stderr);
         }
-        let f = &files[a];
-        let secs: f64 = f.runs.iter().map(|r| r.seconds).sum::<f64>() / f.runs.len().max(1) as f64;
-        let _ = writeln!(out, " {secs:.1} |");
+        out.push('\n');
     }
     let _ = writeln!(
         out,
-        "\nCells: mean ± standard error across runs of `perf_disc_greedy_mean`. s/run: mean wall time of one run (one thread). This invocation computed for {compute_seconds:.1} s on {} thread(s).\n",
-        rayon::current_num_threads()
+        "\nCells: mean ± standard error across runs of `perf_disc_greedy_mean`.\n"
     );
     out.push_str(&markdown_table(metrics, args.threshold));
     out

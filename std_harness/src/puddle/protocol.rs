@@ -137,7 +137,9 @@ pub struct StepRecord {
     pub perf_disc_greedy_steps: f64,
     /// Rollouts that reached the goal.
     pub perf_disc_greedy_goals: usize,
-    /// Wall time of the step (collection, learning, evaluation), seconds.
+    /// Wall time of the step (collection, learning, evaluation), seconds. Not written to
+    /// the result files (they are identical for identical seeds); see `timing.csv`.
+    #[serde(skip)]
     pub seconds: f64,
     /// Algorithm diagnostics.
     #[serde(flatten)]

@@ -17,7 +17,8 @@ pub struct RunRecord {
     pub run: usize,
     /// The algorithm's parameters (§3.4).
     pub parameters: serde_json::Value,
-    /// Wall time of the run, seconds.
+    /// Wall time of the run, seconds (not written: see `timing.csv`).
+    #[serde(skip)]
     pub seconds: f64,
     /// Per-step records.
     pub steps: Vec<StepRecord>,

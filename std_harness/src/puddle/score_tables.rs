@@ -170,8 +170,8 @@ impl ScoreTableData {
     }
 }
 
-/// Fits the realistic tables' source GPs (reward, next x, next y per source), each source
-/// from its own stream (seed, SCORE_TABLE, source), in parallel.
+/// Fits the realistic tables' source GPs (reward, next x, next y per source, on all its
+/// records whatever `options.max_gp` says), each source from its own stream (seed, SCORE_TABLE, source), in parallel.
 pub fn fit_source_gps(
     sources: &SourceSet,
     options: &GpOptions,
@@ -184,7 +184,12 @@ pub fn fit_source_gps(
         .enumerate()
         .map(|(k, s)| {
             let mut rng = super::stream(seed, &[super::SCORE_TABLE, k as u64]);
-            SourceGps::fit(&s.records, options, &mut rng)
+            // Source GPs use all the source's records (§4.2: max_gp caps target GPs only).
+            let all = GpOptions {
+                max_gp: usize::MAX,
+                ..*options
+            };
+            SourceGps::fit(&s.records, &all, &mut rng)
         })
         .collect()
 }

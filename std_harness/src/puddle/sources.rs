@@ -353,7 +353,12 @@ pub fn generate_source(
     for _ in 0..g.episodes {
         episode(env, &mut greedy, rng, &mut times, &mut records)?;
     }
-    let gps = SourceGps::fit(&records, &g.gp, rng)?;
+    // Source GPs use all records (§4.2: max_gp caps target GPs only).
+    let all = GpOptions {
+        max_gp: usize::MAX,
+        ..g.gp
+    };
+    let gps = SourceGps::fit(&records, &all, rng)?;
     let [reward, next_x, next_y] = gps.posteriors_at(&records, NoiseSubtraction::Reference)?;
     Ok(SourceDataset {
         times,

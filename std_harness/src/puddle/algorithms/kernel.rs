@@ -135,7 +135,6 @@ impl KernelSetup {
             "gp_search": "core Nelder-Mead, 10 restarts",
             "score_rows": self.values.len(),
             "score_spacing": self.spacing,
-            "setup_seconds": self.setup_seconds,
         })
     }
 }
