@@ -130,6 +130,9 @@ pub struct Args {
     /// No progress bars.
     #[arg(long)]
     pub quiet: bool,
+    /// Compute nothing: summarise and plot the runs of this configuration already in --out.
+    #[arg(long)]
+    pub no_run: bool,
 }
 
 fn default_algorithms() -> Vec<Algorithm> {
@@ -325,7 +328,11 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
         bail!("--algorithms needs at least one algorithm");
     }
     let experiment = build_experiment(&Args {
-        algorithms: algorithms.clone(),
+        algorithms: if args.no_run {
+            Vec::new()
+        } else {
+            algorithms.clone()
+        },
         ..args.clone()
     })?;
     let runs: Vec<usize> = (args.runs.start..args.runs.end).collect();
@@ -352,16 +359,19 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
             (a, bar)
         })
         .collect();
+    let config = experiment_json(args, &experiment);
     let finished: Mutex<Vec<(Algorithm, RunRecord)>> = Mutex::new(Vec::new());
+    let jobs = if args.no_run { Vec::new() } else { jobs };
     jobs.par_iter()
         .try_for_each(|&(algorithm, run)| -> anyhow::Result<()> {
             let bar = &bars[&algorithm];
             let record = run_one(&experiment, algorithm, run, args.seed, || bar.inc(1))
                 .with_context(|| format!("{} run {run}", algorithm.name()))?;
-            finished
-                .lock()
-                .map_err(|_| anyhow!("poisoned"))?
-                .push((algorithm, record));
+            // Each run is merged into its file as soon as it ends, so an interrupted
+            // invocation keeps every finished run.
+            let mut done = finished.lock().map_err(|_| anyhow!("poisoned"))?;
+            save_run(&args.out, &config, algorithm, record.clone())?;
+            done.push((algorithm, record));
             Ok(())
         })?;
     for bar in bars.values() {
@@ -371,37 +381,10 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
     let finished = finished.into_inner().map_err(|_| anyhow!("poisoned"))?;
     let timing = timing_report(args, &finished, compute_seconds)?;
 
-    // Write (merging with runs already in --out) and summarise.
-    let config = experiment_json(args, &experiment);
-    let mut by_algorithm: BTreeMap<Algorithm, Vec<RunRecord>> = BTreeMap::new();
-    for (a, r) in finished {
-        by_algorithm.entry(a).or_default().push(r);
-    }
+    // Summarise every run of this configuration in --out (this invocation's and earlier
+    // ones').
     let mut files: BTreeMap<Algorithm, ResultFile> = BTreeMap::new();
-    for (a, records) in by_algorithm {
-        let path = args.out.join(format!("{}.json", a.name()));
-        let mut file = ResultFile::new(config.clone(), records);
-        if path.exists() {
-            if let Ok(mut old) = ResultFile::read(&path) {
-                if old.experiment == file.experiment {
-                    old.merge(file)?;
-                    file = old;
-                } else {
-                    eprintln!(
-                        "note: {} holds another configuration; overwriting it",
-                        path.display()
-                    );
-                }
-            }
-        }
-        file.write(&path)?;
-        files.insert(a, file);
-    }
-    // Algorithms of this configuration computed by earlier invocations also join the summary.
     for a in Algorithm::ALL {
-        if files.contains_key(&a) {
-            continue;
-        }
         let path = args.out.join(format!("{}.json", a.name()));
         if let Ok(old) = ResultFile::read(&path) {
             if old.experiment == config {
@@ -497,6 +480,31 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
     println!("{timing}");
     println!("outputs in {}", args.out.display());
     Ok(())
+}
+
+/// Merges one finished run into `<out>/<algorithm>.json` (created when absent; a file of
+/// another configuration is replaced, with a note).
+fn save_run(
+    out: &Path,
+    config: &serde_json::Value,
+    algorithm: Algorithm,
+    record: RunRecord,
+) -> anyhow::Result<()> {
+    let path = out.join(format!("{}.json", algorithm.name()));
+    let mut file = ResultFile::new(config.clone(), vec![record]);
+    if path.exists() {
+        match ResultFile::read(&path) {
+            Ok(mut old) if old.experiment == *config => {
+                old.merge(file)?;
+                file = old;
+            }
+            _ => eprintln!(
+                "note: {} holds another configuration; replacing it",
+                path.display()
+            ),
+        }
+    }
+    file.write(&path)
 }
 
 /// Appends this invocation's wall times to `timing.csv` (`algorithm,run,step,seconds`, one
