@@ -21,7 +21,7 @@ use rayon::prelude::*;
 
 use crate::commands::identify::RunRange;
 use crate::puddle::algorithms::{Algorithm, Experiment, TransferOptions, Variances, kernel};
-use crate::puddle::gp::GpOptions;
+use crate::puddle::gp::{GpOptions, GpSearch};
 use crate::puddle::metrics::{TransferMetrics, markdown_table, transfer_metrics};
 use crate::puddle::protocol::{self, Protocol};
 use crate::puddle::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
@@ -104,6 +104,10 @@ pub struct Args {
     /// GP training cap `max_gp`: the last this many records (spec: 4000).
     #[arg(long, default_value_t = 4000)]
     pub max_gp: usize,
+    /// GP hyperparameter search: `spec` (§4.2) or `screened` (faster, not the spec's
+    /// procedure: starts screened on a 300-point subsample, then refined on all data).
+    #[arg(long, value_enum, default_value = "spec")]
+    pub gp_search: GpSearch,
     /// IWFQI/AWFQI estimator variances: `published` (v_r 0.1, v_s 0.2) or `corrected`
     /// (0.01, 0.04), spec §14.6.
     #[arg(long, value_enum, default_value = "published")]
@@ -162,6 +166,7 @@ fn load_sources(args: &Args, dynamics: Dynamics) -> anyhow::Result<SourceSet> {
                 gp: GpOptions {
                     restarts: args.gp_restarts,
                     max_gp: args.max_gp,
+                    search: args.gp_search,
                 },
                 ..Generation::default()
             };
@@ -203,6 +208,7 @@ pub fn build_experiment(args: &Args) -> anyhow::Result<Experiment> {
         gp: GpOptions {
             restarts: args.gp_restarts,
             max_gp: args.max_gp,
+            search: args.gp_search,
         },
         transition_weights: args.transition_weights,
         rbt_total: args.rbt_total,
@@ -575,7 +581,7 @@ fn report_markdown(
     );
     let _ = writeln!(
         out,
-        "Sources: {} ({:?} records). Seed {}. GP: {} restarts, max_gp {}. {} iterations, {} trees.\n",
+        "Sources: {} ({:?} records). Seed {}. GP: {} restarts, max_gp {}, {:?} search. {} iterations, {} trees.\n",
         experiment.sources.origin,
         experiment
             .sources
@@ -586,6 +592,7 @@ fn report_markdown(
         args.seed,
         experiment.options.gp.restarts,
         experiment.options.gp.max_gp,
+        experiment.options.gp.search,
         p.iterations,
         p.trees
     );

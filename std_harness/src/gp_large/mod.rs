@@ -165,6 +165,39 @@ impl HyperparameterBox {
     }
 }
 
+/// How [`LargeGp::fit`] spends its optimisations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FitStrategy {
+    /// Spec §4.2 as written: every start (initial values and restarts) is optimised on all
+    /// the data, and the best optimum is kept.
+    AllStarts,
+    /// A faster search for the same optimum (**not** the spec's procedure): every start is
+    /// first optimised on an evenly spaced subsample of at most `subsample` points; the end
+    /// points are then refined on all the data, once per group of end points closer than
+    /// `merge_radius` in log space (infinity norm), and the best refined optimum is kept.
+    /// With at most `subsample` points it is [`FitStrategy::AllStarts`].
+    ///
+    /// The starts are the same draws as [`FitStrategy::AllStarts`]'s. Each full-data
+    /// optimisation begins near its optimum instead of at a random corner of the box, which
+    /// removes most of the `O(n³)` evaluations; the result differs from the spec's only when
+    /// the subsample's likelihood has no end point in the basin of the full data's best
+    /// optimum.
+    Screened {
+        /// Size of the screening subsample.
+        subsample: usize,
+        /// End points within this distance (log space, infinity norm) share one refinement.
+        merge_radius: f64,
+    },
+}
+
+impl FitStrategy {
+    /// [`FitStrategy::Screened`] with a 300-point subsample and a merge radius of 0.5.
+    pub const SCREENED: Self = Self::Screened {
+        subsample: 300,
+        merge_radius: 0.5,
+    };
+}
+
 /// Options of [`LargeGp::fit`]; [`FitOptions::default`] is spec §4.2's procedure.
 #[derive(Debug, Clone, Copy)]
 pub struct FitOptions {
@@ -180,6 +213,8 @@ pub struct FitOptions {
     pub optimizer: optimizer::Options,
     /// faer's parallelism for the linear algebra ([`Par::Seq`] by default).
     pub parallelism: Par,
+    /// How the starts are optimised ([`FitStrategy::AllStarts`], the spec's, by default).
+    pub strategy: FitStrategy,
 }
 
 impl Default for FitOptions {
@@ -191,6 +226,7 @@ impl Default for FitOptions {
             max_points: MAX_GP,
             optimizer: optimizer::Options::default(),
             parallelism: Par::Seq,
+            strategy: FitStrategy::AllStarts,
         }
     }
 }
@@ -210,6 +246,12 @@ pub struct OptimizationRun {
     pub gradients: usize,
     /// Why it stopped.
     pub stop: optimizer::Stop,
+    /// [`FitStrategy::Screened`]: the end point on the subsample (where the full-data
+    /// optimisation started) and the subsample evaluations spent.
+    pub screening: Option<([f64; 3], usize)>,
+    /// [`FitStrategy::Screened`]: the earlier run whose refinement this start shares
+    /// (its `theta`, likelihood and counts are copies of that run's).
+    pub merged_into: Option<usize>,
 }
 
 /// The record of a [`LargeGp::fit`]: every optimisation and the index of the one kept.
@@ -506,32 +548,78 @@ impl<const D: usize> LargeGp<D> {
             }));
         }
         let mut eval = LikelihoodEvaluator::new(inputs, targets, options.parallelism)?;
-        let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
-        let mut best: Option<usize> = None;
-        for start in starts {
+        let optimize = |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| {
             let m = optimizer::minimize(
-                &mut NegativeLml(&mut eval),
-                &start,
+                &mut NegativeLml(eval),
+                start,
                 &lower,
                 &upper,
                 &options.optimizer,
             );
-            let run = OptimizationRun {
-                start,
+            OptimizationRun {
+                start: *start,
                 theta: m.x,
                 log_marginal_likelihood: -m.f,
                 evaluations: m.evaluations,
                 gradients: m.gradients,
                 stop: m.stop,
-            };
-            if m.f.is_finite()
-                && best.is_none_or(|b: usize| {
-                    run.log_marginal_likelihood > runs[b].log_marginal_likelihood
-                })
-            {
-                best = Some(runs.len());
+                screening: None,
+                merged_into: None,
             }
-            runs.push(run);
+        };
+        let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
+        match options.strategy {
+            FitStrategy::Screened {
+                subsample,
+                merge_radius,
+            } if inputs.len() > subsample.max(1) => {
+                let n = inputs.len();
+                let m = subsample.max(1);
+                let picks: Vec<usize> = (0..m).map(|i| i * n / m).collect();
+                let sub_inputs: Vec<[f64; D]> = picks.iter().map(|&i| inputs[i]).collect();
+                let sub_targets: Vec<f64> = picks.iter().map(|&i| targets[i]).collect();
+                let mut sub_eval =
+                    LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?;
+                for start in &starts {
+                    let screened = optimize(&mut sub_eval, start);
+                    let end = screened.theta;
+                    let shared = runs.iter().position(|r| {
+                        r.merged_into.is_none()
+                            && r.screening.is_some_and(|(e, _)| {
+                                e.iter()
+                                    .zip(&end)
+                                    .all(|(a, b)| (a - b).abs() <= merge_radius)
+                            })
+                    });
+                    let mut run = match shared {
+                        Some(j) => OptimizationRun {
+                            merged_into: Some(j),
+                            ..runs[j]
+                        },
+                        None => optimize(&mut eval, &end),
+                    };
+                    run.start = *start;
+                    run.screening = Some((end, screened.evaluations));
+                    runs.push(run);
+                }
+            }
+            _ => {
+                for start in &starts {
+                    let run = optimize(&mut eval, start);
+                    runs.push(run);
+                }
+            }
+        }
+        // The first of the highest likelihood among the finished optimisations.
+        let mut best: Option<usize> = None;
+        for (i, run) in runs.iter().enumerate() {
+            if run.merged_into.is_none()
+                && run.log_marginal_likelihood.is_finite()
+                && best
+                    .is_none_or(|b| run.log_marginal_likelihood > runs[b].log_marginal_likelihood)
+            {
+                best = Some(i);
+            }
         }
         let best = best.ok_or(Error::NotPositiveDefinite)?;
         let theta = runs[best].theta;

@@ -13,8 +13,11 @@
 //! 3. A backtracking line search along the projected path `P(x + α d)` accepts the first
 //!    `α` with the Armijo decrease `f(x⁺) ≤ f(x) + 10⁻⁴ gᵀ(x⁺ − x)`; the first iteration
 //!    starts from `α = min(1, 1/‖d‖)` as L-BFGS-B does, later ones from 1.
-//! 4. `H` is updated with `s = x⁺ − x`, `y = g⁺ − g` when `sᵀy > 0` (scaled by `sᵀy/yᵀy`
-//!    before the first update).
+//! 4. `H` is updated with `s = x⁺ − x`, `y = g⁺ − g` restricted to the free variables when
+//!    `sᵀy > 0` (scaled by `sᵀy/yᵀy` before the first update), and reset to the identity
+//!    whenever the binding set changes. Without the reset a variable that reaches its bound
+//!    leaves a curvature model scaled for it, and the free variables crawl (thousands of
+//!    tiny steps were observed on the GP likelihood when `σ²ₙ` hit its upper bound).
 //!
 //! It stops with scipy's L-BFGS-B defaults: projected-gradient infinity norm `≤ 10⁻⁵`
 //! (`gtol`) or relative decrease `(f_k − f_{k+1}) / max(|f_k|, |f_{k+1}|, 1) ≤ 2.22·10⁻⁹`
@@ -134,8 +137,12 @@ pub fn minimize<const K: usize, F: Objective<K>>(
         }
         h
     };
+    let scaled = |gamma: f64| identity.map(|row| row.map(|v| v * gamma));
+    // The inverse-Hessian model, and whether it still is an unscaled identity (no curvature
+    // information at all).
     let mut h = identity;
-    let mut updated = false;
+    let mut blind = true;
+    let mut previous_free = [true; K];
     loop {
         // Projected gradient P(x − g) − x and the free variables.
         let mut pg_norm = 0.0f64;
@@ -156,6 +163,17 @@ pub fn minimize<const K: usize, F: Objective<K>>(
             break;
         }
         result.iterations += 1;
+        // A new binding set starts a new curvature model from scratch: the old one mixes in
+        // coordinates that no longer move, or misses ones that now do, and even its scale can
+        // be off by orders of magnitude (it is set by the stiffest coordinate).
+        let reset = |h: &mut [[f64; K]; K], blind: &mut bool| {
+            *h = identity;
+            *blind = true;
+        };
+        if free != previous_free {
+            reset(&mut h, &mut blind);
+            previous_free = free;
+        }
         let direction = |h: &[[f64; K]; K]| {
             let mut d = [0.0; K];
             for i in (0..K).filter(|&i| free[i]) {
@@ -168,48 +186,90 @@ pub fn minimize<const K: usize, F: Objective<K>>(
         };
         let mut d = direction(&h);
         if !(dot(&g, &d) < 0.0) {
-            h = identity;
-            updated = false;
+            reset(&mut h, &mut blind);
             d = direction(&h);
         }
-        let norm = dot(&d, &d).sqrt();
-        let mut alpha = if result.iterations == 1 {
-            (1.0 / norm).min(1.0)
+        let slope = dot(&g, &d);
+        // Without curvature information the first trial moves a unit distance at most.
+        let mut alpha = if blind {
+            (1.0 / dot(&d, &d).sqrt()).min(1.0)
         } else {
             1.0
         };
-        // Backtracking along the projected path.
+        let point = |alpha: f64| {
+            let mut t = x;
+            for i in 0..K {
+                t[i] += alpha * d[i];
+            }
+            project(&t, lower, upper)
+        };
+        // Backtracking along the projected path, with safeguarded quadratic interpolation.
         let mut accepted = None;
+        let mut first_trial = true;
         for _ in 0..40 {
             if result.evaluations >= options.max_evaluations {
                 break;
             }
-            let mut trial = x;
-            for i in 0..K {
-                trial[i] += alpha * d[i];
-            }
-            let trial = project(&trial, lower, upper);
+            let trial = point(alpha);
             if trial == x {
                 break;
             }
             let step: [f64; K] = std::array::from_fn(|i| trial[i] - x[i]);
             result.evaluations += 1;
-            if let Some(f_trial) = objective.value(&trial)
+            let f_trial = objective.value(&trial);
+            if let Some(f_trial) = f_trial
                 && f_trial <= fx + 1e-4 * dot(&g, &step)
             {
-                accepted = Some((trial, f_trial));
+                accepted = Some((trial, f_trial, first_trial));
                 break;
             }
-            alpha *= 0.5;
+            first_trial = false;
+            alpha = match f_trial {
+                Some(f_trial) if f_trial.is_finite() => {
+                    let q = -slope * alpha * alpha / (2.0 * (f_trial - fx - slope * alpha));
+                    q.clamp(0.1 * alpha, 0.5 * alpha)
+                }
+                _ => 0.1 * alpha,
+            };
         }
-        let Some((x_new, f_new)) = accepted else {
+        let Some((mut x_new, mut f_new, first_trial)) = accepted else {
             result.stop = Stop::LineSearch;
             break;
         };
-        let g_new = objective.gradient();
+        let mut g_new = objective.gradient();
         result.gradients += 1;
+        // The full step was accepted but the path is still steep (the curvature condition
+        // gᵀ(new)·d ≥ 0.9·gᵀd fails): extrapolate while the value keeps falling, as a Wolfe
+        // line search would. This crosses the likelihood's flat regions in few iterations.
+        if first_trial {
+            for _ in 0..6 {
+                if !(dot(&g_new, &d) < 0.9 * slope) || result.evaluations >= options.max_evaluations
+                {
+                    break;
+                }
+                alpha *= 4.0;
+                let trial = point(alpha);
+                if trial == x_new {
+                    break;
+                }
+                result.evaluations += 1;
+                match objective.value(&trial) {
+                    Some(f_trial) if f_trial < f_new => {
+                        x_new = trial;
+                        f_new = f_trial;
+                        g_new = objective.gradient();
+                        result.gradients += 1;
+                    }
+                    // No further decrease: keep the accepted point and its gradient (the
+                    // objective's state is not needed again before the next value).
+                    _ => break,
+                }
+            }
+        }
+        // Curvature pairs on the free coordinates only (bound ones have s = 0; their
+        // gradient change says nothing about the free subspace).
         let s: [f64; K] = std::array::from_fn(|i| x_new[i] - x[i]);
-        let y: [f64; K] = std::array::from_fn(|i| g_new[i] - g[i]);
+        let y: [f64; K] = std::array::from_fn(|i| if free[i] { g_new[i] - g[i] } else { 0.0 });
         let decrease = (fx - f_new) / fx.abs().max(f_new.abs()).max(1.0);
         x = x_new;
         fx = f_new;
@@ -222,10 +282,10 @@ pub fn minimize<const K: usize, F: Objective<K>>(
         }
         let sy = dot(&s, &y);
         if sy > 1e-10 * dot(&s, &s).sqrt() * dot(&y, &y).sqrt() {
-            if !updated {
-                let scale = sy / dot(&y, &y);
-                h = identity.map(|row| row.map(|v| v * scale));
-                updated = true;
+            let scale = sy / dot(&y, &y);
+            if blind {
+                h = scaled(scale);
+                blind = false;
             }
             // H ← (I − ρ s yᵀ) H (I − ρ y sᵀ) + ρ s sᵀ.
             let rho = 1.0 / sy;

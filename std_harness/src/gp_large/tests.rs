@@ -64,7 +64,10 @@ fn matches_the_core_gp_for_fixed_hyperparameters() {
             );
             let std = p.noisy_variance.sqrt();
             assert!((s - std).abs() <= 1e-8 * (1.0 + std), "{s} vs {std}");
-            assert_eq!(gp.predict(z), GpPrediction { mean: m, std: s });
+            // One input is solved alone, a batch blockwise: equal up to rounding.
+            let single = gp.predict(z);
+            assert!((single.mean - m).abs() <= 1e-12 * (1.0 + m.abs()));
+            assert!((single.std - s).abs() <= 1e-12 * (1.0 + s));
         }
     }
 }
@@ -260,27 +263,79 @@ fn invalid_input_is_rejected() {
     assert!(LargeGp::new(&twins, &[0.0, 1.0], noiseless, Par::Seq).is_ok());
 }
 
-/// The published source data stores the reference's own source-GP predictions (sklearn,
-/// L-BFGS-B, 10 restarts, noise subtracted) at every record: refitting the reward GP of a
-/// source must find the same optimum and reproduce them.
 #[test]
-fn reproduces_the_reference_source_gp_predictions() {
+fn screened_strategy_finds_the_spec_optimum() {
+    let (zs, ys) = data(120, 13);
+    let spec = FitOptions::default();
+    let screened = FitOptions {
+        strategy: FitStrategy::Screened {
+            subsample: 40,
+            merge_radius: 0.5,
+        },
+        ..spec
+    };
+    let (a, ra) = LargeGp::fit(&zs, &ys, &spec, &mut rng(14)).unwrap();
+    let (b, rb) = LargeGp::fit(&zs, &ys, &screened, &mut rng(14)).unwrap();
+    // Same starts (same draws), far fewer full-data evaluations, same optimum.
+    let starts = |r: &FitReport| r.runs.iter().map(|run| run.start).collect::<Vec<_>>();
+    assert_eq!(starts(&ra), starts(&rb));
+    let full = |r: &FitReport| {
+        r.runs
+            .iter()
+            .filter(|run| run.merged_into.is_none())
+            .map(|run| run.evaluations)
+            .sum::<usize>()
+    };
+    assert!(full(&rb) * 3 < full(&ra), "{} vs {}", full(&rb), full(&ra));
+    assert!(rb.runs.iter().all(|run| run.screening.is_some()));
+    assert!(rel(b.log_marginal_likelihood(), a.log_marginal_likelihood()) < 1e-9);
+    let (ta, tb) = (a.hyperparameters().to_log(), b.hyperparameters().to_log());
+    for k in 0..3 {
+        assert!((ta[k] - tb[k]).abs() < 1e-3, "{ta:?} vs {tb:?}");
+    }
+    // A subsample at least as large as the data is the spec's procedure.
+    let whole = FitOptions {
+        strategy: FitStrategy::Screened {
+            subsample: 120,
+            merge_radius: 0.5,
+        },
+        ..spec
+    };
+    let (_, rc) = LargeGp::fit(&zs, &ys, &whole, &mut rng(14)).unwrap();
+    assert_eq!(rc, ra);
+}
+
+fn read_source(path: &str) -> Option<Vec<Vec<f64>>> {
+    let text = std::fs::read_to_string(path).ok()?;
+    Some(
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+            .collect(),
+    )
+}
+
+/// Fits one GP of one published source as spec §6 says and compares its noise-subtracted
+/// predictions at the source's own records with the reference's (sklearn, L-BFGS-B, 10
+/// restarts), stored in the source file. Returns `false` when the file is missing.
+fn check_source_gp(dynamics: &str, source: usize, column: usize, strategy: FitStrategy) -> bool {
     let path = format!(
-        "{}/../../shared/data/puddle-sources/shared_dynamics_source_1.csv",
+        "{}/../../shared/data/puddle-sources/{dynamics}_source_{source}.csv",
         env!("CARGO_MANIFEST_DIR")
     );
-    let Ok(text) = std::fs::read_to_string(&path) else {
+    let Some(rows) = read_source(&path) else {
         eprintln!("skipped: {path} not found");
-        return;
+        return false;
     };
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
-        .collect();
     let zs: Vec<[f64; 3]> = rows.iter().map(|r| [r[1], r[2], r[3]]).collect();
-    let ys: Vec<f64> = rows.iter().map(|r| r[4]).collect();
-    let (gp, report) = LargeGp::fit(&zs, &ys, &FitOptions::default(), &mut rng(12)).unwrap();
+    let ys: Vec<f64> = rows.iter().map(|r| r[column]).collect();
+    // Targets r, next x, next y (columns 4, 5, 6); reference mean and std columns follow.
+    let (mean_col, std_col) = (8 + 2 * (column - 4), 9 + 2 * (column - 4));
+    let options = FitOptions {
+        strategy,
+        ..FitOptions::default()
+    };
+    let (gp, _) = LargeGp::fit(&zs, &ys, &options, &mut rng(12)).unwrap();
     let mut means = vec![0.0; zs.len()];
     let mut stds = vec![0.0; zs.len()];
     gp.predict_into(&zs, &mut means, &mut stds).unwrap();
@@ -296,19 +351,40 @@ fn reproduces_the_reference_source_gp_predictions() {
     );
     let (mut worst_mean, mut worst_std) = (0.0f64, 0.0f64);
     for ((r, m), s) in rows.iter().zip(&means).zip(&stds) {
-        worst_mean = worst_mean.max((m - r[8]).abs());
-        worst_std = worst_std.max((s - r[9]).abs());
+        worst_mean = worst_mean.max((m - r[mean_col]).abs());
+        worst_std = worst_std.max((s - r[std_col]).abs());
     }
-    eprintln!(
-        "source 1 reward GP: {:?}, LML {:.6}, worst |Δmean| {worst_mean:.2e}, worst |Δstd| {worst_std:.2e}, runs {:?}",
-        gp.hyperparameters(),
-        gp.log_marginal_likelihood(),
-        report
-            .runs
-            .iter()
-            .map(|r| (r.log_marginal_likelihood, r.evaluations))
-            .collect::<Vec<_>>()
+    assert!(
+        worst_mean < 1e-5 && worst_std < 1e-5,
+        "{dynamics} source {source}, column {column}: |Δmean| ≤ {worst_mean:.1e}, \
+         |Δstd| ≤ {worst_std:.1e}, {:?}",
+        gp.hyperparameters()
     );
-    assert!(worst_mean < 1e-3, "means differ by up to {worst_mean}");
-    assert!(worst_std < 1e-3, "stds differ by up to {worst_std}");
+    true
+}
+
+/// Source 1's reward GP (291 records), fitted exactly as spec §4.2 says, reproduces the
+/// reference's predictions.
+#[test]
+fn reproduces_the_reference_source_gp_predictions() {
+    check_source_gp("shared_dynamics", 1, 4, FitStrategy::AllStarts);
+}
+
+/// Every GP of every published source (reward, next x, next y; both dynamics), with both
+/// strategies. Slow in debug builds:
+/// `cargo test --release -p awfqi-harness --lib -- --ignored reproduces_every`.
+#[test]
+#[ignore]
+fn reproduces_every_reference_source_gp() {
+    for dynamics in ["shared_dynamics", "puddle_dynamics"] {
+        for source in 1..=3 {
+            for column in 4..=6 {
+                for strategy in [FitStrategy::AllStarts, FitStrategy::SCREENED] {
+                    if !check_source_gp(dynamics, source, column, strategy) {
+                        return;
+                    }
+                }
+            }
+        }
+    }
 }
