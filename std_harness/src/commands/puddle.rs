@@ -392,10 +392,10 @@ fn run_in_pool(args: &Args) -> anyhow::Result<()> {
     let mut files: BTreeMap<Algorithm, ResultFile> = BTreeMap::new();
     for a in Algorithm::ALL {
         let path = args.out.join(format!("{}.json", a.name()));
-        if let Ok(old) = ResultFile::read(&path) {
-            if old.experiment == config {
-                files.insert(a, old);
-            }
+        if let Ok(old) = ResultFile::read(&path)
+            && old.experiment == config
+        {
+            files.insert(a, old);
         }
     }
     let summaries: Vec<(Algorithm, Vec<SummaryRow>)> = files

@@ -218,12 +218,15 @@ pub fn evaluate_step(
     })
 }
 
+/// A greedy policy: the action in a state.
+pub type Greedy<'a> = &'a dyn Fn(&[f64; 2]) -> usize;
+
 /// Appends `B` episodes to `data` (§3.2): uniform at step 1 (`greedy` is `None`), ε-greedy
 /// around `greedy` afterwards.
 pub fn collect_episodes(
     protocol: &Protocol,
     target: &PuddleWorld<f64>,
-    greedy: Option<&dyn Fn(&[f64; 2]) -> usize>,
+    greedy: Option<Greedy<'_>>,
     rng: &mut ChaCha8Rng,
     data: &mut Vec<Record>,
 ) -> anyhow::Result<()> {
@@ -262,7 +265,7 @@ mod tests {
         fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
             let target = self.protocol.target();
             let g = |s: &[f64; 2]| if s[0] < 4.5 { 0 } else { 2 };
-            let greedy: Option<&dyn Fn(&[f64; 2]) -> usize> = if k == 1 { None } else { Some(&g) };
+            let greedy: Option<Greedy<'_>> = if k == 1 { None } else { Some(&g) };
             collect_episodes(&self.protocol, &target, greedy, rng, &mut self.data)?;
             Ok(Diagnostics::default())
         }

@@ -5,7 +5,7 @@ use awfqi::env::PuddleWorld;
 use rand_chacha::ChaCha8Rng;
 
 use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Learner, Protocol, collect_episodes};
+use crate::puddle::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
 use crate::puddle::sources::Record;
 use crate::trees::ActionForests;
 
@@ -39,8 +39,7 @@ impl Episodic {
             .q
             .as_ref()
             .map(|q| move |s: &[f64; 2]| q.greedy_action(s));
-        let greedy: Option<&dyn Fn(&[f64; 2]) -> usize> =
-            greedy.as_ref().map(|g| g as &dyn Fn(&[f64; 2]) -> usize);
+        let greedy: Option<Greedy<'_>> = greedy.as_ref().map(|g| g as Greedy<'_>);
         collect_episodes(&self.protocol, &self.target, greedy, rng, &mut self.data)
     }
 
