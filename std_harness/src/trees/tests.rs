@@ -367,3 +367,22 @@ fn action_forest_batches_equal_pointwise() {
         assert_eq!(q.predict(s, a), Ok(o));
     }
 }
+
+#[test]
+fn a_pair_with_a_zero_and_a_subnormal_weight_is_a_leaf_not_a_nan() {
+    // Two samples, weights 0 and 1.73·10⁻³²² (subnormal: w·y keeps only a few bits, so the
+    // computed impurity of the pair need not be 0). The zero-weight sample must not get a
+    // leaf of its own (its value would be 0/0): the pair is one leaf predicting about the
+    // positive-weight sample's target.
+    let xs = [[1.0, 1.0], [2.0, 3.0]];
+    let ys = [-0.97, -37.3];
+    let ws = [0.0, 1.73e-322];
+    for seed in 0..50 {
+        let forest = Forest::fit(&xs, &ys, &ws, 5, &mut rng(seed)).unwrap();
+        for x in &xs {
+            let v = forest.predict(x);
+            assert!(v.is_finite(), "seed {seed}: prediction {v}");
+            assert!((v + 37.3).abs() < 37.3 * 0.1, "seed {seed}: prediction {v}");
+        }
+    }
+}
