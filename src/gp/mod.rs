@@ -30,9 +30,10 @@
 //!
 //! # Numerics
 //!
-//! Every factorisation adds [`BASE_JITTER`] (`10⁻¹⁰`, the reference's) to the diagonal; when
-//! a pivot is not positive and finite it retries with up to [`JITTER_ESCALATIONS`] larger
-//! jitters relative to the signal variance and the precision of `T`, and otherwise returns
+//! Every factorisation adds [`BASE_JITTER`] (`10⁻¹⁰`, the reference's) to the diagonal. When
+//! a pivot is not finite, or not above the rounding floor `10·n·ε·K_ii` (below it, rounding
+//! in the working precision dominates the pivot and the factor would be silently wrong), it
+//! retries with up to [`JITTER_ESCALATIONS`] larger jitters relative to the signal variance and the precision of `T`, and otherwise returns
 //! [`Error::NotPositiveDefinite`](crate::Error::NotPositiveDefinite). [`Gp::jitter`] reports
 //! the jitter in use. Dot products are summed in the working precision (four interleaved
 //! partial sums, no wider accumulator: a Cortex-M4F has no double-precision FPU). The latent

@@ -348,9 +348,11 @@ fn assert_unchanged<T: Real, const N: usize, const D: usize>(a: &Gp<T, N, D>, b:
 fn duplicate_inputs_without_noise_escalate_the_jitter_in_f32() {
     let mut gp = Gp::<f32, 4, 2>::new(Hyperparameters::isotropic(1.0, 1.0, 0.0)).unwrap();
     gp.fit(&[[1.0, 2.0], [1.0, 2.0]], &[0.5, 0.5]).unwrap();
-    // 1 + 1e-10 rounds to 1 in f32, so the base jitter fails and the first escalation,
-    // max(1e-10, c·ε)·10 = 1.19e-6, is used.
-    let expected = f32::EPSILON * 10.0;
+    // 1 + 1e-10 rounds to 1 in f32, so the base jitter fails. With jitter j the second pivot
+    // of two duplicates is (1 + j) − 1/(1 + j) ≈ 2j, which must exceed the pivot guard
+    // 10·n·ε·K_ii ≈ 20ε: level k gives j = max(1e-10, c·ε)·10ᵏ, so 2·ε·10 is at the guard
+    // (rejected) and the second escalation, ε·100 = 1.19e-5, is the first accepted.
+    let expected = f32::EPSILON * 100.0;
     assert!((gp.jitter() - expected).abs() < 1e-12, "{}", gp.jitter());
     let p = gp.predict(&[1.0, 2.0]).unwrap();
     assert!((p.mean - 0.5).abs() < 1e-4);

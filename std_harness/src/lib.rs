@@ -4,5 +4,6 @@
 pub mod commands;
 pub mod fqi;
 pub mod gp_large;
+pub mod plot;
 pub mod reference;
 pub mod trees;

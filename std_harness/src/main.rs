@@ -19,11 +19,14 @@ enum Command {
     Demo(commands::demo::Args),
     /// Gaussian-process regression cases from a JSON file, by the core or the reference.
     Gp(commands::gp::Args),
+    /// Finite-MDP identification on the Grid World (thesis Figs. 4.2 and 4.3).
+    Identify(commands::identify::Args),
 }
 
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Demo(args) => commands::demo::run(&args),
         Command::Gp(args) => commands::gp::run(&args),
+        Command::Identify(args) => commands::identify::run(&args),
     }
 }

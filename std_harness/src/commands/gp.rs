@@ -1,10 +1,491 @@
-//! The `gp` subcommand (to be written).
+//! The `gp` subcommand: Gaussian-process regression cases from a JSON file, computed by the
+//! core (`awfqi::gp::Gp`, f64 or f32) or by the harness's reference GP
+//! ([`crate::reference::gp`]).
+//!
+//! Input: `{"cases":[{"name":…, "x":[[…D],…N], "y":[…N], "signal_variance":c,
+//! "length_scales":[…D], "noise_variance":s2, "x_test":[[…D],…M]}]}` with
+//! `k(x,x′) = c·exp(−½ Σ_d ((x_d−x′_d)/l_d)²)` plus `s2` on the diagonal of the training
+//! matrix.
+//!
+//! Output: `{"cases":[{"name":…, "mean":[…M], "std":[…M], "log_marginal_likelihood":…,
+//! "jitter":…}]}`; `std` is the latent function's (noise excluded) and `jitter` is what was
+//! added to the training diagonal beyond `s2` (the core's `Gp::jitter()`, or `--jitter` for
+//! the reference), so a fit that needed more than the base jitter never passes silently.
+//! A case that cannot be computed gives `{"name":…, "error":"…"}` and the other cases
+//! still run.
+//!
+//! The core's capacity `N` and dimension `D` are const generics; this command supports
+//! `D` in `1..=MAX_DIM` and picks the smallest capacity of [`CAPACITIES`] that holds the
+//! case (up to 256 points).
+
+use std::fmt;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use awfqi::Real;
+use awfqi::gp::{Gp, Hyperparameters};
+use serde::{Deserialize, Serialize};
+
+use crate::reference::gp::{Hyperparameters as ReferenceHyperparameters, ReferenceGp};
+
+/// The capacities (training points) the command can run the core with; a case uses the
+/// smallest one that holds it.
+pub const CAPACITIES: [usize; 5] = [16, 32, 64, 128, 256];
+
+/// The largest input dimension the command dispatches to the core.
+pub const MAX_DIM: usize = 8;
 
 /// Arguments of `awfqi-harness gp`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// JSON file with the cases: {"cases":[{"name", "x", "y", "signal_variance",
+    /// "length_scales", "noise_variance", "x_test"}, …]}. The core takes 1 to 8 input
+    /// dimensions and at most 256 training points per case.
+    #[arg(long, value_name = "FILE.json")]
+    pub cases: PathBuf,
+    /// Floating-point type the core computes in.
+    #[arg(long, value_enum, default_value_t = Precision::F64)]
+    pub precision: Precision,
+    /// Compute with the harness's reference GP (f64, heap, plain Cholesky) instead of the
+    /// core.
+    #[arg(long, conflicts_with = "precision")]
+    pub reference: bool,
+    /// With --reference: add this much to the training diagonal beyond the noise variance,
+    /// to reproduce a core fit that reported this jitter.
+    #[arg(long, requires = "reference", value_name = "J")]
+    pub jitter: Option<f64>,
+    /// Write the JSON here instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
+
+/// Floating-point type of the core.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// 64-bit (the host default).
+    F64,
+    /// 32-bit (the microcontroller default).
+    F32,
+}
+
+/// Who computes a case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Engine {
+    /// The core `awfqi::gp::Gp` in the given precision.
+    Core(Precision),
+    /// The reference GP, with `extra_diagonal` added to the training diagonal.
+    Reference {
+        /// Added to the diagonal beyond the noise variance (≥ 0).
+        extra_diagonal: f64,
+    },
+}
+
+/// One regression case of the input file.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct Case {
+    /// Name echoed in the output.
+    pub name: String,
+    /// Training inputs, `N` rows of `D` coordinates.
+    pub x: Vec<Vec<f64>>,
+    /// Training targets, `N` values.
+    pub y: Vec<f64>,
+    /// Signal variance `c`.
+    pub signal_variance: f64,
+    /// Length scales, one per dimension (their count is `D`).
+    pub length_scales: Vec<f64>,
+    /// Noise variance `s2` (training diagonal only).
+    pub noise_variance: f64,
+    /// Test inputs, `M` rows of `D` coordinates.
+    pub x_test: Vec<Vec<f64>>,
+}
+
+impl Case {
+    /// The hyperparameters in the reference GP's form.
+    pub fn reference_hyperparameters(&self) -> ReferenceHyperparameters {
+        ReferenceHyperparameters {
+            signal_variance: self.signal_variance,
+            length_scales: self.length_scales.clone(),
+            noise_variance: self.noise_variance,
+        }
+    }
+}
+
+/// The numbers computed for one case.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct Fit {
+    /// Predictive mean at each test input.
+    pub mean: Vec<f64>,
+    /// Latent (noise-free) predictive standard deviation at each test input.
+    pub std: Vec<f64>,
+    /// Log marginal likelihood of the training data.
+    pub log_marginal_likelihood: f64,
+    /// Added to the training diagonal beyond the noise variance.
+    pub jitter: f64,
+}
+
+/// Why a case could not be computed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CaseError {
+    /// The case is malformed or outside what the command supports (dimension, capacity,
+    /// mismatched lengths), found before the core is called.
+    Unsupported(String),
+    /// The core returned this error.
+    Core(awfqi::Error),
+    /// The reference GP returned this error.
+    Reference(String),
+}
+
+impl fmt::Display for CaseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CaseError::Unsupported(message) | CaseError::Reference(message) => f.write_str(message),
+            CaseError::Core(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+impl std::error::Error for CaseError {}
+
+/// One case of the output: its numbers or its error.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(untagged)]
+pub enum CaseOutput {
+    /// The case was computed.
+    Fit {
+        /// The case's name.
+        name: String,
+        /// Its numbers.
+        #[serde(flatten)]
+        fit: Fit,
+    },
+    /// The case could not be computed.
+    Failed {
+        /// The case's name (or `#i` when the case had none).
+        name: String,
+        /// What went wrong.
+        error: String,
+    },
+}
+
+/// The whole output document.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct Output {
+    /// One entry per input case, in input order.
+    pub cases: Vec<CaseOutput>,
+}
 
 /// Runs the subcommand.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("not yet implemented")
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let engine = if args.reference {
+        Engine::Reference {
+            extra_diagonal: args.jitter.unwrap_or(0.0),
+        }
+    } else {
+        Engine::Core(args.precision)
+    };
+    let text = std::fs::read_to_string(&args.cases)
+        .with_context(|| format!("reading {}", args.cases.display()))?;
+    let output = run_json(&text, engine)?;
+    let json = serde_json::to_string_pretty(&output)?;
+    match &args.out {
+        Some(path) => std::fs::write(path, json + "\n")
+            .with_context(|| format!("writing {}", path.display()))?,
+        None => println!("{json}"),
+    }
+    Ok(())
+}
+
+/// Computes every case of an input document. Fails only when the document is not
+/// `{"cases":[…]}`; a malformed or failing case becomes an `error` entry.
+pub fn run_json(text: &str, engine: Engine) -> anyhow::Result<Output> {
+    #[derive(Deserialize)]
+    struct Input {
+        cases: Vec<serde_json::Value>,
+    }
+    let input: Input = serde_json::from_str(text).context("the input must be {\"cases\":[…]}")?;
+    let cases = input
+        .cases
+        .into_iter()
+        .enumerate()
+        .map(|(i, value)| {
+            let fallback_name = value
+                .get("name")
+                .and_then(|n| n.as_str())
+                .map_or_else(|| format!("#{i}"), str::to_owned);
+            match serde_json::from_value::<Case>(value) {
+                Ok(case) => run_case(&case, engine),
+                Err(error) => CaseOutput::Failed {
+                    name: fallback_name,
+                    error: format!("malformed case: {error}"),
+                },
+            }
+        })
+        .collect();
+    Ok(Output { cases })
+}
+
+/// Computes one case with `engine`, turning an error into an `error` entry.
+pub fn run_case(case: &Case, engine: Engine) -> CaseOutput {
+    let result = match engine {
+        Engine::Core(precision) => fit_core(case, precision),
+        Engine::Reference { extra_diagonal } => fit_reference(case, extra_diagonal),
+    };
+    match result {
+        Ok(fit) => CaseOutput::Fit {
+            name: case.name.clone(),
+            fit,
+        },
+        Err(error) => CaseOutput::Failed {
+            name: case.name.clone(),
+            error: error.to_string(),
+        },
+    }
+}
+
+/// Computes a case with the reference GP, `extra_diagonal` added to the training diagonal.
+pub fn fit_reference(case: &Case, extra_diagonal: f64) -> Result<Fit, CaseError> {
+    let hyper = case.reference_hyperparameters();
+    let gp = ReferenceGp::fit_with_diagonal(&case.x, &case.y, &hyper, extra_diagonal)
+        .map_err(CaseError::Reference)?;
+    let mut mean = Vec::with_capacity(case.x_test.len());
+    let mut std = Vec::with_capacity(case.x_test.len());
+    for (i, point) in case.x_test.iter().enumerate() {
+        gp.check_point(point)
+            .map_err(|e| CaseError::Reference(format!("x_test[{i}]: {e}")))?;
+        let (m, v) = gp.predict(point);
+        mean.push(m);
+        std.push(v.sqrt());
+    }
+    Ok(Fit {
+        mean,
+        std,
+        log_marginal_likelihood: gp.log_marginal_likelihood(),
+        jitter: extra_diagonal,
+    })
+}
+
+/// Computes a case with the core in `precision`, choosing the capacity that fits.
+///
+/// The case is checked first (dimension in `1..=MAX_DIM`, row lengths, `y` length, at most
+/// the largest of [`CAPACITIES`] points); everything else (values, hyperparameters, a
+/// matrix that is not positive definite) is left to the core, whose error is returned as
+/// [`CaseError::Core`]. With `f32` the inputs are rounded to `f32` first and the outputs
+/// widened back to `f64` exactly.
+pub fn fit_core(case: &Case, precision: Precision) -> Result<Fit, CaseError> {
+    check_shape(case)?;
+    let capacity = capacity_for(case.x.len())?;
+    match precision {
+        Precision::F64 => dispatch_dimension::<f64>(case, capacity),
+        Precision::F32 => dispatch_dimension::<f32>(case, capacity),
+    }
+}
+
+/// The smallest capacity of [`CAPACITIES`] that holds `n` points (an empty case takes the
+/// smallest and gets the core's `EmptyData` error).
+pub fn capacity_for(n: usize) -> Result<usize, CaseError> {
+    CAPACITIES
+        .iter()
+        .copied()
+        .find(|&capacity| capacity >= n)
+        .ok_or_else(|| {
+            CaseError::Unsupported(format!(
+                "{n} training points exceed the largest built-in capacity, {}",
+                CAPACITIES[CAPACITIES.len() - 1]
+            ))
+        })
+}
+
+/// Checks the lengths the const-generic core cannot be called with otherwise.
+fn check_shape(case: &Case) -> Result<(), CaseError> {
+    let d = case.length_scales.len();
+    if !(1..=MAX_DIM).contains(&d) {
+        return Err(CaseError::Unsupported(format!(
+            "{d} length scales: the input dimension must be 1 to {MAX_DIM}"
+        )));
+    }
+    if case.y.len() != case.x.len() {
+        return Err(CaseError::Unsupported(format!(
+            "{} training inputs but {} targets",
+            case.x.len(),
+            case.y.len()
+        )));
+    }
+    for (field, rows) in [("x", &case.x), ("x_test", &case.x_test)] {
+        if let Some((i, row)) = rows.iter().enumerate().find(|(_, row)| row.len() != d) {
+            return Err(CaseError::Unsupported(format!(
+                "{field}[{i}] has {} coordinates, expected {d} (the number of length scales)",
+                row.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn dispatch_dimension<T: Real>(case: &Case, capacity: usize) -> Result<Fit, CaseError> {
+    match case.length_scales.len() {
+        1 => dispatch_capacity::<T, 1>(case, capacity),
+        2 => dispatch_capacity::<T, 2>(case, capacity),
+        3 => dispatch_capacity::<T, 3>(case, capacity),
+        4 => dispatch_capacity::<T, 4>(case, capacity),
+        5 => dispatch_capacity::<T, 5>(case, capacity),
+        6 => dispatch_capacity::<T, 6>(case, capacity),
+        7 => dispatch_capacity::<T, 7>(case, capacity),
+        8 => dispatch_capacity::<T, 8>(case, capacity),
+        d => Err(CaseError::Unsupported(format!(
+            "input dimension {d} is not supported (1 to {MAX_DIM})"
+        ))),
+    }
+}
+
+fn dispatch_capacity<T: Real, const D: usize>(
+    case: &Case,
+    capacity: usize,
+) -> Result<Fit, CaseError> {
+    match capacity {
+        16 => on_large_stack::<T, 16, D>(case),
+        32 => on_large_stack::<T, 32, D>(case),
+        64 => on_large_stack::<T, 64, D>(case),
+        128 => on_large_stack::<T, 128, D>(case),
+        256 => on_large_stack::<T, 256, D>(case),
+        n => Err(CaseError::Unsupported(format!("no built-in capacity {n}"))),
+    }
+}
+
+/// Stack of the thread a case runs on, beyond the room for the GP itself.
+const BASE_STACK_BYTES: usize = 4 << 20;
+
+/// Runs the case on a thread whose stack holds several copies of `Gp<T, N, D>`.
+///
+/// The core's `Gp` is a plain value (up to 512 KiB of matrix for `N = 256` in f64) and
+/// `Gp::new` returns it by value, so it cannot be built straight into a `Box`; an
+/// unoptimised build moves it through several stack temporaries. Instead of relying on the
+/// optimiser, each case runs on its own thread with `BASE_STACK_BYTES` plus eight times
+/// the GP's size of stack, in debug and release alike.
+fn on_large_stack<T: Real, const N: usize, const D: usize>(case: &Case) -> Result<Fit, CaseError> {
+    let stack = BASE_STACK_BYTES + 8 * std::mem::size_of::<Gp<T, N, D>>();
+    std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .name(format!("gp-case-{N}x{D}"))
+            .stack_size(stack)
+            .spawn_scoped(scope, || fit_core_with::<T, N, D>(case))
+            .map_err(|e| CaseError::Unsupported(format!("could not start a worker thread: {e}")))?;
+        worker
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
+}
+
+/// Fits `Gp<T, N, D>` to the case and predicts at every test input.
+fn fit_core_with<T: Real, const N: usize, const D: usize>(case: &Case) -> Result<Fit, CaseError> {
+    let to_point = |row: &[f64]| -> [T; D] { std::array::from_fn(|d| T::from_f64(row[d])) };
+    let hyper = Hyperparameters {
+        signal_variance: T::from_f64(case.signal_variance),
+        length_scales: to_point(&case.length_scales),
+        noise_variance: T::from_f64(case.noise_variance),
+    };
+    let x: Vec<[T; D]> = case.x.iter().map(|row| to_point(row)).collect();
+    let y: Vec<T> = case.y.iter().map(|&v| T::from_f64(v)).collect();
+    let mut gp = Gp::<T, N, D>::new(hyper).map_err(CaseError::Core)?;
+    gp.fit(&x, &y).map_err(CaseError::Core)?;
+    let log_marginal_likelihood = gp.log_marginal_likelihood().map_err(CaseError::Core)?;
+    let mut mean = Vec::with_capacity(case.x_test.len());
+    let mut std = Vec::with_capacity(case.x_test.len());
+    for row in &case.x_test {
+        let prediction = gp.predict(&to_point(row)).map_err(CaseError::Core)?;
+        mean.push(prediction.mean.to_f64());
+        std.push(prediction.latent_variance.to_f64().max(0.0).sqrt());
+    }
+    Ok(Fit {
+        mean,
+        std,
+        log_marginal_likelihood: log_marginal_likelihood.to_f64(),
+        jitter: gp.jitter().to_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(n: usize, d: usize) -> Case {
+        let x: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..d).map(|k| (i * (k + 1)) as f64 * 0.1).collect())
+            .collect();
+        Case {
+            name: format!("{n}x{d}"),
+            y: x.iter().map(|p| p[0].cos()).collect(),
+            x,
+            signal_variance: 1.0,
+            length_scales: vec![2.0; d],
+            noise_variance: 0.1,
+            x_test: vec![vec![0.25; d]],
+        }
+    }
+
+    #[test]
+    fn capacity_is_the_smallest_that_fits() {
+        assert_eq!(capacity_for(0), Ok(16));
+        assert_eq!(capacity_for(16), Ok(16));
+        assert_eq!(capacity_for(17), Ok(32));
+        assert_eq!(capacity_for(129), Ok(256));
+        assert_eq!(capacity_for(256), Ok(256));
+        assert!(matches!(capacity_for(257), Err(CaseError::Unsupported(_))));
+    }
+
+    /// The largest GP (256 points, 8 dimensions, f64) is fitted from a thread with a small
+    /// stack: the case runs on its own big-stack thread, in debug builds too.
+    #[test]
+    fn largest_gp_runs_from_a_small_stack() {
+        let big = case(256, 8);
+        let fit = std::thread::Builder::new()
+            .stack_size(256 << 10)
+            .spawn(move || fit_core(&big, Precision::F64))
+            .unwrap()
+            .join()
+            .unwrap()
+            .unwrap();
+        let reference = fit_reference(&case(256, 8), fit.jitter).unwrap();
+        let scale = 1.0;
+        assert!((fit.mean[0] - reference.mean[0]).abs() <= 1e-9 * scale);
+        assert!((fit.std[0] - reference.std[0]).abs() <= 1e-9 * scale);
+    }
+
+    #[test]
+    fn shapes_outside_the_dispatch_are_errors() {
+        let mut c = case(3, 2);
+        c.length_scales = vec![1.0; MAX_DIM + 1];
+        c.x = vec![vec![0.0; MAX_DIM + 1]; 3];
+        c.x_test = vec![vec![0.0; MAX_DIM + 1]];
+        assert!(matches!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Unsupported(_))
+        ));
+        let mut c = case(3, 2);
+        c.x_test = vec![vec![0.0; 3]];
+        assert!(matches!(
+            fit_core(&c, Precision::F32),
+            Err(CaseError::Unsupported(_))
+        ));
+        let mut c = case(3, 2);
+        c.y.pop();
+        assert!(matches!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Unsupported(_))
+        ));
+    }
+
+    #[test]
+    fn core_errors_are_typed() {
+        let mut c = case(3, 1);
+        c.y[1] = f64::NAN;
+        assert!(matches!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Core(awfqi::Error::NonFinite { .. }))
+        ));
+        let c = case(0, 1);
+        assert_eq!(
+            fit_core(&c, Precision::F64),
+            Err(CaseError::Core(awfqi::Error::EmptyData))
+        );
+    }
 }

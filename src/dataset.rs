@@ -1,0 +1,308 @@
+//! Transition records as Gaussian-process regression data (spec §4.2, §6, §7.2).
+//!
+//! Every GP of the method regresses one output of a record — the reward, or one next-state
+//! coordinate — on the state-action vector `z = (s_x, s_y, a)`, the action index being a
+//! plain real coordinate (§1). A GP of fixed capacity `N` holds at most `N` records, so a
+//! [`SubsetRule`] picks which ones when a dataset is larger: the reference keeps the **last**
+//! `max_gp` records; with the small capacities of a microcontroller, **spread** (every
+//! `len/N`-th record) keeps every part of the dataset represented instead.
+
+use crate::env::Transition;
+use crate::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
+use crate::{Error, Real, Result};
+use rand_core::Rng;
+
+/// Dimension of the GP input `z = (s_x, s_y, a)`.
+pub const INPUT_DIM: usize = 3;
+
+/// The GP input `z = (s_x, s_y, a)` of a state-action pair.
+pub fn input<T: Real>(state: [T; 2], action: usize) -> [T; INPUT_DIM] {
+    [state[0], state[1], T::from_usize(action)]
+}
+
+/// Which output of a record a GP regresses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Output {
+    /// The observed reward `r`.
+    Reward,
+    /// The observed next `x`, `s′_x`.
+    NextX,
+    /// The observed next `y`, `s′_y`.
+    NextY,
+}
+
+impl Output {
+    /// This output of `record`.
+    pub fn of<T: Real>(self, record: &Transition<[T; 2], T>) -> T {
+        match self {
+            Output::Reward => record.reward,
+            Output::NextX => record.next_state[0],
+            Output::NextY => record.next_state[1],
+        }
+    }
+}
+
+/// Which records a GP of capacity `N` is fitted on when a dataset has more than `N`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SubsetRule {
+    /// The last `N` records (the reference's `max_gp` rule, §4.2): in AWFQI, the most
+    /// recent queries.
+    Last,
+    /// `N` records evenly spread over the dataset: record `⌊i·len/N⌋` for `i < N`, so every
+    /// step's queries (or every episode of a source) stay represented. Deterministic.
+    Spread,
+}
+
+impl SubsetRule {
+    /// The indices of the records kept from a dataset of `len` records for capacity
+    /// `capacity`, in increasing order (all of them when `len ≤ capacity`).
+    pub fn indices(self, len: usize, capacity: usize) -> impl Iterator<Item = usize> + Clone {
+        let kept = len.min(capacity);
+        (0..kept).map(move |i| match self {
+            SubsetRule::Last => len - kept + i,
+            // i·len/kept < len, computed in u128 so it cannot overflow.
+            SubsetRule::Spread => (i as u128 * len as u128)
+                .checked_div(kept as u128)
+                .unwrap_or(0) as usize,
+        })
+    }
+}
+
+/// How a GP is trained (§4.2): the starting hyperparameters, the search box and the search
+/// budget. Size: about 12 `T` and 3 `usize`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GpTraining<T> {
+    /// Hyperparameters the GP is reset to before the data are loaded and the search starts.
+    pub initial: Hyperparameters<T, INPUT_DIM>,
+    /// Box of the hyperparameter search.
+    pub bounds: HyperparameterBounds<T, INPUT_DIM>,
+    /// Budget and restarts of the search.
+    pub search: SearchOptions,
+}
+
+impl<T: Real> GpTraining<T> {
+    /// Spec §4.2: start from `c = ℓ = σ²_n = 1`, its bounds, an isotropic search with 10
+    /// restarts (the reference's protocol).
+    pub fn reference() -> Self {
+        Self {
+            initial: Hyperparameters::SPEC_INITIAL,
+            bounds: HyperparameterBounds::spec_default(),
+            search: SearchOptions::default(),
+        }
+    }
+}
+
+/// Fits `gp` from scratch on `output` of the records of `records` chosen by `subset`: resets
+/// it to `training.initial`, loads the records (O(n²) each) and searches the
+/// hyperparameters. Returns the log marginal likelihood reached.
+///
+/// Errors: no records ([`Error::EmptyData`]); those of [`Gp::set_hyperparameters`],
+/// [`Gp::add_point`] (a non-finite record) and [`Gp::optimize_hyperparameters`]. On error
+/// the GP may hold part of the subset; refit it before use.
+pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize>(
+    gp: &mut Gp<T, N, INPUT_DIM>,
+    records: &[Transition<[T; 2], T>],
+    output: Output,
+    subset: SubsetRule,
+    training: &GpTraining<T>,
+    rng: &mut R,
+) -> Result<T> {
+    if records.is_empty() {
+        return Err(Error::EmptyData);
+    }
+    training.search.validate()?;
+    training.bounds.validate()?;
+    gp.clear();
+    gp.set_hyperparameters(training.initial)?;
+    for i in subset.indices(records.len(), N) {
+        if let Some(r) = records.get(i) {
+            gp.add_point(input(r.state, r.action), output.of(r), WhenFull::Refuse)?;
+        }
+    }
+    gp.optimize_hyperparameters(&training.bounds, &training.search, rng)
+}
+
+/// Predicts `gp` at every record's `z` and writes the posterior of the mean function into
+/// `out`, the predictive variances turned into standard deviations by `noise` with the
+/// records as one batch (§6 step 3, §7.2 step 2).
+///
+/// Two passes over the records when `noise` is [`NoiseSubtraction::Reference`] (the
+/// smallest variance first), one otherwise; O(n·N²) in all. Errors: `out` of another length
+/// than `records` ([`Error::InvalidParameter`] naming `out`), no records
+/// ([`Error::EmptyData`]), those of [`Gp::predict`].
+pub fn predict_posteriors<T: Real, const N: usize>(
+    gp: &Gp<T, N, INPUT_DIM>,
+    records: &[Transition<[T; 2], T>],
+    noise: NoiseSubtraction,
+    out: &mut [Posterior<T>],
+) -> Result<()> {
+    if out.len() != records.len() {
+        return Err(Error::InvalidParameter { parameter: "out" });
+    }
+    let transform = batch_transform(gp, records, noise)?;
+    for (o, r) in out.iter_mut().zip(records) {
+        let p = gp.predict(&input(r.state, r.action))?;
+        *o = Posterior::new(p.mean, transform.apply(p.noisy_variance));
+    }
+    Ok(())
+}
+
+/// The [`StdTransform`] of `gp`'s predictions at the records' inputs as one batch (a pass of
+/// predictions for [`NoiseSubtraction::Reference`], none otherwise).
+///
+/// Errors: no records ([`Error::EmptyData`]), those of [`Gp::predict`].
+pub fn batch_transform<T: Real, const N: usize>(
+    gp: &Gp<T, N, INPUT_DIM>,
+    records: &[Transition<[T; 2], T>],
+    noise: NoiseSubtraction,
+) -> Result<StdTransform<T>> {
+    if records.is_empty() {
+        return Err(Error::EmptyData);
+    }
+    let mut smallest = T::INFINITY;
+    if noise == NoiseSubtraction::Reference {
+        for r in records {
+            let p = gp.predict(&input(r.state, r.action))?;
+            smallest = smallest.min(p.noisy_variance);
+        }
+    } else {
+        smallest = T::ZERO;
+    }
+    StdTransform::new(noise, gp.hyperparameters().noise_variance, smallest)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::weights::predictive_stds;
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+    use std::vec;
+    use std::vec::Vec;
+
+    #[test]
+    fn subset_rules_pick_the_documented_records() {
+        let last: Vec<_> = SubsetRule::Last.indices(10, 4).collect();
+        assert_eq!(last, vec![6, 7, 8, 9]);
+        let spread: Vec<_> = SubsetRule::Spread.indices(10, 4).collect();
+        // ⌊i·10/4⌋ = 0, 2, 5, 7.
+        assert_eq!(spread, vec![0, 2, 5, 7]);
+        let all: Vec<_> = SubsetRule::Spread.indices(3, 4).collect();
+        assert_eq!(all, vec![0, 1, 2]);
+        assert_eq!(SubsetRule::Last.indices(0, 4).count(), 0);
+        let big: Vec<_> = SubsetRule::Spread.indices(usize::MAX, 2).collect();
+        assert_eq!(big, vec![0, usize::MAX / 2]);
+    }
+
+    fn records(n: usize) -> Vec<Transition<[f64; 2], f64>> {
+        (0..n)
+            .map(|i| {
+                let x = i as f64 * 0.37 % 10.0;
+                let y = i as f64 * 0.71 % 10.0;
+                Transition {
+                    state: [x, y],
+                    action: i % 4,
+                    reward: -1.0 - 0.1 * x,
+                    next_state: [x + 1.0, y],
+                    absorbing: false,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn fit_gp_loads_the_subset_and_learns_the_trend() {
+        let data = records(40);
+        let mut gp = Gp::<f64, 16, 3>::empty();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let training = GpTraining {
+            search: SearchOptions {
+                max_evaluations: 200,
+                restarts: 3,
+                isotropic: true,
+            },
+            ..GpTraining::reference()
+        };
+        fit_gp(
+            &mut gp,
+            &data,
+            Output::Reward,
+            SubsetRule::Spread,
+            &training,
+            &mut rng,
+        )
+        .unwrap();
+        assert_eq!(gp.len(), 16);
+        let want: Vec<[f64; 3]> = SubsetRule::Spread
+            .indices(40, 16)
+            .map(|i| input(data[i].state, data[i].action))
+            .collect();
+        assert_eq!(gp.inputs(), &want[..]);
+        // r = −1 − 0.1x is smooth: a held-out record is predicted within 0.2.
+        let held_out = &data[1];
+        let p = gp.predict(&input(held_out.state, held_out.action)).unwrap();
+        assert!((p.mean - held_out.reward).abs() < 0.2, "{}", p.mean);
+
+        fit_gp(
+            &mut gp,
+            &data,
+            Output::NextX,
+            SubsetRule::Last,
+            &training,
+            &mut rng,
+        )
+        .unwrap();
+        assert_eq!(gp.targets()[15], data[39].next_state[0]);
+        assert_eq!(
+            fit_gp(
+                &mut gp,
+                &[],
+                Output::NextX,
+                SubsetRule::Last,
+                &training,
+                &mut rng
+            ),
+            Err(Error::EmptyData)
+        );
+    }
+
+    #[test]
+    fn posteriors_apply_noise_subtraction_over_the_batch() {
+        let data = records(12);
+        let mut gp = Gp::<f64, 16, 3>::new(Hyperparameters::isotropic(2.0, 1.5, 0.05)).unwrap();
+        let xs: Vec<[f64; 3]> = data.iter().map(|r| input(r.state, r.action)).collect();
+        let ys: Vec<f64> = data.iter().map(|r| r.reward).collect();
+        gp.fit(&xs, &ys).unwrap();
+        let batch = &data[3..9];
+        for mode in [
+            NoiseSubtraction::Reference,
+            NoiseSubtraction::Principled,
+            NoiseSubtraction::Off,
+        ] {
+            let mut out = vec![Posterior::default(); batch.len()];
+            predict_posteriors(&gp, batch, mode, &mut out).unwrap();
+            // Independent route: collect the variances, then the slice rule of `weights`.
+            let mut stds: Vec<f64> = batch
+                .iter()
+                .map(|r| {
+                    gp.predict(&input(r.state, r.action))
+                        .unwrap()
+                        .noisy_variance
+                })
+                .collect();
+            predictive_stds(mode, 0.05, &mut stds).unwrap();
+            for ((o, s), r) in out.iter().zip(&stds).zip(batch) {
+                assert!((o.std - s).abs() < 1e-12);
+                let mean = gp.predict(&input(r.state, r.action)).unwrap().mean;
+                assert_eq!(o.mean, mean);
+            }
+        }
+        let mut short = vec![Posterior::default(); 2];
+        assert!(predict_posteriors(&gp, batch, NoiseSubtraction::Off, &mut short).is_err());
+    }
+}
