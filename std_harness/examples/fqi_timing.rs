@@ -2,7 +2,10 @@
 //! reference configuration, 6 steps × 10 episodes, 60 iterations, 50 trees, evaluation
 //! included, in at most 5 s).
 //!
-//! `cargo run --release -p awfqi-harness --example fqi_timing [-- SEED [SOURCES_DIR]]`
+//! `cargo run --release -p awfqi-harness --example fqi_timing [-- SEED [SOURCES_DIR [run-only]]]`
+//!
+//! With `run-only` only part (2) runs, so `perf stat` or `time` report its CPU time alone
+//! (wall time on a shared machine includes waiting for the CPU).
 //!
 //! Prints (1) one FQI call (60 iterations, 50 trees) on an IWFQI-sized union of 500 target
 //! records and the 1033 published shared-dynamics source records, and (2) one run of the
@@ -47,12 +50,26 @@ fn main() {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let target = PuddleWorld::<f64>::target(Dynamics::Shared);
 
-    // (1) One FQI call on 500 uniform target records + 1033 source records.
-    let mut union = Dataset::new();
     let mut uniform = UniformPolicy::new(4).unwrap();
+    if args.get(3).map(String::as_str) != Some("run-only") {
+        one_call(&target, &mut uniform, &sources, &mut rng);
+    }
+
+    // (2) One run of the reference FQI configuration.
+    run(&target, &mut uniform, &mut rng);
+}
+
+/// (1) One FQI call on 500 uniform target records + 1033 source records.
+fn one_call(
+    target: &PuddleWorld<f64>,
+    uniform: &mut UniformPolicy,
+    sources: &str,
+    rng: &mut ChaCha8Rng,
+) {
+    let mut union = Dataset::new();
     while union.len() < 500 {
         target
-            .run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, |r| {
+            .run_episode_with(uniform, PUDDLE_HORIZON, rng, |r| {
                 if union.len() < 500 {
                     union.push(r.transition);
                 }
@@ -60,9 +77,9 @@ fn main() {
             })
             .unwrap();
     }
-    union.extend_from(&read_sources(&sources));
+    union.extend_from(&read_sources(sources));
     let t = Instant::now();
-    let out = fqi(&union, &FqiOptions::plain(), &mut rng).unwrap();
+    let out = fqi(&union, &FqiOptions::plain(), rng).unwrap();
     println!(
         "FQI 60 it x 50 trees on {} records (500 target + 1033 source): {:.3} s ({} nodes in Q)",
         union.len(),
@@ -71,8 +88,10 @@ fn main() {
             .map(|a| out.q.forest(a).unwrap().n_nodes())
             .sum::<usize>()
     );
+}
 
-    // (2) One run of the reference FQI configuration.
+/// (2) One run of the reference FQI configuration.
+fn run(target: &PuddleWorld<f64>, uniform: &mut UniformPolicy, rng: &mut ChaCha8Rng) {
     let run_start = Instant::now();
     let mut data = Dataset::new();
     let mut q = None;
@@ -84,24 +103,24 @@ fn main() {
                 Ok(())
             };
             match &q {
-                None => target.run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, &mut push),
+                None => target.run_episode_with(uniform, PUDDLE_HORIZON, rng, &mut push),
                 Some(q) => {
                     let greedy =
                         |s: &[f64; 2]| Ok(awfqi_harness::trees::ActionForests::greedy_action(q, s));
                     let mut policy = EpsilonGreedyPolicy::new(greedy, 0.3, 4).unwrap();
-                    target.run_episode_with(&mut policy, PUDDLE_HORIZON, &mut rng, &mut push)
+                    target.run_episode_with(&mut policy, PUDDLE_HORIZON, rng, &mut push)
                 }
             }
             .unwrap();
         }
         let t_collect = t.elapsed().as_secs_f64();
-        let learned = fqi(&data, &FqiOptions::plain(), &mut rng).unwrap().q;
+        let learned = fqi(&data, &FqiOptions::plain(), rng).unwrap().q;
         let t_fqi = t.elapsed().as_secs_f64() - t_collect;
         let mut greedy = |s: &[f64; 2]| Ok(learned.greedy_action(s));
         let returns: Vec<f64> = (0..5)
             .map(|_| {
                 target
-                    .rollout(&mut greedy, PUDDLE_HORIZON, PUDDLE_DISCOUNT, &mut rng)
+                    .rollout(&mut greedy, PUDDLE_HORIZON, PUDDLE_DISCOUNT, rng)
                     .unwrap()
                     .discounted_return
             })

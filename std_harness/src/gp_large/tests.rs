@@ -73,6 +73,55 @@ fn matches_the_core_gp_for_fixed_hyperparameters() {
 }
 
 #[test]
+fn matches_the_harness_reference_gp() {
+    // The textbook reference of `crate::reference::gp`, on more points than the core holds,
+    // with the jitter 10⁻¹⁰ passed as its extra diagonal.
+    let (zs, ys) = data(150, 20);
+    let rows: Vec<Vec<f64>> = zs.iter().map(|z| z.to_vec()).collect();
+    for &(c, l, s2) in &[(2.0, 0.7, 0.05), (30.0, 1.3, 0.01), (0.5, 4.0, 0.9)] {
+        let hyper = GpHyperparameters {
+            signal_variance: c,
+            length_scale: l,
+            noise_variance: s2,
+        };
+        let gp = LargeGp::new(&zs, &ys, hyper, Par::Seq).unwrap();
+        let reference = crate::reference::gp::ReferenceGp::fit_with_diagonal(
+            &rows,
+            &ys,
+            &crate::reference::gp::Hyperparameters {
+                signal_variance: c,
+                length_scales: vec![l; 3],
+                noise_variance: s2,
+            },
+            JITTER,
+        )
+        .unwrap();
+        assert!(
+            rel(
+                gp.log_marginal_likelihood(),
+                reference.log_marginal_likelihood()
+            ) < 1e-8
+        );
+        let probes: Vec<[f64; 3]> = (0..40)
+            .map(|i| [i as f64 * 0.25, 10.0 - i as f64 * 0.21, (i % 4) as f64])
+            .chain(zs.iter().copied().take(10))
+            .collect();
+        let mut means = vec![0.0; probes.len()];
+        let mut stds = vec![0.0; probes.len()];
+        gp.predict_into(&probes, &mut means, &mut stds).unwrap();
+        for ((z, &m), &sd) in probes.iter().zip(&means).zip(&stds) {
+            let (mean, latent) = reference.predict(z);
+            let std = (latent + s2).sqrt();
+            assert!(
+                (m - mean).abs() <= 1e-8 * (1.0 + mean.abs()),
+                "{m} vs {mean}"
+            );
+            assert!((sd - std).abs() <= 1e-8 * (1.0 + std), "{sd} vs {std}");
+        }
+    }
+}
+
+#[test]
 fn gradient_matches_finite_differences() {
     let (zs, ys) = data(40, 2);
     let mut eval = LikelihoodEvaluator::new(&zs, &ys, Par::Seq).unwrap();
