@@ -29,6 +29,8 @@ struct Data {
     instructions: BTreeMap<String, f64>,
     /// `(experiment, algorithm, seconds, command)`.
     experiments: Vec<(String, String, f64, String)>,
+    /// Date, cores and load averages of the criterion run.
+    conditions: BTreeMap<String, String>,
 }
 
 fn read_criterion(dir: &Path, data: &mut Data) {
@@ -391,6 +393,20 @@ fn experiments_table(d: &Data) -> String {
     s
 }
 
+fn conditions(d: &Data) -> String {
+    let get = |k: &str| d.conditions.get(k).map_or(DASH, String::as_str);
+    format!(
+        "Wall times measured on {} on {} cores; load average (1 min) {} before and {} after \
+         the criterion run (above the core count means other work shared the machine, so \
+         the wall times are slower than on an idle one; the instruction counts are not \
+         affected).\n",
+        get("date"),
+        get("cores"),
+        get("load_before"),
+        get("load_after"),
+    )
+}
+
 fn replace_block(text: &str, name: &str, body: &str) -> Option<String> {
     let open = format!("<!-- perf-tables:{name} -->");
     let close = format!("<!-- /perf-tables:{name} -->");
@@ -404,6 +420,7 @@ fn main() {
     let mut criterion = PathBuf::from("target/criterion");
     let mut callgrind = PathBuf::from("target/perf/callgrind.tsv");
     let mut experiments = PathBuf::from("target/perf/experiments.tsv");
+    let conditions_file = PathBuf::from("target/perf/conditions.tsv");
     let mut files = Vec::new();
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -430,7 +447,13 @@ fn main() {
             }
         }
     }
+    for row in read_tsv(&conditions_file) {
+        if let [key, value, ..] = row.as_slice() {
+            data.conditions.insert(key.clone(), value.clone());
+        }
+    }
     let blocks = [
+        ("conditions", conditions(&data)),
         ("gp", gp_table(&data)),
         ("other", other_table(&data) + "\n" + &draws_line(&data)),
         ("experiments", experiments_table(&data)),
