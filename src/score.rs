@@ -100,7 +100,8 @@ pub struct PointGrid<T> {
 impl<T: Real> PointGrid<T> {
     /// `points[0] × points[1]` points from `lower` with spacing `spacing`.
     ///
-    /// Errors: non-finite values, a non-positive spacing or zero points
+    /// Errors: non-finite values ([`Error::NonFinite`] naming `lower` or `spacing`), a
+    /// non-positive spacing, zero points or a last point that overflows `T`
     /// ([`Error::InvalidParameter`]), more than `usize::MAX` points
     /// ([`Error::CapacityExceeded`]).
     pub fn new(lower: [T; 2], spacing: [T; 2], points: [usize; 2]) -> Result<Self> {
@@ -123,6 +124,14 @@ impl<T: Real> PointGrid<T> {
             .ok_or(Error::CapacityExceeded {
                 capacity: usize::MAX,
             })?;
+        // Every point must be finite: the last one along each axis is the largest.
+        for ((&lo, &d), &n) in lower.iter().zip(&spacing).zip(&points) {
+            if !(lo + d * T::from_usize(n - 1)).is_finite() {
+                return Err(Error::InvalidParameter {
+                    parameter: "spacing",
+                });
+            }
+        }
         Ok(Self {
             lower,
             spacing,
@@ -211,14 +220,16 @@ impl<'a, T: Real> RowSet<'a, T> {
 
     /// Source-data mode: the `(s, a)` of every record of every source, in order.
     ///
-    /// Errors: no records at all ([`Error::EmptyData`]).
+    /// Errors: no records at all ([`Error::EmptyData`]); a record whose state is not
+    /// finite ([`Error::NonFinite`] naming `state`).
     pub fn source_data(sources: &'a [&'a [Transition<[T; 2], T>]]) -> Result<Self> {
         Self::build(None, sources)
     }
 
     /// Both: the grid rows followed by the source rows.
     ///
-    /// Errors: those of [`RowSet::grid`].
+    /// Errors: those of [`RowSet::grid`]; a record whose state is not finite
+    /// ([`Error::NonFinite`] naming `state`).
     pub fn both(
         grid: PointGrid<T>,
         actions: usize,
@@ -235,6 +246,10 @@ impl<'a, T: Real> RowSet<'a, T> {
             return Err(Error::InvalidParameter {
                 parameter: "actions",
             });
+        }
+        // Rows are handed out as query points: a non-finite record state is refused here.
+        for record in sources.iter().flat_map(|s| s.iter()) {
+            crate::error::ensure_all_finite(&record.state, "state")?;
         }
         let rows = Self { grid, sources };
         match rows.checked_len() {
@@ -385,8 +400,9 @@ impl<'a, T: Real> ScoreTable<'a, T> {
     /// ([`Error::EmptyData`]); `storage` shorter than the row count
     /// ([`Error::CapacityExceeded`] with its length), checked before anything is computed;
     /// the first error of a model (e.g. a state outside its domain) or a non-finite value
-    /// triple ([`Error::NonFinite`] naming `source value`). On error the storage's contents
-    /// are unspecified.
+    /// triple ([`Error::NonFinite`] naming `source value`); finite values whose variance
+    /// overflows `T` ([`Error::InvalidParameter`] naming `source value`). On error the
+    /// storage's contents are unspecified.
     pub fn compute<S: SourceModel<T>>(
         rows: RowSet<'a, T>,
         sources: &[S],
@@ -433,11 +449,18 @@ impl<'a, T: Real> ScoreTable<'a, T> {
                 let mean = s / m;
                 (q / m - mean * mean).max(T::ZERO)
             };
-            *slot = Scores {
+            let scores = Scores {
                 reward: var(0),
                 next_x: var(1),
                 next_y: var(2),
             };
+            // Finite values so far apart that their variance (or the sum column) overflows.
+            if !scores.total().is_finite() {
+                return Err(Error::InvalidParameter {
+                    parameter: "source value",
+                });
+            }
+            *slot = scores;
         }
         Ok(Self { rows, values })
     }

@@ -133,7 +133,7 @@ impl<T: Real> GridWorld<T> {
     /// Errors: a state outside the grid.
     pub fn cell_of(&self, state: usize) -> Result<(usize, usize)> {
         self.check_state(state)?;
-        Ok((state % self.width, state / self.width))
+        self.split(state)
     }
 
     /// The unique successor of `(state, action)`: moves are deterministic.
@@ -144,7 +144,7 @@ impl<T: Real> GridWorld<T> {
         if self.absorbing_goal && state == self.goal {
             return Ok(state);
         }
-        let (x, y) = (state % self.width, state / self.width);
+        let (x, y) = self.split(state)?;
         let (nx, ny) = match action {
             0 if x + 1 < self.width => (x + 1, y),
             1 if x > 0 => (x - 1, y),
@@ -153,6 +153,15 @@ impl<T: Real> GridWorld<T> {
             _ => (x, y),
         };
         Ok(nx + self.width * ny)
+    }
+
+    /// `(state % width, state / width)`; checked division, so no division-by-zero panic
+    /// path survives (the constructor already guarantees `width > 0`).
+    fn split(&self, state: usize) -> Result<(usize, usize)> {
+        match (state.checked_rem(self.width), state.checked_div(self.width)) {
+            (Some(x), Some(y)) => Ok((x, y)),
+            _ => Err(Error::OutOfRange { parameter: "state" }),
+        }
     }
 
     fn check_state(&self, state: usize) -> Result<()> {

@@ -20,9 +20,9 @@ pub struct CellGrid<T> {
 impl<T: Real> CellGrid<T> {
     /// A grid of `cells[0] × cells[1]` cells over `[lower[0], upper[0]] × [lower[1], upper[1]]`.
     ///
-    /// Errors: non-finite bounds, `lower ≥ upper` on an axis or a zero cell count
-    /// ([`Error::InvalidParameter`]), more than `u32::MAX − 1` cells
-    /// ([`Error::CapacityExceeded`]).
+    /// Errors: non-finite bounds ([`Error::NonFinite`] naming `lower` or `upper`),
+    /// `lower ≥ upper` on an axis or a zero cell count ([`Error::InvalidParameter`]), more
+    /// than `u32::MAX − 1` cells ([`Error::CapacityExceeded`]).
     pub fn new(lower: [T; 2], upper: [T; 2], cells: [usize; 2]) -> Result<Self> {
         for (&lo, &hi) in lower.iter().zip(&upper) {
             ensure_finite(lo, "lower")?;

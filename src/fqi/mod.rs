@@ -374,7 +374,8 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// ([`Error::EmptyData`]); an action `≥ actions` ([`Error::OutOfRange`]); a
     /// non-finite state, next state, reward or weight ([`Error::NonFinite`]); a negative
     /// weight or a weight slice whose length differs from its samples'
-    /// ([`Error::InvalidParameter`]).
+    /// ([`Error::InvalidParameter`]); rewards, weights and iterations so large that a
+    /// value of the fit could overflow `T` ([`Error::InvalidParameter`] `reward`).
     pub fn fit(&mut self, sets: &[SampleSet<'_, T>], config: &FqiConfig<T>) -> Result<()> {
         self.fit_sets(sets.iter().copied(), config)
     }
@@ -397,6 +398,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
         if total == 0 {
             return Err(Error::EmptyData);
         }
+        check_magnitudes(sets.clone(), config)?;
         self.fit_reward_model(sets.clone(), config);
         for e in self.entries.iter_mut() {
             e.q = e.reward;
@@ -680,6 +682,38 @@ fn fill_empty<T: Real>(
         if let Some(e) = entries.get_mut(i) {
             *field(e) = value;
         }
+    }
+}
+
+/// Rejects finite inputs whose fit could overflow `T`: every sum of the fit is bounded by
+/// `Σ w_r·|r|` or by `(Σ w_r + Σ w_s) · max|Q|`, and `|Q_k| ≤ k · max(|r|, |fill value|)`
+/// (weighted means never exceed their largest term), so when these bounds are finite (with
+/// a factor 4 for rounding) so is every value the fit computes.
+fn check_magnitudes<'s, T: Real + 's>(
+    sets: impl Iterator<Item = SampleSet<'s, T>>,
+    config: &FqiConfig<T>,
+) -> Result<()> {
+    let mut reward_mass = T::ZERO;
+    let mut weight_mass = T::ZERO;
+    let mut largest = match config.empty_cells {
+        EmptyCells::Value(v) => v.abs(),
+        _ => T::ZERO,
+    };
+    for set in sets {
+        for (s, w_r, w_s) in set.iter() {
+            reward_mass += w_r * s.reward.abs();
+            weight_mass += w_r + w_s;
+            largest = largest.max(s.reward.abs());
+        }
+    }
+    let bound =
+        largest * T::from_usize(config.iterations) * (T::ONE + weight_mass) * T::from_f64(4.0);
+    if reward_mass.is_finite() && bound.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter {
+            parameter: "reward",
+        })
     }
 }
 

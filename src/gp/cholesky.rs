@@ -158,11 +158,18 @@ pub(crate) fn drop_first<T: Real>(l: &mut [T], stride: usize, n: usize, work: &m
             return false;
         };
         *wi = first;
+        // Row i ends before row i + 1 starts, so the two ranges lie in disjoint halves.
+        // (An element-wise copy: `copy_within` would keep a bounds-check panic path.)
         let dst = i * stride;
-        if l.get(src + 1..src + 2 + i).is_none() {
+        let Some((head, tail)) = l.split_at_mut_checked(src) else {
             return false;
+        };
+        let (Some(to), Some(from)) = (head.get_mut(dst..dst + i + 1), tail.get(1..i + 2)) else {
+            return false;
+        };
+        for (t, &f) in to.iter_mut().zip(from) {
+            *t = f;
         }
-        l.copy_within(src + 1..src + 2 + i, dst);
     }
     rank_one_update(l, stride, m, w)
 }

@@ -37,9 +37,11 @@ impl<T: Real, const D: usize> Hyperparameters<T, D> {
         }
     }
 
-    /// Checks that every value is finite, `c > 0`, every `ℓ_d > 0` and `σ²ₙ ≥ 0`.
+    /// Checks that every value is finite, `c > 0`, every `ℓ_d > 0`, `σ²ₙ ≥ 0`, and that
+    /// `c + σ²ₙ` (the Gram diagonal and the prior's noisy variance) is finite too.
     ///
-    /// Errors: [`Error::NonFinite`] or [`Error::InvalidParameter`] naming the field.
+    /// Errors: [`Error::NonFinite`] or [`Error::InvalidParameter`] naming the field
+    /// (`noise_variance` when `c + σ²ₙ` overflows).
     pub fn validate(&self) -> Result<()> {
         ensure_finite(self.signal_variance, "signal_variance")?;
         crate::error::ensure_all_finite(&self.length_scales, "length_scales")?;
@@ -54,7 +56,9 @@ impl<T: Real, const D: usize> Hyperparameters<T, D> {
                 parameter: "length_scales",
             });
         }
-        if self.noise_variance < T::ZERO {
+        if self.noise_variance < T::ZERO
+            || !(self.signal_variance + self.noise_variance).is_finite()
+        {
             return Err(Error::InvalidParameter {
                 parameter: "noise_variance",
             });

@@ -75,7 +75,11 @@ fn attempt<T: Real, const D: usize>(
     let (Some(src), Some(dst)) = (ys.get(solve..n), z.get_mut(solve..n)) else {
         return false;
     };
-    dst.copy_from_slice(src);
+    // Element-wise: the lengths are equal, but `copy_from_slice` keeps a length-mismatch
+    // panic path where the optimiser cannot prove it.
+    for (d, &s) in dst.iter_mut().zip(src) {
+        *d = s;
+    }
     cholesky::forward_solve(factor, stride, solve, n, z)
 }
 
@@ -325,8 +329,13 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
                 ) else {
                     return Err(Error::CapacityExceeded { capacity: N });
                 };
-                xs.copy_from_slice(x);
-                ys.copy_from_slice(y);
+                // Element-wise, as in `attempt`: no length-mismatch panic path.
+                for (d, s) in xs.iter_mut().zip(x) {
+                    *d = *s;
+                }
+                for (d, &s) in ys.iter_mut().zip(y) {
+                    *d = s;
+                }
                 self.len = x.len();
                 self.jitter_level = level;
                 Ok(())

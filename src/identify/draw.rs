@@ -55,10 +55,17 @@ fn draw_checked<T: Real, R: Rng + ?Sized>(
         let u: f64 = rng::uniform_f64(rng);
         ((u * score.len() as f64) as usize).min(score.len() - 1)
     };
-    Ok(StateAction {
-        state: index / num_actions,
-        action: index % num_actions,
-    })
+    // Checked division: `num_actions > 0` was checked, but only a checked form leaves no
+    // division-by-zero panic path for the no-panic proof.
+    match (
+        index.checked_div(num_actions),
+        index.checked_rem(num_actions),
+    ) {
+        (Some(state), Some(action)) => Ok(StateAction { state, action }),
+        _ => Err(Error::InvalidParameter {
+            parameter: "num_actions",
+        }),
+    }
 }
 
 /// Draws one pair with probability proportional to `score` (index `s·|𝒜| + a`, need not

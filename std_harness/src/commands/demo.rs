@@ -4,7 +4,9 @@
 //! generative-model queries on the target, fits the core's fixed-capacity `f32` GP to the
 //! observed rewards (hyperparameters searched by marginal likelihood inside spec §4.2's
 //! box), and compares its posterior mean with the true mean reward on a grid. Writes
-//! `episode.csv`, `gp_reward.csv` and `summary.json` under `--out`.
+//! `episode.csv`, `gp_reward.csv`, `summary.json` and the figure `demo.{png,svg}` (the
+//! episode and the queries over the box; the true and learned reward along y = 4, through
+//! two puddles) under `--out`.
 
 use std::fs;
 use std::io::Write;
@@ -19,6 +21,8 @@ use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::Serialize;
+
+use crate::plot::{Figure, LegendPosition, Panel, Series, SeriesStyle, XScale};
 
 /// Capacity of the demo's GP: what a microcontroller could afford (≈ 17 KiB in `f32`).
 const GP_CAPACITY: usize = 64;
@@ -193,5 +197,99 @@ pub fn demo(args: &Args) -> anyhow::Result<Summary> {
         args.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
+    plot(&target, episode, &inputs, &gp, &args.out.join("demo"))?;
     Ok(summary)
+}
+
+/// Two panels: where the agent went and where it queried; the reward it learned along
+/// y = 4 against the truth.
+fn plot(
+    target: &PuddleWorld<f32>,
+    episode: &[EpisodeRecord<f32>],
+    queries: &[[f32; 3]],
+    gp: &Gp<f32, GP_CAPACITY, 3>,
+    stem: &std::path::Path,
+) -> anyhow::Result<()> {
+    let mut path: Vec<(f64, f64)> = episode
+        .iter()
+        .map(|r| {
+            (
+                f64::from(r.transition.state[0]),
+                f64::from(r.transition.state[1]),
+            )
+        })
+        .collect();
+    if let Some(last) = episode.last() {
+        let s = last.transition.next_state;
+        path.push((f64::from(s[0]), f64::from(s[1])));
+    }
+    let queried = queries
+        .iter()
+        .map(|z| (f64::from(z[0]), f64::from(z[1])))
+        .collect();
+    let space = Panel {
+        title: "Target Puddle World: one episode and the queries".into(),
+        x_label: "s_x".into(),
+        y_label: "s_y".into(),
+        x_scale: XScale::Linear,
+        y_range: Some((0.0, 10.0)),
+        series: vec![
+            Series {
+                label: "episode".into(),
+                points: path,
+                errors: None,
+                style: SeriesStyle::LineWithMarkers,
+                color: 0,
+            },
+            Series {
+                label: "queries".into(),
+                points: queried,
+                errors: None,
+                style: SeriesStyle::Points,
+                color: 1,
+            },
+        ],
+        references: vec![],
+        legend: LegendPosition::LowerRight,
+    };
+    let (mut truth, mut mean, mut std) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..=100 {
+        let x = i as f32 / 10.0;
+        truth.push((f64::from(x), f64::from(target.mean_reward([x, 4.0])?)));
+        let p = gp.predict(&[x, 4.0, 0.0])?;
+        mean.push((f64::from(x), f64::from(p.mean)));
+        std.push(f64::from(p.latent_variance.sqrt()));
+    }
+    let profile = Panel {
+        title: "Mean reward along y = 4".into(),
+        x_label: "s_x".into(),
+        y_label: "reward".into(),
+        x_scale: XScale::Linear,
+        y_range: None,
+        series: vec![
+            Series {
+                label: "true mean reward".into(),
+                points: truth,
+                errors: None,
+                style: SeriesStyle::Line,
+                color: 0,
+            },
+            Series {
+                label: "GP mean ± latent std".into(),
+                points: mean,
+                errors: Some(std),
+                style: SeriesStyle::Line,
+                color: 1,
+            },
+        ],
+        references: vec![],
+        legend: LegendPosition::LowerRight,
+    };
+    Figure {
+        panels: vec![space, profile],
+        panel_width: 640,
+        height: 480,
+    }
+    .save(stem)?;
+    Ok(())
 }

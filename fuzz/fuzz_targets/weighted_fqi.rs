@@ -1,0 +1,164 @@
+//! Weighted tabular FQI on arbitrary grids, samples, weights and settings (f32 and f64):
+//! `CellGrid::new`, `FqiConfig::new`/`with_min_weight`, `TabularFqi::new`/`fit`/`value`/
+//! `max_value`/`greedy_action`.
+//!
+//! Invariants: no panic; a successful fit leaves every Q-value, reward model and weight
+//! finite; a failed fit leaves the table exactly as it was (documented: everything is
+//! checked before the table changes); queries return finite values or typed errors.
+#![no_main]
+
+use awfqi::Real;
+use awfqi::env::Transition;
+use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
+use libfuzzer_sys::fuzz_target;
+
+fn real<T: Real>(b: &mut Bytes) -> T {
+    T::from_f64(b.num())
+}
+
+fn run<T: Real>(b: &mut Bytes) {
+    let grid = if b.bool() {
+        let lower = [real::<T>(b), real(b)];
+        let upper = [real::<T>(b), real(b)];
+        let cells = [b.index(7), b.index(7)];
+        trace!("CellGrid::new({lower:?}, {upper:?}, {cells:?})");
+        match CellGrid::new(lower, upper, cells) {
+            Ok(g) => g,
+            Err(e) => {
+                expect_kind(
+                    "CellGrid::new",
+                    &e,
+                    &[Kind::Invalid, Kind::NonFinite, Kind::Capacity],
+                );
+                return;
+            }
+        }
+    } else {
+        CellGrid::square(T::ZERO, T::from_f64(10.0), 1 + b.index(6)).expect("a valid grid")
+    };
+    let actions = b.index(5);
+    let mut storage = [FqiEntry::<T>::EMPTY; 6 * 6 * 4];
+    let mut fqi = match TabularFqi::new(grid, actions, &mut storage) {
+        Ok(f) => f,
+        Err(e) => {
+            expect_kind("TabularFqi::new", &e, &[Kind::Invalid, Kind::Capacity]);
+            return;
+        }
+    };
+    let discount = if b.bool() { real(b) } else { T::from_f64(0.9) };
+    let iterations = b.index(12);
+    let empty = match b.u8() % 3 {
+        0 => EmptyCells::Nearest,
+        1 => EmptyCells::CappedNearest,
+        _ => EmptyCells::Value(real(b)),
+    };
+    let config = match FqiConfig::new(discount, iterations, empty) {
+        Ok(c) => c,
+        Err(e) => {
+            expect_kind(
+                "FqiConfig::new",
+                &e,
+                &[Kind::NonFinite, Kind::OutOfRange, Kind::Invalid],
+            );
+            return;
+        }
+    };
+    let config = if b.bool() {
+        match config.with_min_weight(real(b)) {
+            Ok(c) => c,
+            Err(e) => {
+                expect_kind("with_min_weight", &e, &[Kind::NonFinite, Kind::Invalid]);
+                return;
+            }
+        }
+    } else {
+        config
+    };
+
+    let n_sets = 1 + b.index(3);
+    let mut samples: Vec<Vec<Transition<[T; 2], T>>> = Vec::new();
+    let mut rewards: Vec<Option<Vec<T>>> = Vec::new();
+    let mut transitions: Vec<Option<Vec<T>>> = Vec::new();
+    for _ in 0..n_sets {
+        let n = b.index(20);
+        let set: Vec<_> = (0..n)
+            .map(|_| Transition {
+                state: [real(b), real(b)],
+                action: b.index(6),
+                reward: real(b),
+                next_state: [real(b), real(b)],
+                absorbing: b.bool(),
+            })
+            .collect();
+        let weights = |b: &mut Bytes| {
+            if b.bool() {
+                let m = if b.u8() == 0xff { n + 1 } else { n };
+                Some((0..m).map(|_| real::<T>(b)).collect::<Vec<T>>())
+            } else {
+                None
+            }
+        };
+        rewards.push(weights(b));
+        transitions.push(weights(b));
+        samples.push(set);
+    }
+    let sets: Vec<SampleSet<'_, T>> = samples
+        .iter()
+        .zip(&rewards)
+        .zip(&transitions)
+        .map(|((s, r), t)| SampleSet::weighted(s, r.as_deref(), t.as_deref()))
+        .collect();
+    trace!("fit({samples:?}, rewards {rewards:?}, transitions {transitions:?}, {config:?})");
+    let before: Vec<FqiEntry<T>> = fqi.entries().to_vec();
+    match fqi.fit(&sets, &config) {
+        Ok(()) => {
+            for e in fqi.entries() {
+                finite("fit", "q", e.q().to_f64());
+                finite("fit", "reward_model", e.reward_model().to_f64());
+                finite("fit", "transition_weight", e.transition_weight().to_f64());
+            }
+        }
+        Err(e) => {
+            expect_kind(
+                "fit",
+                &e,
+                &[
+                    Kind::Empty,
+                    Kind::OutOfRange,
+                    Kind::NonFinite,
+                    Kind::Invalid,
+                ],
+            );
+            assert!(
+                fqi.entries() == &before[..],
+                "a failed fit changed the table"
+            );
+        }
+    }
+    for _ in 0..4 {
+        let s = [real::<T>(b), real(b)];
+        let a = b.index(6);
+        match fqi.value(s, a) {
+            Ok(v) => finite("value", "q", v.to_f64()),
+            Err(e) => expect_kind("value", &e, &[Kind::NonFinite, Kind::OutOfRange]),
+        }
+        match fqi.max_value(s) {
+            Ok(v) => finite("max_value", "v", v.to_f64()),
+            Err(e) => expect_kind("max_value", &e, &[Kind::NonFinite]),
+        }
+        match fqi.greedy_action(s) {
+            Ok(a) => assert!(a < actions),
+            Err(e) => expect_kind("greedy_action", &e, &[Kind::NonFinite]),
+        }
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut b = Bytes::new(data);
+    if b.bool() {
+        run::<f32>(&mut b)
+    } else {
+        run::<f64>(&mut b)
+    }
+});

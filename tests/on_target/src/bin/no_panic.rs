@@ -1,0 +1,782 @@
+//! The no-panic proof: an image that calls every public entry point of the core, in `f32`
+//! and `f64`, with inputs the optimiser cannot see through (`black_box`), linked with a
+//! panic handler that calls a symbol defined nowhere. If any panic path of the core
+//! survives optimisation (release, LTO, opt-level s), the handler is live and the link
+//! fails naming `awfqi_core_has_a_reachable_panic_path`. Built by `scripts/no-panic`; it
+//! is never run.
+//!
+//! Keep it complete: a new public function of the core gets a call here.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box as opaque;
+
+use awfqi::Real;
+use awfqi::alias::{AliasEntry, AliasTable};
+use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
+use awfqi::dataset::{
+    GpTraining, Output, SubsetRule, batch_transform, fit_gp, input, predict_posteriors,
+};
+use awfqi::env::Transition;
+use awfqi::env::{
+    Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld,
+};
+use awfqi::evaluation::{evaluate, evaluate_greedy};
+use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use awfqi::identify::score::{mutual_information_score, uniform_score, variance_score};
+use awfqi::identify::{
+    Belief, Criterion, MiConfig, RewardEntropy, Scoring, StateAction, belief_weighted_policy,
+    belief_weighted_q, compute_score, draw_pair, draw_pairs, log_likelihood, run_queries,
+};
+use awfqi::planning::{
+    StoppingRule, backup, evaluate_policy, greedy_action, greedy_policy, q_from_values,
+    value_iteration,
+};
+use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+use awfqi::score::{
+    GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceModel,
+};
+use awfqi::weights::{
+    Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
+    effective_sample_size, ideal_weight, predictive_stds,
+};
+use cortex_m_rt::entry;
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+/// A value of `T` the optimiser cannot know.
+fn num<T: Real>(x: f64) -> T {
+    opaque(T::from_f64(opaque(x)))
+}
+
+fn index(i: usize) -> usize {
+    opaque(i)
+}
+
+fn keep<V>(v: V) {
+    opaque(v);
+}
+
+fn error_and_float<T: Real>() {
+    // `Error`'s Display goes through core::fmt; it is covered by writing into a sink.
+    struct Sink;
+    impl core::fmt::Write for Sink {
+        fn write_str(&mut self, s: &str) -> core::fmt::Result {
+            opaque(s);
+            Ok(())
+        }
+    }
+    let errors = [
+        awfqi::Error::CapacityExceeded { capacity: index(3) },
+        awfqi::Error::NonFinite { parameter: "x" },
+        awfqi::Error::InvalidParameter { parameter: "y" },
+        awfqi::Error::OutOfRange { parameter: "z" },
+        awfqi::Error::EmptyData,
+        awfqi::Error::NotPositiveDefinite,
+    ];
+    let e = errors
+        .get(index(2))
+        .copied()
+        .unwrap_or(awfqi::Error::EmptyData);
+    keep(core::fmt::write(&mut Sink, format_args!("{e}")));
+
+    let x: T = num(0.3);
+    keep((x.sqrt(), x.exp(), x.ln(), x.ln_1p(), x.abs(), x.floor()));
+    keep((x.max(num(0.1)), x.min(num(0.1)), x.is_finite(), x.is_nan()));
+    keep((
+        x.squared(),
+        x.clamp_to(num(0.0), num(1.0)),
+        x.to_f64(),
+        T::from_usize(index(7)),
+    ));
+    keep(awfqi::float::log_add_exp(x, num(2.0)));
+    keep(awfqi::float::log_sum_exp(opaque(
+        &[x, num(1.0), num(-3.0)][..],
+    )));
+}
+
+fn rng_and_policy<T: Real>(rng: &mut ChaCha8Rng) {
+    keep(awfqi::rng::uniform_f64(rng));
+    keep(awfqi::rng::uniform::<T, _>(rng));
+    keep(awfqi::rng::uniform_in::<T, _>(rng, num(-1.0), num(2.0)));
+    keep(awfqi::rng::standard_normal::<T, _>(rng));
+    keep(awfqi::rng::normal::<T, _>(rng, num(1.0), num(0.5)));
+    let weights: [T; 4] = [num(0.0), num(1.0), num(2.0), num(0.5)];
+    keep(awfqi::rng::categorical(rng, opaque(&weights[..])));
+
+    if let Ok(mut uniform) = UniformPolicy::new(index(4)) {
+        keep(uniform.num_actions());
+        keep(Policy::<[T; 2]>::action(
+            &mut uniform,
+            &[num(1.0), num(2.0)],
+            rng,
+        ));
+    }
+    let greedy = |s: &[T; 2]| -> awfqi::Result<usize> { Ok(usize::from(s[0] > s[1])) };
+    if let Ok(mut policy) = EpsilonGreedyPolicy::new(greedy, num::<T>(0.3), index(4)) {
+        keep(policy.epsilon());
+        keep(policy.action(&[num(1.0), num(2.0)], rng));
+        keep(policy.greedy());
+        keep(policy.greedy_mut());
+        let inner = policy.into_greedy();
+        keep(inner(&[num(1.0), num(0.0)]));
+    }
+}
+
+fn grid<T: Real>(rng: &mut ChaCha8Rng) {
+    let candidates = GridWorld::<T>::thesis_candidates(opaque(true));
+    let world = match GridWorld::<T>::new(
+        index(10),
+        index(10),
+        (index(3), index(4)),
+        num(0.25),
+        opaque(false),
+    ) {
+        Ok(w) => w,
+        Err(_) => candidates[0],
+    };
+    keep(GridWorld::<T>::thesis(index(2), opaque(false)));
+    keep((
+        world.width(),
+        world.height(),
+        world.goal(),
+        world.absorbing_goal(),
+    ));
+    keep(world.state_of(index(3), index(5)));
+    keep(world.cell_of(index(37)));
+    keep(world.next_state(index(37), index(2)));
+    keep((
+        FiniteMdp::num_states(&world),
+        FiniteMdp::num_actions(&world),
+        world.initial_state(),
+    ));
+    keep(world.transition_probability(index(3), index(1), index(2)));
+    let mut total = T::ZERO;
+    keep(world.for_each_successor(index(5), index(0), |s, p| {
+        total += p * T::from_usize(s);
+    }));
+    keep(total);
+    keep(world.reward_mean(index(99), index(0)));
+    keep(world.reward_variance(index(9), index(3)));
+    keep(GenerativeModel::num_actions(&world));
+    keep(world.query(index(44), index(1), rng));
+}
+
+fn puddle<T: Real>(rng: &mut ChaCha8Rng) {
+    let dynamics = if opaque(true) {
+        Dynamics::PuddleBased
+    } else {
+        Dynamics::Shared
+    };
+    keep(dynamics.slow_down());
+    let puddles = [
+        Puddle::new([num::<T>(1.0), num(4.0)], num(0.7)),
+        Puddle::new([num(6.0), num(6.0)], num(0.8)),
+    ];
+    let custom = PuddleWorld::new([num(5.0), num(10.0)], opaque(&puddles[..]), dynamics);
+    let [s1, s2, s3] = PuddleWorld::<T>::sources(dynamics);
+    let worlds = [
+        PuddleWorld::<T>::target(dynamics),
+        s1,
+        s2,
+        s3,
+        PuddleWorld::source_1(dynamics),
+    ];
+    keep((
+        PuddleWorld::<T>::source_2(dynamics),
+        PuddleWorld::<T>::source_3(dynamics),
+    ));
+    let world = match custom {
+        Ok(w) => w,
+        Err(_) => worlds[index(3) % 5],
+    };
+    keep((
+        world.goal(),
+        world.dynamics(),
+        world.slow_down(),
+        world.num_puddles(),
+    ));
+    let mut sum = T::ZERO;
+    for p in world.puddles() {
+        sum += p.variance + p.mean[0];
+    }
+    keep(sum);
+    let s = [num::<T>(3.0), num(4.5)];
+    keep(world.initial_state());
+    keep(world.check_state(s));
+    keep(world.puddle_weight(s));
+    keep(world.step_length(s));
+    keep(world.in_goal(s));
+    keep(world.mean_reward(s));
+    keep(world.mean_next_state(s, index(2)));
+    keep(world.step(s, index(1), rng));
+    keep(GenerativeModel::num_actions(&world));
+    keep(world.query(s, index(3), rng));
+
+    let mut uniform = UniformPolicy::new(4).unwrap_or_else(|_| loop {});
+    let mut count = 0usize;
+    keep(world.run_episode_with(&mut uniform, index(50), rng, |r| {
+        count += r.t;
+        Ok(())
+    }));
+    keep(count);
+    let mut records = [EpisodeRecord::<T>::default(); 50];
+    keep(world.run_episode(&mut uniform, index(50), &mut records, rng));
+    keep(&records);
+    keep(world.rollout(&mut uniform, index(50), num(0.99), rng));
+}
+
+fn gp<T: Real>(rng: &mut ChaCha8Rng) {
+    let hyper = Hyperparameters::<T, 3> {
+        signal_variance: num(2.0),
+        length_scales: [num(1.5), num(2.0), num(1.0)],
+        noise_variance: num(0.05),
+    };
+    keep(Hyperparameters::<T, 3>::SPEC_INITIAL);
+    keep(Hyperparameters::<T, 3>::isotropic(
+        num(1.0),
+        num(2.0),
+        num(0.1),
+    ));
+    keep(hyper.validate());
+    let a = [num::<T>(1.0), num(2.0), num(0.0)];
+    let b = [num::<T>(0.5), num(2.5), num(1.0)];
+    keep(hyper.covariance(&a, &b));
+
+    let mut gp = match Gp::<T, 16, 3>::new(hyper) {
+        Ok(gp) => gp,
+        Err(_) => Gp::empty(),
+    };
+    keep(Gp::<T, 16, 3>::default().len());
+    keep(Gp::<T, 16, 3>::CAPACITY);
+    let mut x = [[T::ZERO; 3]; 12];
+    let mut y = [T::ZERO; 12];
+    for (i, (xi, yi)) in x.iter_mut().zip(y.iter_mut()).enumerate() {
+        let t = T::from_usize(i);
+        *xi = [t * num(0.7), num::<T>(10.0) - t, T::from_usize(i % 4)];
+        *yi = (t * num(0.3)).exp();
+    }
+    let n = index(10).min(12);
+    keep(gp.fit(opaque(&x[..n]), opaque(&y[..n])));
+    keep(gp.add_point(
+        b,
+        num(0.5),
+        if opaque(true) {
+            WhenFull::DropOldest
+        } else {
+            WhenFull::Refuse
+        },
+    ));
+    keep(gp.predict(&a));
+    keep(gp.log_marginal_likelihood());
+    keep((gp.len(), gp.is_empty(), gp.hyperparameters(), gp.jitter()));
+    keep((gp.inputs().len(), gp.targets().len()));
+    keep(gp.set_hyperparameters(Hyperparameters::isotropic(num(1.0), num(1.0), num(0.1))));
+    let bounds = HyperparameterBounds::<T, 3>::spec_default();
+    keep(bounds.validate());
+    keep(bounds.contains(gp.hyperparameters()));
+    let options = SearchOptions {
+        max_evaluations: index(30),
+        restarts: index(2),
+        isotropic: opaque(false),
+    };
+    keep(options.validate());
+    keep(SearchOptions::default());
+    keep(gp.optimize_hyperparameters(&bounds, &options, rng));
+    // Fill to capacity so the sliding-window path of `add_point` is live too.
+    for i in 0..index(20) {
+        let t = T::from_usize(i);
+        keep(gp.add_point([t, t * num(0.5), num(1.0)], t, WhenFull::DropOldest));
+    }
+    keep(gp.predict(&b));
+    gp.clear();
+    keep(gp.len());
+}
+
+fn record<T: Real>(i: usize) -> Transition<[T; 2], T> {
+    let t = T::from_usize(i % 10);
+    Transition {
+        state: [t, num::<T>(9.0) - t],
+        action: i % 4,
+        reward: num::<T>(-1.0) - t,
+        next_state: [t + num(1.0), num::<T>(9.0) - t],
+        absorbing: i % 7 == 6,
+    }
+}
+
+fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
+    // alias
+    let mut entries = [AliasEntry::<T>::EMPTY; 8];
+    let weights: [T; 5] = [num(0.0), num(1.0), num(2.5), num(0.1), num(3.0)];
+    if let Ok(table) = AliasTable::build(opaque(weights).into_iter().take(index(5)), &mut entries) {
+        keep((
+            table.len(),
+            table.is_empty(),
+            table.probability(index(2)),
+            table.sample(rng),
+        ));
+        let mut out = [0usize; 4];
+        table.sample_into(rng, &mut out);
+        keep(out);
+        if let Some(e) = table.entries().get(index(1)) {
+            keep((e.threshold(), e.alias()));
+        }
+    }
+
+    // weights
+    let params = WeightParams::new(
+        if opaque(true) {
+            Estimator::Mean
+        } else {
+            Estimator::Heuristic
+        },
+        num::<T>(0.1),
+        num(1000.0),
+    )
+    .unwrap_or_else(|_| WeightParams::reference_reward());
+    keep((
+        params.estimator(),
+        params.noise_variance(),
+        params.max_weight(),
+    ));
+    let (pt, ps) = (
+        Posterior::new(num::<T>(-1.2), num(0.1)),
+        Posterior::new(num::<T>(-1.0), num(0.05)),
+    );
+    keep(params.weight(num(-1.0), pt, ps));
+    let ys: [T; 3] = [num(-1.0), num(-2.0), num(0.5)];
+    let mut out = [T::ZERO; 3];
+    keep(params.weights_into(&ys, &[pt; 3], &[ps; 3], &mut out));
+    let mut variances: [T; 3] = [num(0.5), num(0.2), num(0.3)];
+    let mode = [
+        NoiseSubtraction::Reference,
+        NoiseSubtraction::Principled,
+        NoiseSubtraction::Off,
+    ][index(1) % 3];
+    keep(predictive_stds(mode, num::<T>(0.1), &mut variances));
+    if let Ok(transform) = StdTransform::new(mode, num::<T>(0.1), num(0.2)) {
+        keep(transform.apply(num(0.4)));
+    }
+    keep(ideal_weight(
+        num::<T>(-1.05),
+        num(-1.0),
+        num(-1.2),
+        num(0.01),
+    ));
+    let mut summary = WeightSummary::<T>::new();
+    keep(summary.add(&out));
+    summary.add_ones(index(3));
+    keep((
+        summary.count(),
+        summary.mean(),
+        summary.effective_sample_size(),
+    ));
+    keep(effective_sample_size(opaque(&out[..])));
+
+    // dataset
+    let records: [Transition<[T; 2], T>; 12] = core::array::from_fn(record::<T>);
+    let z = input(records[index(3) % 12].state, index(2));
+    keep(z);
+    let output = [Output::Reward, Output::NextX, Output::NextY][index(2) % 3];
+    keep(output.of(&records[index(4) % 12]));
+    let rule = if opaque(true) {
+        SubsetRule::Spread
+    } else {
+        SubsetRule::Last
+    };
+    keep(rule.indices(index(12), index(5)).fold(0, |a, i| a + i));
+    let mut training = GpTraining::<T>::reference();
+    training.search.max_evaluations = index(20);
+    training.search.restarts = index(1);
+    let mut gp = Gp::<T, 8, 3>::empty();
+    keep(fit_gp(
+        &mut gp,
+        opaque(&records[..]),
+        output,
+        rule,
+        &training,
+        rng,
+    ));
+    let mut posteriors = [Posterior::<T>::default(); 12];
+    keep(predict_posteriors(&gp, &records, mode, &mut posteriors));
+    keep(batch_transform(&gp, &records, mode));
+
+    // fqi
+    let grid = CellGrid::new(
+        [num::<T>(0.0), num(0.0)],
+        [num(10.0), num(10.0)],
+        [index(3), index(3)],
+    )
+    .or_else(|_| CellGrid::square(num::<T>(0.0), num(10.0), index(3)));
+    if let Ok(grid) = grid {
+        keep((
+            grid.cells(),
+            grid.len(),
+            grid.is_empty(),
+            grid.lower(),
+            grid.upper(),
+        ));
+        keep((
+            grid.cell_of([num(3.3), num(7.1)]),
+            grid.coordinates(index(4)),
+            grid.center(index(4)),
+        ));
+        keep(TabularFqi::<T>::required_entries(&grid, index(4)));
+        let mut storage = [FqiEntry::<T>::EMPTY; 36];
+        if let Ok(mut fqi) = TabularFqi::new(grid, index(4), &mut storage) {
+            let empty = match index(1) {
+                0 => EmptyCells::Nearest,
+                1 => EmptyCells::CappedNearest,
+                _ => EmptyCells::Value(num(-1.0)),
+            };
+            let config = FqiConfig::new(num::<T>(0.9), index(5), empty)
+                .and_then(|c| c.with_min_weight(num(0.5)))
+                .unwrap_or_else(|_| FqiConfig::reference());
+            keep((
+                config.discount(),
+                config.iterations(),
+                config.empty_cells(),
+                config.min_weight(),
+            ));
+            let w = [num::<T>(0.5); 12];
+            let sets = [
+                SampleSet::unweighted(&records[..6]),
+                SampleSet::weighted(&records[6..], Some(&w[6..]), None),
+            ];
+            keep((sets[0].len(), sets[1].is_empty()));
+            keep(fqi.fit(&sets, &config));
+            keep(fqi.fit_sets(sets.iter().copied(), &config));
+            keep((fqi.grid().len(), fqi.actions()));
+            if let Some(e) = fqi.entries().get(index(5)) {
+                keep((e.q(), e.reward_model(), e.transition_weight(), e.has_data()));
+            }
+            keep(fqi.value([num(2.0), num(3.0)], index(1)));
+            keep(fqi.max_value([num(2.0), num(3.0)]));
+            keep(fqi.greedy_action([num(2.0), num(3.0)]));
+            let target = PuddleWorld::<T>::target(Dynamics::Shared);
+            keep(evaluate_greedy(&target, &fqi, rng));
+            let mut uniform = UniformPolicy::new(4).unwrap_or_else(|_| loop {});
+            keep(evaluate(&target, &mut uniform, index(2), rng));
+            fqi.clear();
+        }
+    }
+
+    // score
+    let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
+    let point_grid = PointGrid::new(
+        [num::<T>(0.0), num(0.0)],
+        [num(5.0), num(5.0)],
+        [index(3), index(3)],
+    )
+    .or_else(|_| PointGrid::puddle(num::<T>(5.0)));
+    let source_sets: [&[Transition<[T; 2], T>]; 2] = [&records[..4], &records[4..9]];
+    if let Ok(point_grid) = point_grid {
+        keep((
+            point_grid.points(),
+            point_grid.len(),
+            point_grid.is_empty(),
+            point_grid.spacing(),
+            point_grid.point(index(4)),
+        ));
+        let rows = match index(2) {
+            0 => RowSet::grid(point_grid, 4),
+            1 => RowSet::source_data(&source_sets),
+            _ => RowSet::both(point_grid, 4, &source_sets),
+        };
+        if let Ok(rows) = rows {
+            keep((
+                rows.len(),
+                rows.is_empty(),
+                rows.row(index(7)),
+                rows.iter().count(),
+            ));
+            let mut scores = [Scores::<T>::ZERO; 64];
+            let models = [
+                GpSourceModel::new(&gp, None),
+                GpSourceModel::new(&gp, Some([&gp, &gp])),
+            ];
+            keep(models[index(1) % 2].predict([num(1.0), num(2.0)], index(1)));
+            let computed = if opaque(true) {
+                ScoreTable::compute(rows, &worlds, &mut scores)
+            } else {
+                ScoreTable::compute(rows, &models, &mut scores)
+            };
+            if let Ok(table) = computed {
+                keep((
+                    table.len(),
+                    table.is_empty(),
+                    table.rows().len(),
+                    table.values().len(),
+                ));
+                if let Some(row) = table.row(index(3)) {
+                    keep((
+                        row.state,
+                        row.action,
+                        row.scores.total(),
+                        row.scores.get(ScoreColumn::NextY),
+                    ));
+                }
+                keep(ScoreTable::from_parts(rows, table.values()).map(|t| t.len()));
+                let mut alias = [AliasEntry::<T>::EMPTY; 64];
+                let column = [
+                    ScoreColumn::Reward,
+                    ScoreColumn::NextX,
+                    ScoreColumn::NextY,
+                    ScoreColumn::Total,
+                ][index(3) % 4];
+                if let Ok(sampler) = table.sampler(column, &mut alias) {
+                    keep((
+                        sampler.draw(rng),
+                        sampler.rows().len(),
+                        sampler.alias().len(),
+                    ));
+                    kernel::<T>(sampler, &records, &posteriors, rng);
+                }
+            }
+        }
+    }
+}
+
+/// `Awfqi` itself: construction, a step, every accessor and `reset`.
+fn kernel<T: Real>(
+    sampler: RowSampler<'_, T>,
+    records: &[Transition<[T; 2], T>],
+    posteriors: &[Posterior<T>],
+    rng: &mut ChaCha8Rng,
+) {
+    let mut config = AwfqiConfig::<T>::thesis(index(4));
+    config.gp_training.search.max_evaluations = index(10);
+    config.gp_training.search.restarts = index(1);
+    keep(config.validate());
+    let Ok(source) = SourceData::new(records, posteriors) else {
+        return;
+    };
+    keep((source.records().len(), source.reward_posteriors().len()));
+    let sources = [source];
+    let blank = record::<T>(0);
+    let mut samples = [blank; 8];
+    let mut weights = [T::ZERO; 12];
+    let mut gp = Gp::<T, 8, 3>::empty();
+    let mut storage = [FqiEntry::<T>::EMPTY; 36];
+    let Ok(grid) = CellGrid::square(num::<T>(0.0), num(10.0), index(3)) else {
+        return;
+    };
+    let Ok(fqi) = TabularFqi::new(grid, 4, &mut storage) else {
+        return;
+    };
+    let target = PuddleWorld::<T>::target(Dynamics::Shared);
+    if let Ok(mut kernel) = Awfqi::new(
+        config,
+        target,
+        sampler,
+        &sources,
+        &mut samples,
+        &mut weights,
+        &mut gp,
+        fqi,
+    ) {
+        keep(kernel.step(rng));
+        keep((
+            kernel.config().budget,
+            kernel.steps(),
+            kernel.target_samples().len(),
+            kernel.reward_weights().len(),
+        ));
+        keep((
+            kernel.q().actions(),
+            kernel.gp().len(),
+            kernel.target().num_puddles(),
+        ));
+        kernel.reset();
+        keep(kernel.steps());
+    }
+}
+
+/// Identification and planning on the Grid World candidates.
+fn identification<T: Real>(rng: &mut ChaCha8Rng) {
+    let candidates = GridWorld::<T>::thesis_candidates(opaque(false));
+    let k = index(4).min(4);
+    let cands = &candidates[..k];
+    let model = candidates[index(2) % 4];
+    keep(log_likelihood(
+        &model,
+        index(5),
+        index(1),
+        index(6),
+        num::<T>(0.3),
+    ));
+    let weights = [num::<T>(1.0), num(2.0), num(0.0), num(1.0)];
+    let mut belief = Belief::<T, 4>::from_weights(&weights[..k])
+        .or_else(|_| Belief::uniform(index(4)))
+        .unwrap_or_else(|_| loop {});
+    keep(belief.update(cands, index(99), index(1), index(98), num(1.0)));
+    let t = Transition {
+        state: index(3),
+        action: index(0),
+        reward: num(0.2),
+        next_state: index(4),
+        absorbing: false,
+    };
+    keep(belief.observe(cands, &t));
+    keep((
+        belief.len(),
+        belief.is_empty(),
+        belief.observations(),
+        belief.is_contradicted(),
+    ));
+    keep((
+        belief.log_probabilities().len(),
+        belief.log_prior().len(),
+        belief.map(),
+        belief.entropy(),
+    ));
+    let mut p = [T::ZERO; 4];
+    keep(belief.probabilities(&mut p[..k]));
+    let probabilities = belief.probability_array();
+    let mut score = [T::ZERO; 400];
+    keep(uniform_score(&mut score));
+    keep(variance_score(cands, &probabilities[..k], &mut score));
+    let config = MiConfig {
+        samples: index(20),
+        bins: index(16),
+        reward_entropy: if opaque(true) {
+            RewardEntropy::Differential
+        } else {
+            RewardEntropy::Literal
+        },
+        skip_identical_rewards: opaque(true),
+    };
+    keep(mutual_information_score(
+        cands,
+        &probabilities[..k],
+        &config,
+        rng,
+        &mut score,
+    ));
+    let criterion = match index(1) {
+        0 => Criterion::Uniform,
+        1 => Criterion::Variance,
+        _ => Criterion::MutualInformation(config),
+    };
+    keep(compute_score(
+        &criterion,
+        cands,
+        &probabilities[..k],
+        rng,
+        &mut score,
+    ));
+    keep(draw_pair(&score, index(4), rng));
+    let mut pairs = [StateAction {
+        state: 0,
+        action: 0,
+    }; 4];
+    keep(draw_pairs(&score, index(4), rng, &mut pairs));
+    keep(pairs);
+    let scoring = if opaque(true) {
+        Scoring::Adaptive(criterion)
+    } else {
+        Scoring::Fixed
+    };
+    let mut seen = 0usize;
+    keep(run_queries(
+        cands,
+        &model,
+        &scoring,
+        index(5),
+        &mut belief,
+        &mut score,
+        rng,
+        |i, _| seen += i,
+    ));
+    keep(seen);
+    belief.reset();
+
+    // Planning on the MAP candidate, then the belief-weighted policy.
+    let chosen = &candidates[belief.map() % 4];
+    let (mut values, mut q, mut policy) = ([T::ZERO; 100], [T::ZERO; 400], [0usize; 100]);
+    let rule = StoppingRule {
+        tolerance: num::<T>(1e-4),
+        max_sweeps: index(200),
+    };
+    keep(StoppingRule::<T>::default());
+    if let Ok(c) = value_iteration(chosen, num::<T>(0.9), rule, &mut values, &mut q) {
+        keep((c.sweeps, c.residual, c.converged));
+    }
+    keep(backup(chosen, num::<T>(0.9), &values, index(5), index(2)));
+    keep(q_from_values(chosen, num::<T>(0.9), &values, &mut q));
+    keep(greedy_action(&q[..4]));
+    keep(greedy_policy(&q, index(4), &mut policy));
+    keep(evaluate_policy(
+        chosen,
+        &policy,
+        num::<T>(0.9),
+        rule,
+        &mut values,
+    ));
+    let mut tables = [T::ZERO; 1600];
+    for (k, table) in tables.chunks_exact_mut(400).enumerate() {
+        if let Some(m) = candidates.get(k) {
+            keep(q_from_values(m, num::<T>(0.9), &values, table));
+        }
+    }
+    let mut scratch = [T::ZERO; 400];
+    keep(belief_weighted_q(
+        &tables[..400 * k],
+        &probabilities[..k],
+        &mut scratch,
+    ));
+    keep(belief_weighted_policy(
+        &tables[..400 * k],
+        &probabilities[..k],
+        index(4),
+        &mut scratch,
+        &mut policy,
+    ));
+    keep(policy);
+}
+
+fn exercise<T: Real>(seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    error_and_float::<T>();
+    rng_and_policy::<T>(&mut rng);
+    grid::<T>(&mut rng);
+    puddle::<T>(&mut rng);
+    gp::<T>(&mut rng);
+    transfer::<T>(&mut rng);
+    identification::<T>(&mut rng);
+}
+
+#[entry]
+fn main() -> ! {
+    exercise::<f32>(opaque(1));
+    exercise::<f64>(opaque(2));
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[cfg(not(feature = "diagnose"))]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    unsafe extern "C" {
+        fn awfqi_core_has_a_reachable_panic_path() -> !;
+    }
+    // SAFETY: never linked; the link fails if this handler is reachable.
+    unsafe { awfqi_core_has_a_reachable_panic_path() }
+}
+
+/// `scripts/no-panic --diagnose`: links with a looping handler so the surviving panic
+/// calls can be listed from the disassembly with their source lines.
+#[cfg(feature = "diagnose")]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    extern "C" fn awfqi_core_has_a_reachable_panic_path() -> ! {
+        loop {
+            cortex_m::asm::nop();
+        }
+    }
+    awfqi_core_has_a_reachable_panic_path()
+}

@@ -1,0 +1,740 @@
+//! The core on an emulated Cortex-M4F (QEMU `mps2-an386`), in `f32`, the microcontroller's
+//! precision: every module against golden values computed on the host in `f64`
+//! (`src/golden.rs`, proven by the core's host test `tests/on_target_golden.rs`), spec
+//! tables, hand-computed values and invariants.
+//!
+//! Run with `scripts/test-on-target`. A failed assertion logs its message and exits
+//! QEMU with status 1, a hard fault with status 3; the runner prints `N passed, M failed`.
+#![no_std]
+#![no_main]
+
+use cortex_m as _;
+use cortex_m_rt as _;
+use defmt_semihosting as _;
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    defmt::error!("{}", defmt::Display2Format(info));
+    semihosting::process::exit(1)
+}
+
+#[defmt::panic_handler]
+fn defmt_panic() -> ! {
+    semihosting::process::exit(1)
+}
+
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    defmt::error!("hard fault");
+    semihosting::process::exit(3)
+}
+
+use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::gp::{Gp, Hyperparameters};
+use awfqi_on_target::{close, golden};
+
+// Helpers live outside the `#[defmt_test::tests]` module, which admits only tests.
+fn instance(i: usize, dynamics: Dynamics) -> PuddleWorld<f32> {
+    match i {
+        0 => PuddleWorld::target(dynamics),
+        1 => PuddleWorld::source_1(dynamics),
+        2 => PuddleWorld::source_2(dynamics),
+        _ => PuddleWorld::source_3(dynamics),
+    }
+}
+
+fn gp_hyper() -> Hyperparameters<f32, 3> {
+    let l = golden::GP_LENGTH_SCALES;
+    Hyperparameters {
+        signal_variance: golden::GP_SIGNAL_VARIANCE as f32,
+        length_scales: [l[0] as f32, l[1] as f32, l[2] as f32],
+        noise_variance: golden::GP_NOISE_VARIANCE as f32,
+    }
+}
+
+fn gp_point(p: &[f64; 3]) -> [f32; 3] {
+    [p[0] as f32, p[1] as f32, p[2] as f32]
+}
+
+fn check_predictions(gp: &Gp<f32, 16, 3>, expected: &[(f64, f64); 3]) {
+    for (x, &(mean, variance)) in golden::GP_TEST.iter().zip(expected.iter()) {
+        let p = gp.predict(&gp_point(x)).unwrap();
+        assert!(
+            close(p.mean as f64, mean, 2e-4, 1e-4),
+            "mean {} vs {}",
+            p.mean,
+            mean
+        );
+        assert!(
+            close(p.latent_variance as f64, variance, 2e-4, 1e-4),
+            "variance {} vs {}",
+            p.latent_variance,
+            variance
+        );
+        assert!(p.noisy_variance == p.latent_variance + gp_hyper().noise_variance);
+    }
+}
+
+#[defmt_test::tests]
+mod tests {
+    use super::{check_predictions, gp_hyper, gp_point, instance};
+    use awfqi::Error;
+    use awfqi::env::{Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, PuddleWorld};
+    use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions, WhenFull};
+    use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+    use awfqi_on_target::{close, golden};
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+
+    /// Spec §2.7: mean reward r̄ and step length α (κ = 5) of the four instances at eight
+    /// points, to f32 precision (the table has 6 decimals).
+    #[test]
+    fn puddle_world_mean_reward_and_step_length_match_spec_table() {
+        const POINTS: [[f32; 2]; 8] = [
+            [0.0, 0.0],
+            [1.0, 4.0],
+            [2.0, 2.0],
+            [5.0, 5.0],
+            [6.0, 6.0],
+            [8.0, 2.0],
+            [5.0, 9.0],
+            [7.0, 9.0],
+        ];
+        // [point][instance] = (r̄, α)
+        const TABLE: [[(f64, f64); 4]; 8] = [
+            [
+                (-1.000121, 0.999994),
+                (-1.000000, 1.000000),
+                (-1.134130, 0.993338),
+                (-1.000000, 1.000000),
+            ],
+            [
+                (-23.737327, 0.467975),
+                (-1.000907, 0.999955),
+                (-12.529551, 0.634326),
+                (-1.000907, 0.999955),
+            ],
+            [
+                (-1.639298, 0.969025),
+                (-1.000074, 0.999996),
+                (-22.527471, 0.481609),
+                (-1.000074, 0.999996),
+            ],
+            [
+                (-12.399788, 0.636947),
+                (-12.399667, 0.636949),
+                (-6.748596, 0.776741),
+                (-12.399726, 0.636948),
+            ],
+            [
+                (-22.527397, 0.481610),
+                (-22.527397, 0.481610),
+                (-3.061517, 0.906556),
+                (-22.527412, 0.481610),
+            ],
+            [
+                (-1.134113, 0.993339),
+                (-1.134113, 0.993339),
+                (-1.061376, 0.996941),
+                (-23.870533, 0.466521),
+            ],
+            [
+                (-0.039372, 0.998035),
+                (-0.039372, 0.998035),
+                (-0.039663, 0.998021),
+                (-1.039372, 0.998035),
+            ],
+            [
+                (-1.038409, 0.998083),
+                (-1.038409, 0.998083),
+                (-1.400652, 0.980361),
+                (-0.038409, 0.998083),
+            ],
+        ];
+        for (point, row) in POINTS.iter().zip(TABLE.iter()) {
+            for (i, &(reward, alpha)) in row.iter().enumerate() {
+                let world = instance(i, Dynamics::PuddleBased);
+                let r = world.mean_reward(*point).unwrap() as f64;
+                let a = world.step_length(*point).unwrap() as f64;
+                assert!(
+                    close(r, reward, 2e-6, 4e-6),
+                    "r̄ instance {} at {:?}: {} vs {}",
+                    i,
+                    point,
+                    r,
+                    reward
+                );
+                assert!(
+                    close(a, alpha, 2e-6, 2e-6),
+                    "α instance {} at {:?}: {} vs {}",
+                    i,
+                    point,
+                    a,
+                    alpha
+                );
+                let shared = instance(i, Dynamics::Shared);
+                assert!(shared.step_length(*point).unwrap() == 1.0);
+            }
+        }
+    }
+
+    /// Sampled steps (κ = 5) from fixed seeds against spec §2.3 evaluated on the host in f64
+    /// with the same noise draws.
+    #[test]
+    fn puddle_world_steps_match_host_f64() {
+        for (&(i, s, a, seed), &(next, reward, absorbing)) in
+            golden::STEP_CASES.iter().zip(golden::STEP_EXPECTED.iter())
+        {
+            let world = instance(i, Dynamics::PuddleBased);
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let state = [s[0] as f32, s[1] as f32];
+            let t = world.query(state, a, &mut rng).unwrap();
+            for (got, want) in t.next_state.iter().zip(next.iter()) {
+                assert!(
+                    close(*got as f64, *want, 1e-5, 1e-6),
+                    "s′ {} vs {}",
+                    got,
+                    want
+                );
+            }
+            assert!(
+                close(t.reward as f64, reward, 1e-5, 2e-6),
+                "r {} vs {}",
+                t.reward,
+                reward
+            );
+            assert!(t.absorbing == absorbing && t.state == state && t.action == a);
+        }
+    }
+
+    /// Episodes: records chain (each next state is the following record's state), only the
+    /// last can be absorbing, and the rollout's discounted return is the sum over the same
+    /// episode (same seed) computed here; bad arguments are typed errors.
+    #[test]
+    fn puddle_world_episodes_chain_and_rollouts_sum() {
+        let world = PuddleWorld::<f32>::target(Dynamics::Shared);
+        let greedy_up = |_: &[f32; 2]| -> awfqi::Result<usize> { Ok(2) };
+        let mut policy = EpsilonGreedyPolicy::new(greedy_up, 0.3f32, 4).unwrap();
+        let mut records = [EpisodeRecord::<f32>::default(); 50];
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let n = world
+            .run_episode(&mut policy, 50, &mut records, &mut rng)
+            .unwrap();
+        assert!((1..=50).contains(&n));
+        assert!(records[0].transition.state == [0.0, 0.0]);
+        for (t, pair) in records[..n].windows(2).enumerate() {
+            assert!(pair[0].t == t && pair[1].t == t + 1);
+            assert!(pair[0].transition.next_state == pair[1].transition.state);
+            assert!(!pair[0].transition.absorbing);
+        }
+        let mut expected = 0.0f32;
+        let mut weight = 1.0f32;
+        for r in &records[..n] {
+            expected += weight * r.transition.reward;
+            weight *= 0.99;
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let rollout = world.rollout(&mut policy, 50, 0.99, &mut rng).unwrap();
+        assert!(rollout.steps == n && rollout.discounted_return == expected);
+        assert!(rollout.reached_goal == records[n - 1].transition.absorbing);
+
+        let mut small = [EpisodeRecord::<f32>::default(); 10];
+        assert!(
+            world.run_episode(&mut policy, 50, &mut small, &mut rng)
+                == Err(Error::CapacityExceeded { capacity: 10 })
+        );
+        let mut uniform = UniformPolicy::new(4).unwrap();
+        assert!(world.rollout(&mut uniform, 0, 0.99, &mut rng).is_err());
+        assert!(world.rollout(&mut uniform, 50, f32::NAN, &mut rng).is_err());
+        assert!(
+            world.query([f32::NAN, 1.0], 0, &mut rng)
+                == Err(Error::NonFinite { parameter: "state" })
+        );
+        assert!(
+            world.query([10.5, 1.0], 0, &mut rng) == Err(Error::OutOfRange { parameter: "state" })
+        );
+        assert!(
+            world.query([1.0, 1.0], 4, &mut rng)
+                == Err(Error::OutOfRange {
+                    parameter: "action"
+                })
+        );
+    }
+
+    /// Grid World: hand-computed moves (walls keep the state), exact probabilities, reward
+    /// means, and a sampled reward that is the mean plus √0.25 times the seeded normal draw.
+    #[test]
+    fn grid_world_moves_probabilities_and_rewards() {
+        let grid = GridWorld::<f32>::thesis(0, false).unwrap(); // goal (9, 9) = state 99
+        let moves = [
+            (0, 0, 1),
+            (0, 1, 0),
+            (0, 2, 10),
+            (0, 3, 0),
+            (99, 0, 99),
+            (99, 2, 99),
+            (55, 1, 54),
+            (55, 3, 45),
+        ];
+        for &(s, a, next) in &moves {
+            assert!(grid.next_state(s, a) == Ok(next));
+            assert!(grid.transition_probability(s, a, next) == Ok(1.0));
+            let other = if next == 0 { 1 } else { 0 };
+            assert!(grid.transition_probability(s, a, other) == Ok(0.0));
+        }
+        assert!(grid.reward_mean(99, 1) == Ok(1.0) && grid.reward_mean(98, 0) == Ok(0.0));
+        assert!(grid.reward_variance(3, 3) == Ok(0.25));
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let t = grid.query(99, 1, &mut rng).unwrap();
+        let mut same = ChaCha8Rng::seed_from_u64(21);
+        let z: f32 = awfqi::rng::standard_normal(&mut same);
+        assert!(t.next_state == 98 && close(t.reward as f64, (1.0 + 0.5 * z) as f64, 1e-6, 1e-6));
+        assert!(grid.query(100, 0, &mut rng).is_err() && grid.query(0, 4, &mut rng).is_err());
+        let absorbing = GridWorld::<f32>::thesis(3, true).unwrap(); // goal (5, 5) = 55
+        assert!(absorbing.next_state(55, 0) == Ok(55));
+        assert!(absorbing.query(54, 0, &mut rng).unwrap().absorbing);
+    }
+
+    /// GP in f32 on the target: fit 7 points, predict, add an 8th, predict again; every
+    /// value against the harness's f64 reference GP on the host.
+    #[test]
+    fn gp_fit_predict_add_point_match_host_f64_reference() {
+        let mut gp = Gp::<f32, 16, 3>::new(gp_hyper()).unwrap();
+        let mut x = [[0.0f32; 3]; 7];
+        let mut y = [0.0f32; 7];
+        for ((xi, yi), (p, v)) in x
+            .iter_mut()
+            .zip(y.iter_mut())
+            .zip(golden::GP_X.iter().zip(golden::GP_Y.iter()))
+        {
+            *xi = gp_point(p);
+            *yi = *v as f32;
+        }
+        gp.fit(&x, &y).unwrap();
+        assert!(gp.jitter() == 1e-10);
+        check_predictions(&gp, &golden::GP_PRED_7);
+        let lml = gp.log_marginal_likelihood().unwrap() as f64;
+        assert!(
+            close(lml, golden::GP_LML[0], 1e-3, 1e-5),
+            "lml {} vs {}",
+            lml,
+            golden::GP_LML[0]
+        );
+
+        gp.add_point(
+            gp_point(&golden::GP_X[7]),
+            golden::GP_Y[7] as f32,
+            WhenFull::Refuse,
+        )
+        .unwrap();
+        assert!(gp.len() == 8);
+        check_predictions(&gp, &golden::GP_PRED_8);
+        let lml = gp.log_marginal_likelihood().unwrap() as f64;
+        assert!(
+            close(lml, golden::GP_LML[1], 1e-3, 1e-5),
+            "lml {} vs {}",
+            lml,
+            golden::GP_LML[1]
+        );
+    }
+
+    /// The bounded search never ends below its own starting point (spec §4.2's initial
+    /// hyperparameters), stays in the box, and bad input leaves the GP unchanged.
+    #[test]
+    fn gp_search_improves_and_bad_input_is_a_typed_error() {
+        let mut x = [[0.0f32; 3]; 8];
+        let mut y = [0.0f32; 8];
+        for ((xi, yi), (p, v)) in x
+            .iter_mut()
+            .zip(y.iter_mut())
+            .zip(golden::GP_X.iter().zip(golden::GP_Y.iter()))
+        {
+            *xi = gp_point(p);
+            *yi = *v as f32;
+        }
+        let mut gp = Gp::<f32, 8, 3>::empty();
+        gp.fit(&x, &y).unwrap();
+        let start = gp.log_marginal_likelihood().unwrap();
+        let bounds = HyperparameterBounds::spec_default();
+        let options = SearchOptions {
+            max_evaluations: 60,
+            restarts: 1,
+            isotropic: true,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let best = gp
+            .optimize_hyperparameters(&bounds, &options, &mut rng)
+            .unwrap();
+        assert!(
+            best >= start - 1e-3 && best.is_finite(),
+            "search {} < start {}",
+            best,
+            start
+        );
+        assert!(bounds.contains(gp.hyperparameters()));
+
+        let before = *gp.hyperparameters();
+        assert!(
+            gp.add_point([1.0, 2.0, 3.0], 0.0, WhenFull::Refuse)
+                == Err(Error::CapacityExceeded { capacity: 8 })
+        );
+        assert!(
+            gp.add_point([f32::NAN, 2.0, 3.0], 0.0, WhenFull::DropOldest)
+                == Err(Error::NonFinite { parameter: "x" })
+        );
+        assert!(gp.fit(&x[..0], &y[..0]) == Err(Error::EmptyData));
+        let mut bad = before;
+        bad.length_scales[1] = 0.0;
+        assert!(
+            gp.set_hyperparameters(bad)
+                == Err(Error::InvalidParameter {
+                    parameter: "length_scales"
+                })
+        );
+        assert!(*gp.hyperparameters() == before && gp.len() == 8 && gp.inputs() == &x[..]);
+        assert!(gp.predict(&[0.0, f32::INFINITY, 0.0]) == Err(Error::NonFinite { parameter: "x" }));
+    }
+
+    /// Draws from the caller's generator: categorical never picks a zero weight, uniform_in
+    /// stays in its interval, and invalid parameters are typed errors.
+    #[test]
+    fn random_draws_respect_their_supports() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let weights = [0.0f32, 3.0, 0.0, 1.0];
+        let mut counts = [0u32; 4];
+        for _ in 0..400 {
+            counts[awfqi::rng::categorical(&mut rng, &weights).unwrap()] += 1;
+        }
+        assert!(counts[0] == 0 && counts[2] == 0 && counts[1] > counts[3] && counts[3] > 0);
+        for _ in 0..100 {
+            let u = awfqi::rng::uniform_in(&mut rng, -2.0f32, 3.0).unwrap();
+            assert!((-2.0..3.0).contains(&u));
+        }
+        assert!(awfqi::rng::categorical::<f32, _>(&mut rng, &[]) == Err(Error::EmptyData));
+        assert!(awfqi::rng::normal(&mut rng, 0.0f32, -1.0).is_err());
+        assert!(
+            EpsilonGreedyPolicy::new(|_: &[f32; 2]| awfqi::Result::Ok(0usize), 1.5f32, 4).is_err()
+        );
+    }
+
+    /// The footprint images' GP workload runs to completion on the target (a footprint of
+    /// code that fails would mean nothing) and gives a finite result.
+    #[test]
+    fn footprint_gp_workload_runs() {
+        let mut gp = Gp::<f32, 16, 3>::empty();
+        let total = awfqi_on_target::workloads::gp_reward_model(&mut gp, 7).unwrap();
+        assert!(total.is_finite() && gp.len() == 16, "total {}", total);
+    }
+
+    /// The AWFQI loop for a small budget on the target (f32): 6 × 6 cells, a 16-point GP,
+    /// 100 score rows, 2 steps of 20 queries, sources of 2 episodes. Checks the step report
+    /// against the run's own sizes and that every output is finite and in range.
+    #[test]
+    fn awfqi_loop_small_budget() {
+        use awfqi_on_target::workloads::{KernelRun, KernelStorage, awfqi_puddle};
+        use core::mem::MaybeUninit;
+        static mut STORAGE: MaybeUninit<KernelStorage<100, 100, 144, 40, 16>> =
+            MaybeUninit::zeroed();
+        // SAFETY: the only reference; all-zero bits are valid for every field.
+        let storage = unsafe { (*core::ptr::addr_of_mut!(STORAGE)).assume_init_mut() };
+        let run = KernelRun {
+            cells: 6,
+            spacing: 2.5,
+            budget: 20,
+            steps: 2,
+            episodes: 2,
+            search: (40, 1),
+        };
+        let (report, evaluation) = awfqi_puddle(storage, run, 3).unwrap();
+        assert!(
+            report.step == 2 && report.n_target_samples == 40,
+            "step {} samples {}",
+            report.step,
+            report.n_target_samples
+        );
+        assert!(report.n_source_samples > 0 && report.n_source_samples <= 300);
+        assert!(report.gp_points == 16 && report.gp_log_likelihood.is_finite());
+        assert!(report.wr_mean.is_finite() && report.wr_mean >= 0.0);
+        let total = (report.n_target_samples + report.n_source_samples) as f32;
+        assert!(
+            report.wr_eff > 0.0 && report.wr_eff <= total * 1.0001,
+            "ess {}",
+            report.wr_eff
+        );
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(
+            evaluation.mean_steps >= 1.0
+                && evaluation.mean_steps <= 50.0
+                && evaluation.reached_goal <= 5
+        );
+        // Every drawn query lies on the score grid (spacing 2.5) with a valid action.
+        for t in storage.samples.iter() {
+            for c in t.state {
+                assert!(c % 2.5 == 0.0 && (0.0..=10.0).contains(&c));
+            }
+            assert!(t.action < 4 && t.reward.is_finite());
+        }
+    }
+
+    /// Spec §7.3's golden weights (both estimators), the ESS example and §7.7's ideal weight,
+    /// in f32.
+    #[test]
+    fn weights_match_spec_golden_values() {
+        use awfqi::weights::{
+            Estimator, Posterior, WeightParams, effective_sample_size, ideal_weight,
+        };
+        // y, μt, σt, μs, σs, v, mean, heuristic
+        const TABLE: [[f64; 8]; 5] = [
+            [
+                -1.0,
+                -1.2,
+                0.1,
+                -1.0,
+                0.05,
+                0.1,
+                0.805079404153,
+                0.804827777517,
+            ],
+            [
+                -1.3,
+                -1.0,
+                0.2,
+                -1.25,
+                0.03,
+                0.1,
+                0.623422515078,
+                0.623257005989,
+            ],
+            [
+                -5.0,
+                -1.0,
+                0.05,
+                -5.1,
+                0.04,
+                0.1,
+                1.33061875955e-34,
+                1.32832086981e-34,
+            ],
+            [
+                2.3,
+                2.0,
+                0.1,
+                2.2,
+                0.02,
+                0.2,
+                0.808455457025,
+                0.808372998447,
+            ],
+            [0.0, 0.0, 0.1, 0.0, 0.4, 0.1, 0.0, 1.53741222957],
+        ];
+        for row in TABLE.iter() {
+            let f = |i: usize| row[i] as f32;
+            let (t, s) = (Posterior::new(f(1), f(2)), Posterior::new(f(3), f(4)));
+            for (estimator, expected) in [(Estimator::Mean, row[6]), (Estimator::Heuristic, row[7])]
+            {
+                let params = WeightParams::new(estimator, f(5), 1000.0).unwrap();
+                let w = params.weight(f(0), t, s).unwrap() as f64;
+                assert!(
+                    close(w, expected, 0.0, 2e-4),
+                    "weight {} vs {}",
+                    w,
+                    expected
+                );
+            }
+        }
+        let ess = effective_sample_size(&[1.0f32, 1.0, 0.5, 0.0, 2.0]).unwrap();
+        assert!(close(ess as f64, 3.24, 0.0, 1e-6), "ess {}", ess);
+        let w = ideal_weight(-1.05f32, -1.0, -1.2, 0.01).unwrap();
+        assert!(
+            close(w as f64, core::f64::consts::E, 0.0, 2e-5),
+            "ideal {}",
+            w
+        );
+    }
+
+    /// Oracle score table over the three sources on the 3 × 3 puddle grid (spacing 5):
+    /// `V_r` at (0, 0) and (5, 5) from spec §2.7's mean rewards, `V_x = V_y = 0` (shared
+    /// dynamics), and draws whose frequencies follow `V_r / Σ V_r` (never a zero row).
+    #[test]
+    fn score_table_and_draws() {
+        use awfqi::alias::AliasEntry;
+        use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+        let worlds = PuddleWorld::<f32>::sources(Dynamics::Shared);
+        let rows = RowSet::grid(PointGrid::puddle(5.0).unwrap(), 4).unwrap();
+        assert!(rows.len() == 36);
+        let mut storage = [Scores::<f32>::ZERO; 36];
+        let table = ScoreTable::compute(rows, &worlds, &mut storage).unwrap();
+        let variance = |v: [f64; 3]| {
+            let m = (v[0] + v[1] + v[2]) / 3.0;
+            v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0
+        };
+        let expected_00 = variance([-1.000000, -1.134130, -1.000000]);
+        let expected_55 = variance([-12.399667, -6.748596, -12.399726]);
+        let mut sum = 0.0f64;
+        for r in 0..36 {
+            let row = table.row(r).unwrap();
+            assert!(
+                row.scores.get(ScoreColumn::NextX) == 0.0
+                    && row.scores.get(ScoreColumn::NextY) == 0.0
+            );
+            let v = row.scores.get(ScoreColumn::Reward) as f64;
+            if row.state == [0.0, 0.0] {
+                assert!(
+                    close(v, expected_00, 1e-5, 1e-3),
+                    "V_r(0,0) {} vs {}",
+                    v,
+                    expected_00
+                );
+            }
+            if row.state == [5.0, 5.0] {
+                assert!(
+                    close(v, expected_55, 1e-4, 1e-4),
+                    "V_r(5,5) {} vs {}",
+                    v,
+                    expected_55
+                );
+            }
+            sum += v;
+        }
+        let mut alias = [AliasEntry::<f32>::EMPTY; 36];
+        let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut counts = [0u32; 36];
+        const DRAWS: u32 = 4000;
+        for _ in 0..DRAWS {
+            let (r, state, action) = sampler.draw(&mut rng);
+            assert!(table.rows().row(r) == Some((state, action)));
+            counts[r] += 1;
+        }
+        for r in 0..36 {
+            let p = table.row(r).unwrap().scores.get(ScoreColumn::Reward) as f64 / sum;
+            let n = DRAWS as f64;
+            let sd = libm::sqrt(n * p * (1.0 - p));
+            let c = counts[r] as f64;
+            assert!(
+                (c - n * p).abs() <= 5.0 * sd + 1.0,
+                "row {}: {} draws, expected {}",
+                r,
+                c,
+                n * p
+            );
+            if p == 0.0 {
+                assert!(counts[r] == 0);
+            }
+        }
+    }
+
+    /// Weighted FQI on a two-cell chain, hand-computed: target samples c0 → c1 (r = 0) and
+    /// c1 absorbing (r = 1); a source sample c0 → c0 with r = −10, reward weight 0.25 and
+    /// transition weight 0.5. Then R̂(c0) = (0 + 0.25·(−10))/1.25 = −2 and
+    /// Q(c0) = −2 + 0.9·(1·Q(c1) + 0.5·Q(c0))/1.5, whose fixed point is −2; Q(c1) = 1.
+    #[test]
+    fn weighted_fqi_sweep_on_a_chain() {
+        use awfqi::env::Transition;
+        use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+        let t = |s: [f32; 2], r: f32, n: [f32; 2], absorbing: bool| Transition {
+            state: s,
+            action: 0,
+            reward: r,
+            next_state: n,
+            absorbing,
+        };
+        let target = [
+            t([0.5, 0.5], 0.0, [1.5, 0.5], false),
+            t([1.5, 0.5], 1.0, [1.5, 0.5], true),
+        ];
+        let source = [t([0.5, 0.5], -10.0, [0.5, 0.5], false)];
+        let (rw, tw) = ([0.25f32], [0.5f32]);
+        let grid = CellGrid::new([0.0, 0.0], [2.0, 1.0], [2, 1]).unwrap();
+        let mut storage = [FqiEntry::<f32>::EMPTY; 2];
+        let mut fqi = TabularFqi::new(grid, 1, &mut storage).unwrap();
+        let config = FqiConfig::new(0.9f32, 40, EmptyCells::Value(0.0))
+            .unwrap()
+            .with_min_weight(0.0)
+            .unwrap();
+        let sets = [
+            SampleSet::unweighted(&target),
+            SampleSet::weighted(&source, Some(&rw), Some(&tw)),
+        ];
+        fqi.fit(&sets, &config).unwrap();
+        let e = fqi.entries();
+        assert!(
+            close(e[0].reward_model() as f64, -2.0, 1e-6, 1e-6),
+            "R̂(c0) {}",
+            e[0].reward_model()
+        );
+        assert!(
+            close(e[0].q() as f64, -2.0, 1e-5, 1e-6),
+            "Q(c0) {}",
+            e[0].q()
+        );
+        assert!(
+            close(e[1].q() as f64, 1.0, 1e-6, 1e-6),
+            "Q(c1) {}",
+            e[1].q()
+        );
+        assert!(close(e[0].transition_weight() as f64, 1.5, 1e-6, 0.0));
+        assert!(fqi.value([0.2, 0.9], 0) == Ok(e[0].q()) && fqi.greedy_action([1.9, 0.1]) == Ok(0));
+        // Bad input leaves the table unchanged.
+        let before = [e[0], e[1]];
+        let bad = [t([0.5, 0.5], f32::NAN, [1.5, 0.5], false)];
+        assert!(matches!(
+            fqi.fit(&[SampleSet::unweighted(&bad)], &config),
+            Err(Error::NonFinite { .. })
+        ));
+        assert!(fqi.entries() == &before[..]);
+        assert!(fqi.fit(&[], &config) == Err(Error::EmptyData));
+    }
+
+    /// Belief updates by hand: from a uniform prior over the four thesis candidates, one
+    /// observation at the goal of candidate 0 (reward 1 at state 99, whose mean is 1 under
+    /// candidate 0 and 0 under the others, variance 0.25) multiplies candidate 0's odds by
+    /// exp((1 − 0)²/(2·0.25)) = e² against each other one. Then the identification workload
+    /// (50 adaptive queries) finds the true candidate.
+    #[test]
+    fn belief_update_and_identification() {
+        use awfqi::identify::Belief;
+        let candidates = awfqi::env::GridWorld::<f32>::thesis_candidates(false);
+        let mut belief = Belief::<f32, 4>::uniform(4).unwrap();
+        belief.update(&candidates, 99, 1, 98, 1.0).unwrap();
+        let p = belief.probability_array();
+        let e2 = libm::exp(2.0);
+        let expected0 = e2 / (e2 + 3.0);
+        assert!(
+            close(p[0] as f64, expected0, 1e-6, 1e-5),
+            "p0 {} vs {}",
+            p[0],
+            expected0
+        );
+        for &q in &p[1..] {
+            assert!(close(q as f64, 1.0 / (e2 + 3.0), 1e-6, 1e-5), "p {}", q);
+        }
+        assert!(belief.map() == 0 && belief.observations() == 1);
+        let before = belief;
+        assert!(belief.update(&candidates, 100, 0, 0, 1.0).is_err() && belief == before);
+        assert!(belief.update(&candidates, 0, 0, 1, f32::NAN).is_err() && belief == before);
+
+        use awfqi_on_target::workloads::{IdentificationStorage, grid_identification};
+        use core::mem::MaybeUninit;
+        static mut STORAGE: MaybeUninit<IdentificationStorage> = MaybeUninit::zeroed();
+        // SAFETY: the only reference; all-zero bits are valid.
+        let storage = unsafe { (*core::ptr::addr_of_mut!(STORAGE)).assume_init_mut() };
+        let found = grid_identification(storage, 2, 50, 200, 5).unwrap();
+        assert!(
+            found.map == 2 && found.map_probability > 0.99,
+            "map {} p {}",
+            found.map,
+            found.map_probability
+        );
+        // Candidate 2's goal is (0, 9): from state 0 the optimal first move is up (action 2),
+        // and the value is γ⁹/(1 − γ) (9 steps up, then reward 1 every step: moving up at the top
+        // border stays put).
+        let v = libm::pow(0.9, 9.0) / 0.1;
+        assert!(
+            found.initial_action == 2 && close(found.initial_value as f64, v, 1e-3, 1e-4),
+            "v {} vs {}",
+            found.initial_value,
+            v
+        );
+    }
+}
