@@ -2,8 +2,8 @@
 //!
 //! Reads criterion's results (`target/criterion/**/new/{benchmark,estimates}.json`), the
 //! callgrind counts written by `scripts/perf-tables` (`target/perf/callgrind.tsv`: operation,
-//! repetitions, instructions) and the experiment wall times (`target/perf/experiments.tsv`:
-//! experiment, algorithm, seconds, command), and replaces each block between
+//! repetitions, instructions) and the experiment times (`target/perf/experiments.tsv`:
+//! experiment, algorithm, wall seconds, CPU seconds, command), and replaces each block between
 //! `<!-- perf-tables:NAME -->` and `<!-- /perf-tables:NAME -->` in the files named on the
 //! command line. Missing measurements show as `–`.
 //!
@@ -27,8 +27,8 @@ struct Data {
     times: BTreeMap<String, Timing>,
     /// Instructions of one iteration (callgrind total ÷ repetitions).
     instructions: BTreeMap<String, f64>,
-    /// `(experiment, algorithm, seconds, command)`.
-    experiments: Vec<(String, String, f64, String)>,
+    /// `(experiment, algorithm, wall seconds, CPU seconds, command)`.
+    experiments: Vec<(String, String, f64, f64, String)>,
     /// Date, cores and load averages of the criterion run.
     conditions: BTreeMap<String, String>,
 }
@@ -440,10 +440,15 @@ fn main() {
         }
     }
     for row in read_tsv(&experiments) {
-        if let [experiment, algorithm, seconds, command, ..] = row.as_slice() {
-            if let Ok(s) = seconds.parse() {
-                data.experiments
-                    .push((experiment.clone(), algorithm.clone(), s, command.clone()));
+        if let [experiment, algorithm, wall, cpu, command, ..] = row.as_slice() {
+            if let (Ok(w), Ok(c)) = (wall.parse(), cpu.parse()) {
+                data.experiments.push((
+                    experiment.clone(),
+                    algorithm.clone(),
+                    w,
+                    c,
+                    command.clone(),
+                ));
             }
         }
     }
