@@ -2,5 +2,8 @@
 //! reference implementation (f64, heap, written for clarity) that the core is tested against.
 
 pub mod commands;
+pub mod fqi;
+pub mod gp_large;
 pub mod plot;
 pub mod reference;
+pub mod trees;

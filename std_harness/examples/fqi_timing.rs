@@ -1,0 +1,124 @@
+//! Wall time of the faithful FQI path on one core (issue 7's target: one run of the puddle
+//! reference configuration, 6 steps × 10 episodes, 60 iterations, 50 trees, evaluation
+//! included, in at most 5 s).
+//!
+//! `cargo run --release -p awfqi-harness --example fqi_timing [-- SEED [SOURCES_DIR]]`
+//!
+//! Prints (1) one FQI call (60 iterations, 50 trees) on an IWFQI-sized union of 500 target
+//! records and the 1033 published shared-dynamics source records, and (2) one run of the
+//! reference FQI configuration step by step: records, time of collection + FQI +
+//! evaluation, and the greedy evaluation (mean of 5 discounted returns). This is a timing
+//! harness, not the experiment command.
+
+use std::time::Instant;
+
+use awfqi::env::{Dynamics, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
+use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi_harness::fqi::{Dataset, FqiOptions, fqi};
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+fn read_sources(dir: &str) -> Dataset<2> {
+    let mut data = Dataset::new();
+    for k in 1..=3 {
+        let path = format!("{dir}/shared_dynamics_source_{k}.csv");
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        for line in text.lines().skip(1) {
+            let v: Vec<f64> = line.split(',').map(|f| f.parse().unwrap()).collect();
+            data.states.push([v[1], v[2]]);
+            data.actions.push(v[3] as usize);
+            data.rewards.push(v[4]);
+            data.next_states.push([v[5], v[6]]);
+            data.absorbing.push(v[7] != 0.0);
+        }
+    }
+    data
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let seed: u64 = args.get(1).map_or(0, |s| s.parse().unwrap());
+    let sources = args.get(2).cloned().unwrap_or_else(|| {
+        format!(
+            "{}/../../shared/data/puddle-sources",
+            env!("CARGO_MANIFEST_DIR")
+        )
+    });
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let target = PuddleWorld::<f64>::target(Dynamics::Shared);
+
+    // (1) One FQI call on 500 uniform target records + 1033 source records.
+    let mut union = Dataset::new();
+    let mut uniform = UniformPolicy::new(4).unwrap();
+    while union.len() < 500 {
+        target
+            .run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, |r| {
+                if union.len() < 500 {
+                    union.push(r.transition);
+                }
+                Ok(())
+            })
+            .unwrap();
+    }
+    union.extend_from(&read_sources(&sources));
+    let t = Instant::now();
+    let out = fqi(&union, &FqiOptions::plain(), &mut rng).unwrap();
+    println!(
+        "FQI 60 it x 50 trees on {} records (500 target + 1033 source): {:.3} s ({} nodes in Q)",
+        union.len(),
+        t.elapsed().as_secs_f64(),
+        (0..4)
+            .map(|a| out.q.forest(a).unwrap().n_nodes())
+            .sum::<usize>()
+    );
+
+    // (2) One run of the reference FQI configuration.
+    let run_start = Instant::now();
+    let mut data = Dataset::new();
+    let mut q = None;
+    for step in 1..=6 {
+        let t = Instant::now();
+        for _ in 0..10 {
+            let mut push = |r: awfqi::env::EpisodeRecord<f64>| {
+                data.push(r.transition);
+                Ok(())
+            };
+            match &q {
+                None => target.run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, &mut push),
+                Some(q) => {
+                    let greedy =
+                        |s: &[f64; 2]| Ok(awfqi_harness::trees::ActionForests::greedy_action(q, s));
+                    let mut policy = EpsilonGreedyPolicy::new(greedy, 0.3, 4).unwrap();
+                    target.run_episode_with(&mut policy, PUDDLE_HORIZON, &mut rng, &mut push)
+                }
+            }
+            .unwrap();
+        }
+        let t_collect = t.elapsed().as_secs_f64();
+        let learned = fqi(&data, &FqiOptions::plain(), &mut rng).unwrap().q;
+        let t_fqi = t.elapsed().as_secs_f64() - t_collect;
+        let mut greedy = |s: &[f64; 2]| Ok(learned.greedy_action(s));
+        let returns: Vec<f64> = (0..5)
+            .map(|_| {
+                target
+                    .rollout(&mut greedy, PUDDLE_HORIZON, PUDDLE_DISCOUNT, &mut rng)
+                    .unwrap()
+                    .discounted_return
+            })
+            .collect();
+        let t_total = t.elapsed().as_secs_f64();
+        println!(
+            "step {step}: {:5} records, collect {:.3} s, FQI {:.3} s, evaluate {:.3} s, greedy return {:8.2}",
+            data.len(),
+            t_collect,
+            t_fqi,
+            t_total - t_collect - t_fqi,
+            returns.iter().sum::<f64>() / 5.0
+        );
+        q = Some(learned);
+    }
+    println!(
+        "one run of the reference FQI configuration: {:.3} s",
+        run_start.elapsed().as_secs_f64()
+    );
+}

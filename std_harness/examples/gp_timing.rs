@@ -1,0 +1,106 @@
+//! Wall time of the large-N GP on one core: one likelihood value (Cholesky), one gradient
+//! (K⁻¹), and a full spec §4.2 fit (initial values + 10 restarts) at the given sizes, on
+//! reward-like data drawn from the Puddle World target with a uniform policy.
+//!
+//! `cargo run --release -p awfqi-harness --example gp_timing [-- N1 N2 ...]` (default 500 1700)
+
+use std::time::Instant;
+
+use awfqi::env::{Dynamics, PUDDLE_HORIZON, PuddleWorld};
+use awfqi::policy::UniformPolicy;
+use awfqi_harness::gp_large::{FitOptions, FitStrategy, LargeGp, LikelihoodEvaluator, Parallelism};
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+fn main() {
+    let sizes: Vec<usize> = {
+        let args: Vec<usize> = std::env::args()
+            .skip(1)
+            .map(|s| s.parse().unwrap())
+            .collect();
+        if args.is_empty() {
+            vec![500, 1700]
+        } else {
+            args
+        }
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let target = PuddleWorld::<f64>::target(Dynamics::Shared);
+    let mut uniform = UniformPolicy::new(4).unwrap();
+    let max = *sizes.iter().max().unwrap();
+    let (mut zs, mut ys) = (Vec::new(), Vec::new());
+    while zs.len() < max {
+        target
+            .run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, |r| {
+                let t = r.transition;
+                zs.push([t.state[0], t.state[1], t.action as f64]);
+                ys.push(t.reward);
+                Ok(())
+            })
+            .unwrap();
+    }
+    for n in sizes {
+        let (z, y) = (&zs[..n], &ys[..n]);
+        let mut eval = LikelihoodEvaluator::new(z, y, Parallelism::Seq).unwrap();
+        let theta = [0.5, 0.3, -3.0];
+        eval.value(&theta).unwrap();
+        let t = Instant::now();
+        let reps = 3;
+        for _ in 0..reps {
+            eval.value(&theta).unwrap();
+        }
+        let t_value = t.elapsed().as_secs_f64() / reps as f64;
+        let t = Instant::now();
+        for _ in 0..reps {
+            eval.value(&theta).unwrap();
+            eval.gradient().unwrap();
+        }
+        let t_both = t.elapsed().as_secs_f64() / reps as f64;
+        println!(
+            "N = {n}: value {:.1} ms, value + gradient {:.1} ms",
+            t_value * 1e3,
+            t_both * 1e3
+        );
+        for (name, strategy) in [
+            ("spec (all starts on all data)", FitStrategy::AllStarts),
+            ("screened (300-point subsample)", FitStrategy::SCREENED),
+        ] {
+            let options = FitOptions {
+                strategy,
+                ..FitOptions::default()
+            };
+            let mut fit_rng = ChaCha8Rng::seed_from_u64(n as u64);
+            let t = Instant::now();
+            let (gp, report) = LargeGp::fit(z, y, &options, &mut fit_rng).unwrap();
+            let t_fit = t.elapsed().as_secs_f64();
+            let evals: usize = report
+                .runs
+                .iter()
+                .filter(|r| r.merged_into.is_none())
+                .map(|r| r.evaluations)
+                .sum();
+            let grads: usize = report
+                .runs
+                .iter()
+                .filter(|r| r.merged_into.is_none())
+                .map(|r| r.gradients)
+                .sum();
+            println!(
+                "  {name}: fit {:.2} s, {evals} values + {grads} gradients on all data, \
+                 per start {:?}; LML {:.6}, {:?}",
+                t_fit,
+                report
+                    .runs
+                    .iter()
+                    .map(|r| if r.merged_into.is_some() {
+                        0
+                    } else {
+                        r.evaluations
+                    })
+                    .collect::<Vec<_>>(),
+                gp.log_marginal_likelihood(),
+                gp.hyperparameters()
+            );
+        }
+    }
+}
