@@ -54,17 +54,27 @@ fn gp_fit_reference(g: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
     });
 }
 
+fn gp_fit_faithful(g: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
+    let case = gp_case(n);
+    g.bench_function(BenchmarkId::new("faithful_f64", n), |b| {
+        b.iter(|| faithful_gp(black_box(&case)))
+    });
+}
+
 fn gp_fit(c: &mut Criterion) {
     let mut g = c.benchmark_group("gp_fit");
     gp_fit_one::<f32, 16>(&mut g, "kernel_f32");
     gp_fit_one::<f64, 16>(&mut g, "kernel_f64");
     gp_fit_reference(&mut g, 16);
+    gp_fit_faithful(&mut g, 16);
     gp_fit_one::<f32, 64>(&mut g, "kernel_f32");
     gp_fit_one::<f64, 64>(&mut g, "kernel_f64");
     gp_fit_reference(&mut g, 64);
+    gp_fit_faithful(&mut g, 64);
     gp_fit_one::<f32, 128>(&mut g, "kernel_f32");
     gp_fit_one::<f64, 128>(&mut g, "kernel_f64");
     gp_fit_reference(&mut g, 128);
+    gp_fit_faithful(&mut g, 128);
     g.finish();
 }
 
@@ -87,6 +97,14 @@ fn gp_predict_reference(g: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
     });
 }
 
+fn gp_predict_faithful(g: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
+    let case = gp_case(n);
+    let gp = faithful_gp(&case);
+    g.bench_function(BenchmarkId::new("faithful_f64", n), |b| {
+        b.iter(|| faithful_predict_all(black_box(&gp), black_box(&case.test)))
+    });
+}
+
 /// 100 predictions (mean and latent variance) per iteration.
 fn gp_predict(c: &mut Criterion) {
     let mut g = c.benchmark_group("gp_predict");
@@ -94,12 +112,15 @@ fn gp_predict(c: &mut Criterion) {
     gp_predict_one::<f32, 16>(&mut g, "kernel_f32");
     gp_predict_one::<f64, 16>(&mut g, "kernel_f64");
     gp_predict_reference(&mut g, 16);
+    gp_predict_faithful(&mut g, 16);
     gp_predict_one::<f32, 64>(&mut g, "kernel_f32");
     gp_predict_one::<f64, 64>(&mut g, "kernel_f64");
     gp_predict_reference(&mut g, 64);
+    gp_predict_faithful(&mut g, 64);
     gp_predict_one::<f32, 128>(&mut g, "kernel_f32");
     gp_predict_one::<f64, 128>(&mut g, "kernel_f64");
     gp_predict_reference(&mut g, 128);
+    gp_predict_faithful(&mut g, 128);
     g.finish();
 }
 
@@ -219,15 +240,27 @@ fn gp_search_one<T: Real, const N: usize>(g: &mut BenchmarkGroup<'_, WallTime>, 
     });
 }
 
+/// The faithful path's search (spec §4.2 as written: L-BFGS-style with the analytic
+/// gradient from the initial values and 10 restarts).
+fn gp_search_faithful(g: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
+    let case = gp_case(n);
+    g.bench_function(BenchmarkId::new("faithful_f64", n), |b| {
+        b.iter(|| faithful_search(black_box(&case), 5))
+    });
+}
+
 fn gp_search(c: &mut Criterion) {
     let mut g = c.benchmark_group("gp_fit_search");
     g.sampling_mode(SamplingMode::Flat).sample_size(10);
     gp_search_one::<f32, 16>(&mut g, "kernel_f32");
     gp_search_one::<f64, 16>(&mut g, "kernel_f64");
+    gp_search_faithful(&mut g, 16);
     gp_search_one::<f32, 64>(&mut g, "kernel_f32");
     gp_search_one::<f64, 64>(&mut g, "kernel_f64");
+    gp_search_faithful(&mut g, 64);
     gp_search_one::<f32, 128>(&mut g, "kernel_f32");
     gp_search_one::<f64, 128>(&mut g, "kernel_f64");
+    gp_search_faithful(&mut g, 128);
     g.finish();
 }
 
@@ -322,12 +355,22 @@ fn fqi_one<T: Real>(g: &mut BenchmarkGroup<'_, WallTime>, name: &str) {
 }
 
 /// Weighted tabular FQI, 41 × 41 cells × 4 actions, 3 000 samples: a fit with 1 iteration
-/// (the reward model) and with 60; one sweep is (t₆₀ − t₁)/59. Kernel only: the harness's
-/// FQI uses Extra-Trees, a different regressor.
+/// (the reward model) and with 60; one sweep is (t₆₀ − t₁)/59. The reference has no tabular
+/// FQI; for scale, the faithful path's FQI (IWFQI weights, 50-tree Extra-Trees per action)
+/// on the same samples with 1 and 2 iterations (one sweep: t₂ − t₁).
 fn fqi(c: &mut Criterion) {
     let mut g = c.benchmark_group("fqi_fit");
     fqi_one::<f32>(&mut g, "kernel_f32");
     fqi_one::<f64>(&mut g, "kernel_f64");
+    g.finish();
+    let case = ForestFqiCase::new();
+    let mut g = c.benchmark_group("fqi_fit");
+    g.sampling_mode(SamplingMode::Flat).sample_size(10);
+    for iterations in [1usize, 2] {
+        g.bench_function(BenchmarkId::new("faithful_f64", iterations), |b| {
+            b.iter(|| case.fit(black_box(iterations), 13))
+        });
+    }
     g.finish();
 }
 

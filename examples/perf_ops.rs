@@ -55,6 +55,35 @@ fn gp_fit_reference(n: usize) -> Op {
     })
 }
 
+fn gp_fit_faithful(n: usize) -> Op {
+    let case = gp_case(n);
+    Box::new(move || {
+        black_box(faithful_gp(black_box(&case)));
+    })
+}
+
+fn gp_predict_faithful(n: usize) -> Op {
+    let case = gp_case(n);
+    let gp = faithful_gp(&case);
+    Box::new(move || {
+        black_box(faithful_predict_all(black_box(&gp), black_box(&case.test)));
+    })
+}
+
+fn gp_search_faithful(n: usize) -> Op {
+    let case = gp_case(n);
+    Box::new(move || {
+        black_box(faithful_search(black_box(&case), 5));
+    })
+}
+
+fn fqi_faithful(iterations: usize) -> Op {
+    let case = ForestFqiCase::new();
+    Box::new(move || {
+        black_box(case.fit(black_box(iterations), 13));
+    })
+}
+
 fn gp_predict<T: Real, const N: usize>() -> Op {
     let case = gp_case(N);
     let gp = fitted_gp::<T, N>(&case, N);
@@ -307,9 +336,11 @@ fn operations() -> Vec<(String, Build)> {
             add(format!("gp_fit/kernel_f32/{}", $n), Box::new(|_| gp_fit::<f32, $n>()));
             add(format!("gp_fit/kernel_f64/{}", $n), Box::new(|_| gp_fit::<f64, $n>()));
             add(format!("gp_fit/reference_f64/{}", $n), Box::new(|_| gp_fit_reference($n)));
+            add(format!("gp_fit/faithful_f64/{}", $n), Box::new(|_| gp_fit_faithful($n)));
             add(format!("gp_predict/kernel_f32/{}", $n), Box::new(|_| gp_predict::<f32, $n>()));
             add(format!("gp_predict/kernel_f64/{}", $n), Box::new(|_| gp_predict::<f64, $n>()));
             add(format!("gp_predict/reference_f64/{}", $n), Box::new(|_| gp_predict_reference($n)));
+            add(format!("gp_predict/faithful_f64/{}", $n), Box::new(|_| gp_predict_faithful($n)));
             add(format!("gp_add_point/kernel_f32/{}", $n), Box::new(|k| gp_add::<f32, $n>(k)));
             add(format!("gp_add_point/kernel_f64/{}", $n), Box::new(|k| gp_add::<f64, $n>(k)));
             add(format!("gp_add_point/reference_f64/{}", $n), Box::new(|_| gp_fit_reference($n)));
@@ -317,6 +348,7 @@ fn operations() -> Vec<(String, Build)> {
             add(format!("gp_add_point_drop_oldest/kernel_f64/{}", $n), Box::new(|_| gp_slide::<f64, $n>()));
             add(format!("gp_fit_search/kernel_f32/{}", $n), Box::new(|k| gp_search::<f32, $n>(k)));
             add(format!("gp_fit_search/kernel_f64/{}", $n), Box::new(|k| gp_search::<f64, $n>(k)));
+            add(format!("gp_fit_search/faithful_f64/{}", $n), Box::new(|_| gp_search_faithful($n)));
         )*};
     }
     sizes!(16, 64, 128);
@@ -377,6 +409,12 @@ fn operations() -> Vec<(String, Build)> {
         add(
             format!("fqi_fit/kernel_f64/{iterations}"),
             Box::new(move |_| fqi::<f64>(iterations)),
+        );
+    }
+    for iterations in [1usize, 2] {
+        add(
+            format!("fqi_fit/faithful_f64/{iterations}"),
+            Box::new(move |_| fqi_faithful(iterations)),
         );
     }
     add(

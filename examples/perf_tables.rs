@@ -150,60 +150,91 @@ fn gp_flops(op: &str, n: f64) -> Option<f64> {
     }
 }
 
+/// The GP operations: `(group, label, units per iteration, sizes)`.
+const GP_OPS: [(&str, &str, f64, &[usize]); 6] = [
+    ("gp_fit", "fit (fixed hyperparameters)", 1.0, &[16, 64, 128]),
+    (
+        "gp_predict",
+        "predict, one point (mean + variance)",
+        100.0,
+        &[16, 64, 128],
+    ),
+    ("gp_fit_predict100", "fit + 100 predictions", 1.0, &[64]),
+    (
+        "gp_add_point",
+        "add a point (reference: refit)",
+        1.0,
+        &[16, 64, 128],
+    ),
+    (
+        "gp_add_point_drop_oldest",
+        "add a point to a full GP, drop the oldest",
+        1.0,
+        &[16, 64, 128],
+    ),
+    (
+        "gp_fit_search",
+        "fit with the hyperparameter search",
+        1.0,
+        &[16, 64, 128],
+    ),
+];
+
+const IMPLEMENTATIONS: [&str; 4] = ["kernel_f32", "kernel_f64", "reference_f64", "faithful_f64"];
+
+fn ratio(a: Option<f64>, b: Option<f64>) -> String {
+    match (a, b) {
+        (Some(a), Some(b)) => format!("{:.2}", a / b),
+        _ => DASH.into(),
+    }
+}
+
 fn gp_table(d: &Data) -> String {
-    let mut s = String::new();
-    s.push_str(
-        "| operation | N | kernel f32 | kernel f64 | reference f64 | reference ÷ kernel f64 \
-         | instructions kernel f64 | instructions reference | flops | instr./flop kernel f64 \
-         | instr./flop reference |\n|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+    let mut s = String::from(
+        "| operation | N | kernel f32 | kernel f64 | reference f64 | faithful f64 \
+         | reference ÷ kernel f64 | faithful ÷ kernel f64 |\n\
+         |---|--:|--:|--:|--:|--:|--:|--:|\n",
     );
-    let ops: [(&str, &str, f64, &[usize]); 6] = [
-        ("gp_fit", "fit (fixed hyperparameters)", 1.0, &[16, 64, 128]),
-        (
-            "gp_predict",
-            "predict, one point (mean + variance)",
-            100.0,
-            &[16, 64, 128],
-        ),
-        ("gp_fit_predict100", "fit + 100 predictions", 1.0, &[64]),
-        (
-            "gp_add_point",
-            "add a point (reference: refit)",
-            1.0,
-            &[16, 64, 128],
-        ),
-        (
-            "gp_add_point_drop_oldest",
-            "add a point to a full GP, drop the oldest",
-            1.0,
-            &[16, 64, 128],
-        ),
-        (
-            "gp_fit_search",
-            "hyperparameter search (550 evaluations)",
-            1.0,
-            &[16, 64, 128],
-        ),
-    ];
-    for (group, label, per, sizes) in ops {
+    for (group, label, per, sizes) in GP_OPS {
         for &n in sizes {
-            let id = |imp: &str| format!("{group}/{imp}/{n}");
-            let t32 = d.time(&id("kernel_f32"), per);
-            let t64 = d.time(&id("kernel_f64"), per);
-            let tref = d.time(&id("reference_f64"), per);
-            let i64 = d.instr(&id("kernel_f64"), per);
-            let iref = d.instr(&id("reference_f64"), per);
+            let t = IMPLEMENTATIONS.map(|imp| d.time(&format!("{group}/{imp}/{n}"), per));
+            let _ = writeln!(
+                s,
+                "| {label} | {n} | {} | {} | {} | {} | {} | {} |",
+                opt(t[0], time),
+                opt(t[1], time),
+                opt(t[2], time),
+                opt(t[3], time),
+                ratio(t[2], t[1]),
+                ratio(t[3], t[1]),
+            );
+        }
+    }
+    s
+}
+
+fn gp_instructions_table(d: &Data) -> String {
+    let mut s = String::from(
+        "| operation | N | flops | instructions kernel f32 | kernel f64 | reference f64 \
+         | faithful f64 | instr./flop kernel f64 | reference | faithful |\n\
+         |---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+    );
+    for (group, label, per, sizes) in GP_OPS {
+        for &n in sizes {
+            let i = IMPLEMENTATIONS.map(|imp| d.instr(&format!("{group}/{imp}/{n}"), per));
             let nf = n as f64;
             let flops = gp_flops(group, nf);
-            // The reference's add-point is a refit: its flops are a fit's.
+            // The reference's add-point is a refit: its flops are a fit's. The faithful
+            // path's search is a different method (quasi-Newton with gradients).
             let ref_flops = if group == "gp_add_point" {
                 gp_flops("gp_fit", nf)
             } else {
                 flops
             };
-            let ratio = match (tref, t64) {
-                (Some(r), Some(k)) => format!("{:.2}", r / k),
-                _ => DASH.into(),
+            let faithful_flops = if group == "gp_fit_search" {
+                None
+            } else {
+                flops
             };
             let per_flop = |i: Option<f64>, f: Option<f64>| match (i, f) {
                 (Some(i), Some(f)) => format!("{:.2}", i / f),
@@ -213,15 +244,15 @@ fn gp_table(d: &Data) -> String {
             let (bound, floor) = if search { ("≤ ", "≥ ") } else { ("", "") };
             let _ = writeln!(
                 s,
-                "| {label} | {n} | {} | {} | {} | {ratio} | {} | {} | {bound}{} | {floor}{} | {} |",
-                opt(t32, time),
-                opt(t64, time),
-                opt(tref, time),
-                opt(i64, count),
-                opt(iref, count),
+                "| {label} | {n} | {bound}{} | {} | {} | {} | {} | {floor}{} | {} | {} |",
                 opt(flops, count),
-                per_flop(i64, flops),
-                per_flop(iref, ref_flops),
+                opt(i[0], count),
+                opt(i[1], count),
+                opt(i[2], count),
+                opt(i[3], count),
+                per_flop(i[1], flops),
+                per_flop(i[2], ref_flops),
+                per_flop(i[3], faithful_flops),
             );
         }
     }
@@ -231,9 +262,9 @@ fn gp_table(d: &Data) -> String {
 fn other_table(d: &Data) -> String {
     let mut s = String::new();
     s.push_str(
-        "| operation | unit | kernel f32 | kernel f64 | reference f64 | reference ÷ kernel f64 \
-         | instructions kernel f32 | instructions kernel f64 | instructions reference |\n\
-         |---|---|--:|--:|--:|--:|--:|--:|--:|\n",
+        "| operation | unit | kernel f32 | kernel f64 | reference f64 | faithful f64 \
+         | reference ÷ kernel f64 | instructions kernel f32 | kernel f64 | reference f64 \
+         | faithful f64 |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
     );
     struct Row {
         label: &'static str,
@@ -321,32 +352,36 @@ fn other_table(d: &Data) -> String {
             per: 1.0,
         },
     ];
-    let mut line = |label: &str, unit: &str, t: [Option<f64>; 3], i: [Option<f64>; 3]| {
-        let ratio = match (t[2], t[1]) {
-            (Some(r), Some(k)) => format!("{:.2}", r / k),
-            _ => DASH.into(),
-        };
+    let mut line = |label: &str, unit: &str, t: [Option<f64>; 4], i: [Option<f64>; 4]| {
         let _ = writeln!(
             s,
-            "| {label} | {unit} | {} | {} | {} | {ratio} | {} | {} | {} |",
+            "| {label} | {unit} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             opt(t[0], time),
             opt(t[1], time),
             opt(t[2], time),
+            opt(t[3], time),
+            ratio(t[2], t[1]),
             opt(i[0], count),
             opt(i[1], count),
             opt(i[2], count),
+            opt(i[3], count),
         );
     };
-    let imps = ["kernel_f32", "kernel_f64", "reference_f64"];
+    let imps = IMPLEMENTATIONS;
     for r in &rows {
         let id = |imp: &str| format!("{}/{imp}/{}", r.group, r.param);
         let t = imps.map(|imp| d.time(&id(imp), r.per));
         let i = imps.map(|imp| d.instr(&id(imp), r.per));
         line(r.label, r.unit, t, i);
         if r.group == "fqi_fit" && r.param == "60" {
-            // One sweep: (t₆₀ − t₁)/59.
+            // One sweep: (t₆₀ − t₁)/59 for the kernel; t₂ − t₁ for the faithful path's
+            // forests (measured with 1 and 2 iterations only).
             let sweep = |f: &dyn Fn(&str) -> Option<f64>, imp: &str| -> Option<f64> {
-                Some((f(&format!("fqi_fit/{imp}/60"))? - f(&format!("fqi_fit/{imp}/1"))?) / 59.0)
+                let one = f(&format!("fqi_fit/{imp}/1"))?;
+                match f(&format!("fqi_fit/{imp}/60")) {
+                    Some(sixty) => Some((sixty - one) / 59.0),
+                    None => Some(f(&format!("fqi_fit/{imp}/2"))? - one),
+                }
             };
             let tf = |id: &str| d.time(id, 1.0);
             let inf = |id: &str| d.instr(id, 1.0);
@@ -377,17 +412,18 @@ fn draws_line(d: &Data) -> String {
 
 fn experiments_table(d: &Data) -> String {
     if d.experiments.is_empty() {
-        return "No experiment wall times measured yet (the `puddle` command was not \
-                available when the tables were generated).\n"
+        return "No experiment times measured yet (`scripts/perf-experiments` found no \
+                `puddle` command, or was skipped).\n"
             .into();
     }
-    let mut s =
-        String::from("| experiment | algorithm | wall time | command |\n|---|---|--:|---|\n");
-    for (experiment, algorithm, seconds, command) in &d.experiments {
+    let mut s = String::from(
+        "| experiment | algorithm | wall time | CPU time (user + sys) | command |\n\
+         |---|---|--:|--:|---|\n",
+    );
+    for (experiment, algorithm, wall, cpu, command) in &d.experiments {
         let _ = writeln!(
             s,
-            "| {experiment} | {algorithm} | {:.1} s | `{command}` |",
-            seconds
+            "| {experiment} | {algorithm} | {wall:.1} s | {cpu:.1} s | `{command}` |"
         );
     }
     s
@@ -460,6 +496,7 @@ fn main() {
     let blocks = [
         ("conditions", conditions(&data)),
         ("gp", gp_table(&data)),
+        ("gp-instructions", gp_instructions_table(&data)),
         ("other", other_table(&data) + "\n" + &draws_line(&data)),
         ("experiments", experiments_table(&data)),
     ];

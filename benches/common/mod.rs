@@ -16,6 +16,8 @@ use awfqi::identify::MiConfig;
 use awfqi::rng::uniform_f64;
 use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
 use awfqi::{Real, Result};
+use awfqi_harness::fqi as forest_fqi;
+use awfqi_harness::gp_large::{FitOptions, GpHyperparameters, LargeGp, Parallelism};
 use awfqi_harness::reference::gp as reference;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -84,6 +86,39 @@ pub fn reference_hyper() -> reference::Hyperparameters {
         length_scales: vec![LENGTH_SCALE; D],
         noise_variance: NOISE_VARIANCE,
     }
+}
+
+/// The fixed hyperparameters in the faithful path's type (its kernel is isotropic).
+pub fn faithful_hyper() -> GpHyperparameters {
+    GpHyperparameters {
+        signal_variance: SIGNAL_VARIANCE,
+        length_scale: LENGTH_SCALE,
+        noise_variance: NOISE_VARIANCE,
+    }
+}
+
+/// The faithful path's GP (faer Cholesky, sequential) with the fixed hyperparameters.
+pub fn faithful_gp(case: &GpCase) -> LargeGp<D> {
+    LargeGp::new(&case.x, &case.y, faithful_hyper(), Parallelism::Seq).expect("faithful fit")
+}
+
+/// The faithful path's fit with spec §4.2's search (L-BFGS-style with the analytic
+/// gradient, initial values and 10 restarts, sequential).
+pub fn faithful_search(case: &GpCase, seed: u64) -> LargeGp<D> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    LargeGp::fit(&case.x, &case.y, &FitOptions::default(), &mut rng)
+        .expect("faithful search")
+        .0
+}
+
+/// Sum of the means and stds of the faithful GP's predictions at `test`, as the faithful
+/// path predicts: one batched call (`predict_into`).
+pub fn faithful_predict_all(gp: &LargeGp<D>, test: &[[f64; D]]) -> f64 {
+    let mut means = vec![0.0; test.len()];
+    let mut stds = vec![0.0; test.len()];
+    gp.predict_into(test, &mut means, &mut stds)
+        .expect("faithful predictions");
+    means.iter().sum::<f64>() + stds.iter().sum::<f64>()
 }
 
 /// Inputs converted to `T`.
@@ -201,6 +236,39 @@ impl<T: Real> FqiCase<T> {
         );
         fqi.fit(&[set], &config)?;
         fqi.value([T::ONE, T::ONE], 0)
+    }
+}
+
+/// The FQI benchmark's data for the faithful path (Extra-Trees FQI of the harness): the same
+/// samples and weights in f64.
+pub struct ForestFqiCase {
+    pub data: forest_fqi::Dataset<2>,
+    pub reward_weights: Vec<f64>,
+    pub transition_weights: Vec<f64>,
+}
+
+impl ForestFqiCase {
+    pub fn new() -> Self {
+        let case = FqiCase::<f64>::new();
+        let mut data = forest_fqi::Dataset::new();
+        for t in &case.samples {
+            data.push(*t);
+        }
+        Self {
+            data,
+            reward_weights: case.reward_weights,
+            transition_weights: case.transition_weights,
+        }
+    }
+
+    /// IWFQI's weighted FQI on 50-tree forests with `iterations` iterations.
+    pub fn fit(&self, iterations: usize, seed: u64) -> f64 {
+        let mut options =
+            forest_fqi::FqiOptions::iwfqi(&self.reward_weights, &self.transition_weights);
+        options.iterations = iterations;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let out = forest_fqi::fqi(&self.data, &options, &mut rng).expect("forest fqi");
+        out.model_rewards.map_or(0.0, |r| r.iter().sum())
     }
 }
 
