@@ -29,6 +29,8 @@ struct Data {
     instructions: BTreeMap<String, f64>,
     /// `(experiment, algorithm, wall seconds, CPU seconds, command)`.
     experiments: Vec<(String, String, f64, f64, String)>,
+    /// CPU (user) seconds per repetition of the acceptance check, by operation.
+    cpu: BTreeMap<String, f64>,
     /// Date, cores and load averages of the criterion run.
     conditions: BTreeMap<String, String>,
 }
@@ -443,6 +445,32 @@ fn conditions(d: &Data) -> String {
     )
 }
 
+fn check(d: &Data) -> String {
+    let per = |imp: &str| d.cpu.get(&format!("gp_fit_predict100/{imp}/64")).copied();
+    let (k32, k64, r) = (per("kernel_f32"), per("kernel_f64"), per("reference_f64"));
+    let us = |v: Option<f64>| opt(v, |s| time(s * 1e9));
+    format!(
+        "Fit + 100 predictions at N = 64, D = 3, in CPU time (user time of 3 000 repetitions, \
+         best of 5 alternating rounds): kernel f64 {}, reference f64 {}, reference ÷ kernel \
+         {} (kernel f32: {}). In instructions: reference ÷ kernel f64 = {}; kernel f64 {} \
+         instructions per flop.\n",
+        us(k64),
+        us(r),
+        ratio(r, k64),
+        us(k32),
+        ratio(
+            d.instr("gp_fit_predict100/reference_f64/64", 1.0),
+            d.instr("gp_fit_predict100/kernel_f64/64", 1.0)
+        ),
+        opt(
+            d.instr("gp_fit_predict100/kernel_f64/64", 1.0)
+                .zip(gp_flops("gp_fit_predict100", 64.0))
+                .map(|(i, f)| i / f),
+            |v| format!("{v:.2}")
+        ),
+    )
+}
+
 fn replace_block(text: &str, name: &str, body: &str) -> Option<String> {
     let open = format!("<!-- perf-tables:{name} -->");
     let close = format!("<!-- /perf-tables:{name} -->");
@@ -457,6 +485,7 @@ fn main() {
     let mut callgrind = PathBuf::from("target/perf/callgrind.tsv");
     let mut experiments = PathBuf::from("target/perf/experiments.tsv");
     let conditions_file = PathBuf::from("target/perf/conditions.tsv");
+    let cpu_file = PathBuf::from("target/perf/cputime.tsv");
     let mut files = Vec::new();
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -493,8 +522,16 @@ fn main() {
             data.conditions.insert(key.clone(), value.clone());
         }
     }
+    for row in read_tsv(&cpu_file) {
+        if let [op, k, seconds, ..] = row.as_slice() {
+            if let (Ok(k), Ok(s)) = (k.parse::<f64>(), seconds.parse::<f64>()) {
+                data.cpu.insert(op.clone(), s / k);
+            }
+        }
+    }
     let blocks = [
         ("conditions", conditions(&data)),
+        ("check", check(&data)),
         ("gp", gp_table(&data)),
         ("gp-instructions", gp_instructions_table(&data)),
         ("other", other_table(&data) + "\n" + &draws_line(&data)),
