@@ -341,12 +341,18 @@ pub fn ideal_weight<T: Real>(y: T, mean_target: T, mean_source: T, variance: T) 
 /// effective sample size `(Σw)² / Σw²`.
 ///
 /// Feed it several slices (target records with weight 1, then each source) without
-/// concatenating them. Size: three `T`.
+/// concatenating them. The sums are kept relative to the largest weight seen so far (and
+/// rescaled when a larger one arrives), like [`effective_sample_size`], so they neither
+/// overflow nor underflow for any finite weights. Size: four `T`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WeightSummary<T> {
     count: T,
+    /// The largest weight so far (0 while every weight is 0).
+    scale: T,
+    /// `Σ w / scale`.
     sum: T,
+    /// `Σ (w / scale)²`.
     sum_of_squares: T,
 }
 
@@ -355,6 +361,7 @@ impl<T: Real> WeightSummary<T> {
     pub fn new() -> Self {
         Self {
             count: T::ZERO,
+            scale: T::ZERO,
             sum: T::ZERO,
             sum_of_squares: T::ZERO,
         }
@@ -371,19 +378,32 @@ impl<T: Real> WeightSummary<T> {
             });
         }
         for &w in weights {
-            self.count += T::ONE;
-            self.sum += w;
-            self.sum_of_squares += w * w;
+            self.push(w, T::ONE);
         }
         Ok(())
     }
 
     /// Adds `count` weights equal to 1 (the target's own records).
     pub fn add_ones(&mut self, count: usize) {
-        let n = T::from_usize(count);
-        self.count += n;
-        self.sum += n;
-        self.sum_of_squares += n;
+        if count > 0 {
+            self.push(T::ONE, T::from_usize(count));
+        }
+    }
+
+    /// Adds `times` copies of the finite, non-negative weight `w`.
+    fn push(&mut self, w: T, times: T) {
+        self.count += times;
+        if w > self.scale {
+            let ratio = self.scale / w;
+            self.sum *= ratio;
+            self.sum_of_squares *= ratio * ratio;
+            self.scale = w;
+        }
+        if self.scale > T::ZERO {
+            let u = w / self.scale;
+            self.sum += times * u;
+            self.sum_of_squares += times * u * u;
+        }
     }
 
     /// Number of weights added.
@@ -394,7 +414,7 @@ impl<T: Real> WeightSummary<T> {
     /// Mean weight; 0 when empty.
     pub fn mean(&self) -> T {
         if self.count > T::ZERO {
-            self.sum / self.count
+            self.sum / self.count * self.scale
         } else {
             T::ZERO
         }

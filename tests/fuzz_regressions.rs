@@ -162,3 +162,30 @@ fn score_variance_overflow_is_an_error() {
     let table = ScoreTable::compute(rows, &sources, &mut storage).unwrap();
     assert!(table.values().iter().all(|s| s.total().is_finite()));
 }
+
+/// Target `weights`: six weights of 3.4·10³⁸ (f32, a cap of 3.4·10³⁸ allows them) made the
+/// summary's `Σw²` overflow, and `effective_sample_size` returned `∞/∞ = NaN`. Fix:
+/// `WeightSummary` keeps its sums relative to the largest weight seen (rescaling when a
+/// larger one arrives), as `effective_sample_size` of a slice already did.
+#[test]
+fn weight_summary_of_huge_and_tiny_weights_is_finite_and_exact() {
+    use awfqi::weights::{WeightSummary, effective_sample_size};
+    let mut s = WeightSummary::<f32>::new();
+    s.add(&[3.4e38; 6]).unwrap();
+    s.add_ones(2);
+    let ess = s.effective_sample_size();
+    // (6·w + 2)² / (6·w² + 2) → 6 as w → ∞.
+    assert!((ess - 6.0).abs() < 1e-4, "ess {ess}");
+    assert!((s.mean() / 2.55e38 - 1.0).abs() < 1e-5, "mean {}", s.mean()); // 3.4e38 · 6/8
+    // Tiny weights: Σw² would underflow to 0 without the scaling; ESS of equal weights is n.
+    let mut t = WeightSummary::<f32>::new();
+    t.add(&[1e-30; 4]).unwrap();
+    assert!((t.effective_sample_size() - 4.0).abs() < 1e-5);
+    // The running summary agrees with the one-slice function.
+    let w = [0.5f32, 0.0, 1e3, 2.0, 7.5];
+    let mut u = WeightSummary::new();
+    u.add(&w[..2]).unwrap();
+    u.add(&w[2..]).unwrap();
+    let direct = effective_sample_size(&w).unwrap();
+    assert!((u.effective_sample_size() - direct).abs() < 1e-5 * direct);
+}

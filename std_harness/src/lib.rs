@@ -5,5 +5,6 @@ pub mod commands;
 pub mod fqi;
 pub mod gp_large;
 pub mod plot;
+pub mod puddle;
 pub mod reference;
 pub mod trees;

@@ -21,6 +21,8 @@ enum Command {
     Gp(commands::gp::Args),
     /// Finite-MDP identification on the Grid World (thesis Figs. 4.2 and 4.3).
     Identify(commands::identify::Args),
+    /// Puddle World transfer experiments: every algorithm on the protocol of spec §3.
+    Puddle(commands::puddle::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -28,5 +30,6 @@ fn main() -> anyhow::Result<()> {
         Command::Demo(args) => commands::demo::run(&args),
         Command::Gp(args) => commands::gp::run(&args),
         Command::Identify(args) => commands::identify::run(&args),
+        Command::Puddle(args) => commands::puddle::run(&args),
     }
 }

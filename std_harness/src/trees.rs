@@ -25,7 +25,7 @@
 //!   `Σwy²/W − (Σwy/W)²` is `≤ 10⁻⁷` ([`MIN_IMPURITY`]), or when no candidate is valid. No
 //!   depth limit, minimum leaf size 1.
 //! * Leaf value `Σwy/W`; forest prediction = unweighted mean of its trees.
-//! * A forest whose training set has total weight 0 (or no samples) predicts 0 **[CHOICE]**.
+//! * A forest whose training set has total weight 0 (or no samples) predicts 0 (the spec's **CHOICE**).
 //!
 //! # Randomness and threads
 //!
@@ -37,12 +37,16 @@
 //!
 //! # Speed
 //!
-//! A fit copies the samples into one array of records `{x, w, y}` and grows each tree by
-//! partitioning a copy of that array in place (no index indirection, no allocation in the
-//! inner loops; buffers are reused across refits with [`Forest::refit`]). Nodes of all trees
-//! live in one flat arena of 16-byte nodes with the two children of a split adjacent, and
-//! batch prediction ([`Forest::predict_into`]) walks one tree at a time over all queries so
-//! the tree stays in cache.
+//! A fit copies the samples into one array of records `{x, w, y}`; each tree partitions
+//! them between two buffers (a node's records in one, its children's in the other), with
+//! branch-free passes: one for the node's sums and ranges, one for both candidates' child
+//! sums, one to partition. No index indirection and no allocation in the inner loops;
+//! buffers are reused across refits ([`Forest::refit`]). Nodes of all trees live in one flat
+//! arena of 16-byte nodes, the two children of a split adjacent and a leaf pointing to
+//! itself, so batch prediction ([`Forest::predict_into`]) walks 8 queries through one tree
+//! in lockstep without a branch per level, one tree at a time so it stays in cache.
+//! Measured on the reference machine (one core, shared): 50 trees on 450 records in
+//! ≈ 1.8 ms, prediction ≈ 13 ns per query and tree (`examples/tree_timing.rs`).
 
 use awfqi::{Error, Result};
 use rand_chacha::ChaCha8Rng;
@@ -237,7 +241,7 @@ impl<const D: usize> Forest<D> {
         self.values.clear();
         self.roots.clear();
         let total_weight: f64 = weights.iter().sum();
-        if !(total_weight > 0.0) {
+        if total_weight <= 0.0 {
             return;
         }
         let ws = &mut self.workspace;
@@ -469,16 +473,19 @@ impl Tree<'_> {
             let value = if st.w > 0.0 { st.s / st.w } else { 0.0 };
             self.values[node] = value;
             let impurity = st.q / st.w - value * value;
-            // `!(impurity > MIN)` also makes a leaf of a zero-weight node (impurity NaN),
-            // which only a degenerate root could be; the forest never grows one.
-            if !(impurity > MIN_IMPURITY) {
+            // A zero-weight node (impurity NaN) is a leaf too; only a degenerate root could
+            // be one, and the forest never grows it.
+            if impurity <= MIN_IMPURITY || impurity.is_nan() {
                 continue;
             }
             if let [a, b] = src {
-                // Two samples with impurity > 0 both have positive weight, so every
-                // candidate separates them with the same score (the same two terms, added
-                // in either order): the first non-constant feature in the random order wins.
-                self.split_pair(node, [a, b], &st, rng);
+                // Two samples: unless one has weight 0 (no valid candidate then; impurity
+                // > 0 is possible through subnormal rounding), every candidate separates them
+                // with the same score (the same two terms, added in either order), so the
+                // first non-constant feature in the random order wins.
+                if a.w > 0.0 && b.w > 0.0 {
+                    self.split_pair(node, [a, b], &st, rng);
+                }
                 continue;
             }
             let Some((feature, threshold)) = best_split(src, &st, rng) else {
@@ -511,7 +518,8 @@ impl Tree<'_> {
 }
 
 impl Tree<'_> {
-    /// Grows node `node` holding exactly the two records `pair`, both of positive weight:
+    /// Grows node `node` holding exactly the two records `pair`, both of positive weight
+    /// (the caller checks):
     /// a split on the first non-constant feature in random order with its two leaves, or a
     /// leaf (already written by the caller) when both features are constant.
     fn split_pair<const D: usize>(

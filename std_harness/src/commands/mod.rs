@@ -3,3 +3,4 @@
 pub mod demo;
 pub mod gp;
 pub mod identify;
+pub mod puddle;

@@ -77,7 +77,7 @@ fn too_few_iterations_give_the_truncated_values() {
     };
     let out = fqi(&chain(), &options, &mut rng(2)).unwrap();
     for s in 0..4 {
-        let d = 4 - s as i32;
+        let d = 4 - s;
         let expected = -(1.0 - gamma.powi(d.min(2))) / (1.0 - gamma);
         assert!((out.q.predict(&[s as f64, 0.0], 0).unwrap() - expected).abs() < 1e-12);
     }

@@ -10,7 +10,11 @@
 //!   initial values and from [`DEFAULT_RESTARTS`] `= 10` starts drawn uniformly in the log
 //!   box (three uniforms per restart, in restart order, from the caller's generator), and
 //!   keeps the best. Only the last `max_points` ([`MAX_GP`] `= 4000`, spec's `max_gp`)
-//!   samples are used.
+//!   samples are used. This is [`FitStrategy::AllStarts`], the default. The option
+//!   [`FitStrategy::Screened`] runs the same starts on a 300-point subsample first and
+//!   refines each distinct end point on all data: it found the same optimum on every
+//!   published source GP and on the target GPs measured, 10–20 times faster at
+//!   `n ≥ 1000`, but it is not the spec's procedure.
 //! * **Prediction**: mean `k*ᵀK⁻¹y` and std `√max(c + σ²ₙ − k*ᵀK⁻¹k*, 0)`, which
 //!   **includes** the noise; [`subtract_noise`] applies the reference's noise-subtraction
 //!   rule (or the principled variance version, spec §14.7).
@@ -18,7 +22,9 @@
 //! # Cost
 //!
 //! One likelihood value is a Cholesky factorisation (`n³/3` flops); its gradient needs
-//! `K⁻¹` (a triangular inverse and a triangular product, `2n³/3` more). Buffers: two `n × n`
+//! `K⁻¹` (a triangular inverse and a triangular product, `2n³/3` more). A spec fit spends
+//! ≈ 400 values and ≈ 300 gradients over its 11 starts: measured on one shared core, 2 s at
+//! `n = 500` and 80 s at `n = 1700` (screened: 0.8 s and 4 s), see `examples/gp_timing.rs`. Buffers: two `n × n`
 //! matrices and two packed triangles (`3n²` f64 in all: 69 MB at `n = 1700`, 384 MB at
 //! `n = 4000`), reused by every evaluation of a fit. Linear algebra runs with the
 //! [`Par`] given in [`FitOptions::parallelism`] (sequential by default: experiments
@@ -92,12 +98,12 @@ impl GpHyperparameters {
                 return Err(Error::NonFinite { parameter });
             }
         }
-        if !(self.signal_variance > 0.0) {
+        if self.signal_variance <= 0.0 {
             return Err(Error::InvalidParameter {
                 parameter: "signal_variance",
             });
         }
-        if !(self.length_scale > 0.0) {
+        if self.length_scale <= 0.0 {
             return Err(Error::InvalidParameter {
                 parameter: "length_scale",
             });

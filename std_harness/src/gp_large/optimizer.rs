@@ -185,7 +185,8 @@ pub fn minimize<const K: usize, F: Objective<K>>(
             d
         };
         let mut d = direction(&h);
-        if !(dot(&g, &d) < 0.0) {
+        let descent = dot(&g, &d);
+        if descent >= 0.0 || descent.is_nan() {
             reset(&mut h, &mut blind);
             d = direction(&h);
         }
@@ -243,7 +244,10 @@ pub fn minimize<const K: usize, F: Objective<K>>(
         // line search would. This crosses the likelihood's flat regions in few iterations.
         if first_trial {
             for _ in 0..6 {
-                if !(dot(&g_new, &d) < 0.9 * slope) || result.evaluations >= options.max_evaluations
+                let steep = dot(&g_new, &d);
+                if steep >= 0.9 * slope
+                    || steep.is_nan()
+                    || result.evaluations >= options.max_evaluations
                 {
                     break;
                 }

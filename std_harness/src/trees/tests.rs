@@ -90,6 +90,41 @@ fn split_with_a_zero_weight_child_is_never_chosen() {
 }
 
 #[test]
+fn subnormal_weights_never_make_a_zero_weight_leaf() {
+    // With a subnormal weight, w·y·y/w and (w·y/w)² round differently and the impurity of
+    // {subnormal, zero} can exceed 10⁻⁷; the zero-weight sample must still not get a leaf.
+    let xs = [[0.0, 0.0], [1.0, 1.0]];
+    let ys = [-1.3, 5.0];
+    let ws = [4.4e-323, 0.0];
+    let forest = Forest::fit(&xs, &ys, &ws, 10, &mut rng(30)).unwrap();
+    let value = forest.predict(&xs[0]);
+    assert!(value.is_finite());
+    assert_eq!(forest.predict(&xs[1]), value);
+    assert_eq!(forest.n_nodes(), 10);
+    // Many subnormal and zero weights: every leaf has positive weight, every value finite.
+    let (xs, ys, mut ws) = random_set(200, 31);
+    for (i, w) in ws.iter_mut().enumerate() {
+        *w = if i % 2 == 0 {
+            0.0
+        } else {
+            f64::from_bits(1 + (i as u64 % 17))
+        };
+    }
+    let forest = Forest::fit(&xs, &ys, &ws, 10, &mut rng(32)).unwrap();
+    for t in 0..forest.n_trees() {
+        for members in leaves_of(&forest, t, &xs).values() {
+            assert!(members.iter().any(|&i| ws[i] > 0.0));
+            assert!(
+                forest
+                    .tree_prediction(t, &xs[members[0]])
+                    .unwrap()
+                    .is_finite()
+            );
+        }
+    }
+}
+
+#[test]
 fn best_candidate_is_chosen() {
     // y = 10·x₀ on the corners of the unit square. Any threshold on x₀ separates perfectly
     // (score 0²/2 + 20²/2 = 200), any threshold on x₁ mixes (score 10²/2 + 10²/2 = 100): every
@@ -330,5 +365,24 @@ fn action_forest_batches_equal_pointwise() {
     q.predict_actions_into(&queries, &acts, &mut out).unwrap();
     for ((s, &a), &o) in queries.iter().zip(&acts).zip(&out) {
         assert_eq!(q.predict(s, a), Ok(o));
+    }
+}
+
+#[test]
+fn a_pair_with_a_zero_and_a_subnormal_weight_is_a_leaf_not_a_nan() {
+    // Two samples, weights 0 and 1.73·10⁻³²² (subnormal: w·y keeps only a few bits, so the
+    // computed impurity of the pair need not be 0). The zero-weight sample must not get a
+    // leaf of its own (its value would be 0/0): the pair is one leaf predicting about the
+    // positive-weight sample's target.
+    let xs = [[1.0, 1.0], [2.0, 3.0]];
+    let ys = [-0.97, -37.3];
+    let ws = [0.0, 1.73e-322];
+    for seed in 0..50 {
+        let forest = Forest::fit(&xs, &ys, &ws, 5, &mut rng(seed)).unwrap();
+        for x in &xs {
+            let v = forest.predict(x);
+            assert!(v.is_finite(), "seed {seed}: prediction {v}");
+            assert!((v + 37.3).abs() < 37.3 * 0.1, "seed {seed}: prediction {v}");
+        }
     }
 }

@@ -1,0 +1,242 @@
+//! `awfqi-kernel`: the core's embedded AWFQI path ([`awfqi::awfqi::Awfqi`]) on the same
+//! protocol as the std algorithms, so the cost of the embedded path is measured, not guessed.
+//!
+//! The kernel runs as it would on a microcontroller, in `f32`, with everything in fixed
+//! storage: a target reward GP of capacity [`GP_POINTS`] fitted on an even spread of `D₀`
+//! (the core's [`SubsetRule::Spread`]) with the core's bounded Nelder–Mead search, tabular
+//! weighted FQI on [`CELLS`] × [`CELLS`] cells instead of Extra-Trees, and a score table
+//! with the setting's rows whose values come from one fixed-capacity reward GP per source
+//! (realistic table, `V_r` only). The source records and their stored reward posteriors are
+//! the experiment's source data, converted to `f32`. Budget, steps, evaluation and records
+//! are the protocol's.
+
+use std::time::Instant;
+
+use awfqi::alias::AliasEntry;
+use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
+use awfqi::dataset::{GpTraining, Output, SubsetRule, fit_gp};
+use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld, Transition};
+use awfqi::fqi::{CellGrid, FqiEntry, TabularFqi};
+use awfqi::gp::Gp;
+use awfqi::score::{GpSourceModel, PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+use awfqi::weights::Posterior;
+use rand_chacha::ChaCha8Rng;
+
+use super::Experiment;
+use crate::puddle::protocol::{Diagnostics, StepRecord, evaluate_step};
+use crate::puddle::score_tables::Mode;
+use crate::puddle::sources::{Record, SourceSet};
+
+/// FQI cells per axis (cells about one unit step wide; see `tests/awfqi_puddle.rs`).
+pub const CELLS: usize = 11;
+/// Capacity of every kernel GP.
+pub const GP_POINTS: usize = 64;
+
+type T = f32;
+type Record32 = Transition<[T; 2], T>;
+
+fn to_f32(r: &Record) -> Record32 {
+    Transition {
+        state: r.state.map(|x| x as T),
+        action: r.action,
+        reward: r.reward as T,
+        next_state: r.next_state.map(|x| x as T),
+        absorbing: r.absorbing,
+    }
+}
+
+fn to_f64(r: &Record32) -> Record {
+    Transition {
+        state: r.state.map(f64::from),
+        action: r.action,
+        reward: f64::from(r.reward),
+        next_state: r.next_state.map(f64::from),
+        absorbing: r.absorbing,
+    }
+}
+
+/// What the kernel path builds once per experiment: the `f32` source data and the score
+/// values of its realistic table.
+#[derive(Debug, Clone)]
+pub struct KernelSetup {
+    /// Row mode of the score table.
+    pub mode: Mode,
+    /// Grid spacing of the score table.
+    pub spacing: f64,
+    records: Vec<Vec<Record32>>,
+    posteriors: Vec<Vec<Posterior<T>>>,
+    values: Vec<Scores<T>>,
+    /// Wall time of the set-up (source GP fits and score table), seconds.
+    pub setup_seconds: f64,
+}
+
+impl KernelSetup {
+    /// Converts the sources and builds the realistic score table from one
+    /// `Gp<f32, 64, 3>` reward GP per source (an even spread of its records, the core's
+    /// reference training), from the stream `rng`.
+    pub fn new(
+        sources: &SourceSet,
+        mode: Mode,
+        spacing: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Self> {
+        let start = Instant::now();
+        let records: Vec<Vec<Record32>> = sources
+            .sources
+            .iter()
+            .map(|s| s.records.iter().map(to_f32).collect())
+            .collect();
+        let posteriors = sources
+            .sources
+            .iter()
+            .map(|s| {
+                s.reward
+                    .iter()
+                    .map(|p| Posterior::new(p.mean as T, p.std as T))
+                    .collect()
+            })
+            .collect();
+        let mut gps: Vec<Box<Gp<T, GP_POINTS, 3>>> = Vec::new();
+        for r in &records {
+            let mut gp = Box::new(Gp::empty());
+            let training = GpTraining::reference();
+            fit_gp(
+                &mut *gp,
+                r,
+                Output::Reward,
+                SubsetRule::Spread,
+                &training,
+                rng,
+            )?;
+            gps.push(gp);
+        }
+        let models: Vec<_> = gps.iter().map(|g| GpSourceModel::new(&**g, None)).collect();
+        let slices: Vec<&[Record32]> = records.iter().map(Vec::as_slice).collect();
+        let rows = row_set(mode, spacing, &slices)?;
+        let mut values = vec![Scores::default(); rows.len()];
+        ScoreTable::compute(rows, &models, &mut values)?;
+        Ok(Self {
+            mode,
+            spacing,
+            records,
+            posteriors,
+            values,
+            setup_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The kernel's fixed parameters for the result files.
+    pub fn parameters(&self) -> serde_json::Value {
+        serde_json::json!({
+            "scalar": "f32",
+            "fqi_cells": [CELLS, CELLS],
+            "gp_capacity": GP_POINTS,
+            "gp_subset": "spread",
+            "gp_search": "core Nelder-Mead, 10 restarts",
+            "score_rows": self.values.len(),
+            "score_spacing": self.spacing,
+        })
+    }
+}
+
+fn row_set<'a>(
+    mode: Mode,
+    spacing: f64,
+    slices: &'a [&'a [Record32]],
+) -> anyhow::Result<RowSet<'a, T>> {
+    let grid = PointGrid::puddle(spacing as T)?;
+    Ok(match mode {
+        Mode::Source => RowSet::source_data(slices)?,
+        Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
+        Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, slices)?,
+    })
+}
+
+/// One run of the kernel on the protocol: `K` steps of [`Awfqi::step`], each followed by
+/// the protocol's evaluation (in `f64`, of the greedy policy of the kernel's `f32` table).
+/// Returns the step records and `D₀`.
+pub fn run(
+    experiment: &Experiment,
+    rng: &mut ChaCha8Rng,
+    mut after_step: impl FnMut(&StepRecord),
+) -> anyhow::Result<(Vec<StepRecord>, Vec<Record>)> {
+    let setup = experiment
+        .kernel
+        .as_ref()
+        .ok_or_else(|| anyhow::anyhow!("no kernel set-up"))?;
+    let protocol = &experiment.protocol;
+    let slices: Vec<&[Record32]> = setup.records.iter().map(Vec::as_slice).collect();
+    let rows = row_set(setup.mode, setup.spacing, &slices)?;
+    let table = ScoreTable::from_parts(rows, &setup.values)?;
+    let mut alias = vec![AliasEntry::default(); table.len()];
+    let sampler = table.sampler(ScoreColumn::Reward, &mut alias)?;
+    let data: Vec<SourceData<'_, T>> = setup
+        .records
+        .iter()
+        .zip(&setup.posteriors)
+        .map(|(r, p)| SourceData::new(r, p))
+        .collect::<awfqi::Result<_>>()?;
+    let budget = protocol.budget();
+    let blank = to_f32(&Transition {
+        state: [0.0; 2],
+        action: 0,
+        reward: 0.0,
+        next_state: [0.0; 2],
+        absorbing: false,
+    });
+    let mut samples = vec![blank; protocol.steps * budget];
+    let source_records: usize = setup.records.iter().map(Vec::len).sum();
+    let mut weights = vec![0.0; source_records];
+    let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
+    let grid = CellGrid::square(0.0, 10.0, CELLS)?;
+    let mut storage = vec![FqiEntry::default(); CELLS * CELLS * PUDDLE_ACTIONS];
+    let fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut storage)?;
+    let config = AwfqiConfig::thesis(budget);
+    let mut kernel = Awfqi::new(
+        config,
+        PuddleWorld::target(protocol.dynamics),
+        sampler,
+        &data,
+        &mut samples,
+        &mut weights,
+        &mut *gp,
+        fqi,
+    )?;
+    let target = protocol.target();
+    let mut steps = Vec::new();
+    for k in 1..=protocol.steps {
+        let start = Instant::now();
+        let report = kernel.step(rng)?;
+        let diagnostics = Diagnostics {
+            n_source_samples: Some(report.n_source_samples),
+            wr_mean: Some(f64::from(report.wr_mean)),
+            wr_eff: Some(f64::from(report.wr_eff)),
+            ws_mean: Some(f64::from(report.ws_mean)),
+            ws_eff: Some(f64::from(report.ws_eff)),
+            reward_gp: Some(crate::puddle::gp::GpSummary {
+                points: report.gp_points,
+                signal_variance: f64::from(report.gp_hyperparameters.signal_variance),
+                length_scale: f64::from(report.gp_hyperparameters.length_scales[0]),
+                noise_variance: f64::from(report.gp_hyperparameters.noise_variance),
+                log_marginal_likelihood: f64::from(report.gp_log_likelihood),
+            }),
+            ..Diagnostics::default()
+        };
+        let q = kernel.q();
+        let greedy = |s: &[f64; 2]| q.greedy_action([s[0] as T, s[1] as T]).unwrap_or(0);
+        let record = evaluate_step(
+            protocol,
+            &target,
+            k,
+            &greedy,
+            report.n_target_samples,
+            diagnostics,
+            start,
+            rng,
+        )?;
+        after_step(&record);
+        steps.push(record);
+    }
+    let collected = kernel.target_samples().iter().map(to_f64).collect();
+    Ok((steps, collected))
+}

@@ -1,0 +1,319 @@
+//! The algorithms compared on the protocol of §3, one module each, and the experiment
+//! context they share ([`Experiment`]).
+
+pub mod fqi;
+pub mod iwfqi;
+pub mod kernel;
+pub mod rbt;
+pub mod sdt;
+
+use std::sync::Arc;
+
+use awfqi::weights::{Estimator, NoiseSubtraction};
+use serde::Serialize;
+
+use super::gp::GpOptions;
+use super::protocol::{Learner, Protocol};
+use super::score_tables::ScoreTableData;
+use super::sources::SourceSet;
+
+/// The algorithms of issue 5, in the order the outputs list them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
+pub enum Algorithm {
+    /// Plain FQI on target episodes (§5).
+    Fqi,
+    /// IWFQI with the mean estimator (§7).
+    Iwfqi,
+    /// IWFQI with the heuristic estimator (§7.5).
+    IwfqiHeuristic,
+    /// IWFQI with the ideal weights of §7.7.
+    IwfqiIdeal,
+    /// Relevance-based transfer (§8).
+    Rbt,
+    /// Shared-dynamics transfer (§9).
+    Sdt,
+    /// AWFQI with the realistic (GP) score table (§12).
+    Awfqi,
+    /// AWFQI with the oracle score table (§12).
+    AwfqiOracle,
+    /// The core's embedded AWFQI (fixed-capacity f32 GP, tabular FQI) on the same protocol.
+    AwfqiKernel,
+}
+
+impl Algorithm {
+    /// Every algorithm.
+    pub const ALL: [Algorithm; 9] = [
+        Algorithm::Fqi,
+        Algorithm::Iwfqi,
+        Algorithm::IwfqiHeuristic,
+        Algorithm::IwfqiIdeal,
+        Algorithm::Rbt,
+        Algorithm::Sdt,
+        Algorithm::Awfqi,
+        Algorithm::AwfqiOracle,
+        Algorithm::AwfqiKernel,
+    ];
+
+    /// The name used in file names, tables and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::Fqi => "fqi",
+            Algorithm::Iwfqi => "iwfqi",
+            Algorithm::IwfqiHeuristic => "iwfqi-heuristic",
+            Algorithm::IwfqiIdeal => "iwfqi-ideal",
+            Algorithm::Rbt => "rbt",
+            Algorithm::Sdt => "sdt",
+            Algorithm::Awfqi => "awfqi",
+            Algorithm::AwfqiOracle => "awfqi-oracle",
+            Algorithm::AwfqiKernel => "awfqi-kernel",
+        }
+    }
+
+    /// Stable identifier used in seeding (never reorder).
+    pub fn id(self) -> u64 {
+        match self {
+            Algorithm::Fqi => 1,
+            Algorithm::Iwfqi => 2,
+            Algorithm::IwfqiHeuristic => 3,
+            Algorithm::IwfqiIdeal => 4,
+            Algorithm::Rbt => 5,
+            Algorithm::Sdt => 6,
+            Algorithm::Awfqi => 7,
+            Algorithm::AwfqiOracle => 8,
+            Algorithm::AwfqiKernel => 9,
+        }
+    }
+
+    /// `true` for the algorithms whose target data are generative-model queries.
+    pub fn is_active(self) -> bool {
+        matches!(
+            self,
+            Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiKernel
+        )
+    }
+
+    /// `true` for the algorithms that need the realistic score table.
+    pub fn needs_realistic_table(self) -> bool {
+        matches!(self, Algorithm::Awfqi)
+    }
+
+    /// The default set of the command: every algorithm but the heuristic-estimator IWFQI
+    /// (a variant of the shared-dynamics reference runs only, §13.1).
+    pub const DEFAULT: [Algorithm; 8] = [
+        Algorithm::Fqi,
+        Algorithm::Iwfqi,
+        Algorithm::IwfqiIdeal,
+        Algorithm::Rbt,
+        Algorithm::Sdt,
+        Algorithm::Awfqi,
+        Algorithm::AwfqiOracle,
+        Algorithm::AwfqiKernel,
+    ];
+
+    /// Colour index in the plot palette (8 colours; the yellow one is left for the source
+    /// states of the scatter plots). The kernel shares the blue of IWFQI: the learning
+    /// curves draw it in a separate panel, next to AWFQI, where IWFQI is absent; the
+    /// heuristic IWFQI shares it too (not in the default set).
+    pub fn color(self) -> usize {
+        match self {
+            Algorithm::Fqi => 7,
+            Algorithm::Iwfqi | Algorithm::IwfqiHeuristic | Algorithm::AwfqiKernel => 0,
+            Algorithm::IwfqiIdeal => 5,
+            Algorithm::Rbt => 4,
+            Algorithm::Sdt => 3,
+            Algorithm::Awfqi => 1,
+            Algorithm::AwfqiOracle => 2,
+        }
+    }
+}
+
+/// IWFQI's estimator variances (§7.1, §14.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Variances {
+    /// `v_r = 0.1`, `v_s = 0.2`: the published runs (standard deviations used as variances).
+    Published,
+    /// `v_r = 0.01`, `v_s = 0.04`: the true noise variances.
+    Corrected,
+}
+
+impl Variances {
+    /// `(v_r, v_s)`.
+    pub fn values(self) -> (f64, f64) {
+        match self {
+            Variances::Published => (0.1, 0.2),
+            Variances::Corrected => (0.01, 0.04),
+        }
+    }
+}
+
+/// Options of the transfer algorithms that the spec exposes (§7.1, §8, §14).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TransferOptions {
+    /// `(v_r, v_s)` of the estimated weights.
+    pub variances: Variances,
+    /// Weight cap `w_max` (1000).
+    pub max_weight: f64,
+    /// Noise subtraction of the target GPs' stds (reference rule by default).
+    #[serde(serialize_with = "serialize_noise")]
+    pub noise: NoiseSubtraction,
+    /// Target-GP fitting (10 restarts, max_gp 4000).
+    pub gp: GpOptions,
+    /// Transition weights on (`None`: the §7.6 default of the dynamics variant: off for
+    /// shared, on for puddle-based).
+    pub transition_weights: Option<bool>,
+    /// RBT's `n_total` (500).
+    pub rbt_total: usize,
+}
+
+fn serialize_noise<S: serde::Serializer>(n: &NoiseSubtraction, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(match n {
+        NoiseSubtraction::Reference => "reference",
+        NoiseSubtraction::Principled => "principled",
+        NoiseSubtraction::Off => "off",
+    })
+}
+
+impl Default for TransferOptions {
+    fn default() -> Self {
+        Self {
+            variances: Variances::Published,
+            max_weight: 1000.0,
+            noise: NoiseSubtraction::Reference,
+            gp: GpOptions::reference(),
+            transition_weights: None,
+            rbt_total: 500,
+        }
+    }
+}
+
+/// Everything the runs of one experiment share (read-only, across threads).
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// The protocol.
+    pub protocol: Protocol,
+    /// The source datasets.
+    pub sources: Arc<SourceSet>,
+    /// Options of the transfer algorithms.
+    pub options: TransferOptions,
+    /// The oracle score table of the setting (AWFQI_oracle).
+    pub oracle_table: Option<Arc<ScoreTableData>>,
+    /// The realistic score table of the setting (AWFQI).
+    pub realistic_table: Option<Arc<ScoreTableData>>,
+    /// The core kernel's own set-up (awfqi-kernel).
+    pub kernel: Option<Arc<kernel::KernelSetup>>,
+}
+
+impl Experiment {
+    /// Whether IWFQI-type algorithms use transition weights here.
+    pub fn transition_weights(&self) -> bool {
+        self.options
+            .transition_weights
+            .unwrap_or(self.protocol.dynamics == awfqi::env::Dynamics::PuddleBased)
+    }
+
+    /// The per-run parameters recorded in the results (§3.4).
+    pub fn parameters(&self, algorithm: Algorithm) -> serde_json::Value {
+        let p = &self.protocol;
+        let mut v = serde_json::json!({
+            "algorithm": algorithm.name(),
+            "batch_size": p.episodes_per_step,
+            "steps": p.steps,
+            "iterations": p.iterations,
+            "trees": p.trees,
+            "epsilon": p.epsilon,
+        });
+        let (v_r, v_s) = self.options.variances.values();
+        let o = &mut v;
+        match algorithm {
+            Algorithm::Iwfqi
+            | Algorithm::IwfqiHeuristic
+            | Algorithm::Awfqi
+            | Algorithm::AwfqiOracle => {
+                o["estimator"] = if algorithm == Algorithm::IwfqiHeuristic {
+                    "heuristic".into()
+                } else {
+                    "mean".into()
+                };
+                o["var_rw"] = v_r.into();
+                o["var_st"] = v_s.into();
+                o["max_weight"] = self.options.max_weight.into();
+                o["max_gp"] = self.options.gp.max_gp.into();
+                o["gp_restarts"] = self.options.gp.restarts.into();
+                o["weight_rw"] = true.into();
+                let st = self.transition_weights() && !algorithm.is_active();
+                o["weight_st"] = serde_json::json!([st, st]);
+                o["noise_subtraction"] = serde_json::to_value(self.options)
+                    .map(|t| t["noise"].clone())
+                    .unwrap_or_default();
+            }
+            Algorithm::IwfqiIdeal => {
+                o["var_rw"] = 0.01.into();
+                o["var_st"] = 0.04.into();
+                o["weights"] = "ideal".into();
+            }
+            Algorithm::Rbt => {
+                o["delta_sa"] = 0.1.into();
+                o["delta_s_prime"] = 0.1.into();
+                o["delta_r"] = 0.1.into();
+                o["mu"] = 0.8.into();
+                o["n_total"] = self.options.rbt_total.into();
+            }
+            Algorithm::AwfqiKernel => {
+                if let Some(k) = &self.kernel {
+                    o["kernel"] = k.parameters();
+                }
+            }
+            Algorithm::Fqi | Algorithm::Sdt => {}
+        }
+        if algorithm.is_active() {
+            o["budget_per_step"] = p.budget().into();
+            let table = match algorithm {
+                Algorithm::AwfqiOracle => self.oracle_table.as_ref().map(|t| (t.mode, "oracle")),
+                Algorithm::Awfqi => self.realistic_table.as_ref().map(|t| (t.mode, "realistic")),
+                _ => self
+                    .kernel
+                    .as_ref()
+                    .map(|k| (k.mode, "realistic (kernel GPs)")),
+            };
+            if let Some((mode, kind)) = table {
+                o["score_table"] =
+                    serde_json::json!({"mode": mode.name(), "values": kind, "column": "V_r"});
+            }
+        }
+        v
+    }
+
+    /// A fresh learner of `algorithm` for one run (the kernel runs through
+    /// [`kernel::run`] instead, since it borrows its storage for the whole run).
+    pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner + '_>> {
+        use awfqi::weights::Estimator::{Heuristic, Mean};
+        Ok(match algorithm {
+            Algorithm::Fqi => Box::new(fqi::Fqi::new(&self.protocol)),
+            Algorithm::Iwfqi => Box::new(iwfqi::Iwfqi::estimated(self, Mean, None)?),
+            Algorithm::IwfqiHeuristic => Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None)?),
+            Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),
+            Algorithm::Rbt => Box::new(rbt::Rbt::new(self)),
+            Algorithm::Sdt => Box::new(sdt::Sdt::new(self)),
+            Algorithm::Awfqi => {
+                let table = self.realistic_table.clone();
+                let table = table.ok_or_else(|| anyhow::anyhow!("no realistic score table"))?;
+                Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
+            }
+            Algorithm::AwfqiOracle => {
+                let table = self.oracle_table.clone();
+                let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
+                Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
+            }
+            Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through kernel::run"),
+        })
+    }
+}
+
+/// An estimator's name.
+pub fn estimator_name(e: Estimator) -> &'static str {
+    match e {
+        Estimator::Mean => "mean",
+        Estimator::Heuristic => "heuristic",
+    }
+}

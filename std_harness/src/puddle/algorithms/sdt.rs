@@ -1,0 +1,54 @@
+//! SDT, shared-dynamics transfer (Laroche & Barlier 2017) as the reference implements it
+//! (spec §9): the reward model is fitted on the target records only, then every record of
+//! the union of target and all source records gets the model's reward (the sources' own
+//! rewards are discarded; their states, next states and absorbing flags are kept), and
+//! iterations 2..60 run on the union, unweighted.
+
+use rand_chacha::ChaCha8Rng;
+
+use super::Experiment;
+use super::fqi::Episodic;
+use crate::fqi::{Dataset, FqiOptions, fqi};
+use crate::puddle::protocol::{Diagnostics, Learner};
+use crate::puddle::sources::Record;
+
+/// SDT.
+#[derive(Debug, Clone)]
+pub struct Sdt {
+    run: Episodic,
+    sources: Dataset<2>,
+}
+
+impl Sdt {
+    /// A fresh run on the experiment's sources.
+    pub fn new(experiment: &Experiment) -> Self {
+        Self {
+            run: Episodic::new(&experiment.protocol),
+            sources: experiment.sources.union(),
+        }
+    }
+}
+
+impl Learner for Sdt {
+    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+        self.run.collect(rng)?;
+        let mut union: Dataset<2> = self.run.data.iter().copied().collect();
+        let n_target = union.len();
+        union.extend_from(&self.sources);
+        let options = self.run.options(FqiOptions::sdt(n_target));
+        self.run.q = Some(fqi(&union, &options, rng)?.q);
+        Ok(Diagnostics {
+            n_source_samples: Some(self.sources.len()),
+            n_eff: Some(union.len()),
+            ..Diagnostics::default()
+        })
+    }
+
+    fn greedy_action(&self, state: &[f64; 2]) -> usize {
+        self.run.greedy_action(state)
+    }
+
+    fn target_samples(&self) -> &[Record] {
+        &self.run.data
+    }
+}

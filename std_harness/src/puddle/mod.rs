@@ -1,0 +1,57 @@
+//! The Puddle World transfer experiments (spec §3–§9, §11–§13): the thesis's Chapter 5 and
+//! the IWFQI paper's puddle-world curves, with every baseline.
+//!
+//! - [`sources`]: source datasets (the published ones, a user's own in the same CSV layout,
+//!   or freshly generated as §6 says);
+//! - [`gp`]: the GP fits (§4.2) on records;
+//! - [`protocol`]: the common experiment protocol of §3 (episodic collection, evaluation,
+//!   per-step records);
+//! - [`algorithms`]: FQI, IWFQI (mean, heuristic, ideal weights), RBT, SDT, AWFQI and
+//!   AWFQI_oracle on the faithful std path, and `awfqi-kernel`, the core's embedded path;
+//! - [`score_tables`]: the oracle and realistic score tables (§11), built once per
+//!   experiment and shared by all runs;
+//! - [`results`]: result files in the reference's layout, summaries, merging of run ranges;
+//! - [`metrics`]: transfer metrics (jump-start, asymptotic performance, total reward,
+//!   transfer ratio, time to threshold);
+//! - [`figures`]: learning curves and sample scatters.
+//!
+//! **Seeding** (spec §1's [CHOICE]): every random stream is a ChaCha8 generator seeded from
+//! a hash of the experiment seed and a purpose: (seed, RUN, algorithm, run index) for a run,
+//! (seed, SCORE_TABLE) for the realistic tables, (seed, SOURCE_GENERATION, source) for
+//! generated source data. No stream depends on thread scheduling or on which other
+//! algorithms or runs are computed, so `--runs 0..5` and `--runs 5..10` give the same runs
+//! as `--runs 0..10`.
+
+pub mod algorithms;
+pub mod figures;
+pub mod gp;
+pub mod metrics;
+pub mod protocol;
+pub mod results;
+pub mod score_tables;
+pub mod sources;
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+/// Stream purpose: one run of one algorithm.
+pub const RUN: u64 = 1;
+/// Stream purpose: the realistic score tables' source-GP fits.
+pub const SCORE_TABLE: u64 = 2;
+/// Stream purpose: generating a source dataset.
+pub const SOURCE_GENERATION: u64 = 3;
+
+/// A seeded stream: ChaCha8 from a SplitMix64 hash of the seed and the parts.
+pub fn stream(seed: u64, parts: &[u64]) -> ChaCha8Rng {
+    fn mix(mut z: u64) -> u64 {
+        z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    let mut h = mix(seed);
+    for &p in parts {
+        h = mix(h ^ mix(p));
+    }
+    ChaCha8Rng::seed_from_u64(h)
+}
