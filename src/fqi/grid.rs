@@ -100,8 +100,10 @@ impl<T: Real> CellGrid<T> {
             _ => (self.lower[1], self.upper[1], self.cells[1]),
         };
         let t = (x - lo) / (hi - lo) * T::from_usize(n);
-        // `as` saturates: negative (and NaN) → 0, huge → usize::MAX, then clamp.
-        let i = t.floor().to_f64() as usize;
+        // `as` truncates towards zero and saturates: ⌊t⌋ for t ≥ 0; 0 for t < 0 and NaN
+        // (as ⌊t⌋ would give after saturating); usize::MAX when huge, then clamp. So no
+        // `floor` is needed (libm's is software, and this runs twice per sample per sweep).
+        let i = t.to_f64() as usize;
         i.min(n - 1)
     }
 
@@ -155,6 +157,34 @@ mod tests {
             g.cell_of([f64::NAN, 0.0]),
             Err(Error::NonFinite { parameter: "state" })
         );
+    }
+
+    #[test]
+    fn cell_index_is_the_clamped_floor_everywhere() {
+        // The index is computed by truncation; it must equal ⌊t⌋ clamped into 0..n for
+        // states below, inside and above the box, at cell borders, and for huge values.
+        let g = CellGrid::square(-1.0f32, 3.0, 8).unwrap();
+        let expected = |x: f32| -> usize {
+            let t = f64::from((x - -1.0) / 4.0 * 8.0).floor();
+            t.clamp(0.0, 7.0) as usize
+        };
+        let edges = [
+            -3e38f32,
+            -1e6,
+            -1.6,
+            -1.5,
+            -1.0 - 1e-7,
+            -1.0,
+            -0.5,
+            3.0,
+            3.5,
+            1e30,
+        ];
+        let steps = (0..=80).map(|k| -1.0 + k as f32 * 0.05);
+        for x in edges.into_iter().chain(steps) {
+            let cell = g.cell_of([x, 0.0]).unwrap();
+            assert_eq!(cell % 8, expected(x), "x = {x}");
+        }
     }
 
     #[test]
