@@ -163,6 +163,8 @@ fn load_sources(args: &Args, dynamics: Dynamics) -> anyhow::Result<SourceSet> {
         "published" => SourceSet::published(dynamics),
         "generate" => {
             let g = Generation {
+                iterations: args.iterations,
+                trees: args.trees,
                 gp: GpOptions {
                     restarts: args.gp_restarts,
                     max_gp: args.max_gp,

@@ -453,6 +453,42 @@ mod tests {
     }
 
     #[test]
+    fn generation_follows_section_6_on_a_small_budget() {
+        let g = Generation {
+            batch: 4,
+            steps: 2,
+            episodes: 3,
+            iterations: 3,
+            trees: 3,
+            gp: GpOptions {
+                restarts: 0,
+                ..GpOptions::reference()
+            },
+            ..Generation::default()
+        };
+        let env = PuddleWorld::<f64>::source_1(Dynamics::Shared);
+        let mut rng = crate::puddle::stream(1, &[9]);
+        let s = generate_source(&env, &g, &mut rng).unwrap();
+        assert_eq!(s.episodes(), 3);
+        assert!(s.len() >= 3 && s.len() <= 150);
+        for i in 0..s.len() {
+            for p in [&s.reward[i], &s.next_state[0][i], &s.next_state[1][i]] {
+                assert!(p.mean.is_finite() && p.std >= 0.0);
+            }
+        }
+        // The posterior means track the data (the GP interpolates the rewards).
+        let err: f64 = s
+            .records
+            .iter()
+            .zip(&s.reward)
+            .map(|(r, p)| (r.reward - p.mean).abs())
+            .sum::<f64>()
+            / s.len() as f64;
+        assert!(err < 2.0, "mean |r − μ| = {err}");
+        assert_eq!(SourceDataset::from_csv(&s.to_csv()).unwrap(), s);
+    }
+
+    #[test]
     fn directories_round_trip() {
         let dir = std::env::temp_dir().join(format!("awfqi-sources-{}", std::process::id()));
         let set = SourceSet::published(Dynamics::PuddleBased).unwrap();
