@@ -179,6 +179,7 @@ fn gp_search<T: Real, const N: usize>(k: usize) -> Op {
 }
 
 fn score_realistic<T: Real>() -> Op {
+    // Leaked: the models borrow the GPs for the life of this one-shot process.
     let sources = Box::leak(Box::new(Sources::<T>::new()));
     let models: Vec<_> = sources
         .gps
@@ -237,6 +238,7 @@ fn alias_build<T: Real>() -> Op {
 
 fn alias_draw<T: Real>() -> Op {
     let weights = alias_weights::<T>();
+    // Leaked: the table borrows its storage for the life of this one-shot process.
     let storage = Box::leak(vec![AliasEntry::<T>::default(); weights.len()].into_boxed_slice());
     let table = AliasTable::build(weights.iter().copied(), storage).expect("table");
     let mut rng = ChaCha8Rng::seed_from_u64(3);

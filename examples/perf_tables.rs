@@ -529,14 +529,29 @@ fn main() {
             }
         }
     }
-    let blocks = [
-        ("conditions", conditions(&data)),
-        ("check", check(&data)),
-        ("gp", gp_table(&data)),
-        ("gp-instructions", gp_instructions_table(&data)),
-        ("other", other_table(&data) + "\n" + &draws_line(&data)),
-        ("experiments", experiments_table(&data)),
-    ];
+    // A block whose measurements are all missing (e.g. experiments skipped on a fresh
+    // clone) keeps what the file already says.
+    let (timed, counted) = (!data.times.is_empty(), !data.instructions.is_empty());
+    let blocks: Vec<(&str, String)> = [
+        ("conditions", !data.conditions.is_empty(), conditions(&data)),
+        ("check", !data.cpu.is_empty() && counted, check(&data)),
+        ("gp", timed, gp_table(&data)),
+        ("gp-instructions", counted, gp_instructions_table(&data)),
+        (
+            "other",
+            timed && counted,
+            other_table(&data) + "\n" + &draws_line(&data),
+        ),
+        (
+            "experiments",
+            !data.experiments.is_empty(),
+            experiments_table(&data),
+        ),
+    ]
+    .into_iter()
+    .filter(|(_, measured, _)| *measured)
+    .map(|(name, _, body)| (name, body))
+    .collect();
     if files.is_empty() {
         for (name, body) in &blocks {
             println!("<!-- {name} -->\n{body}");
