@@ -568,11 +568,11 @@ fn best_split<const D: usize>(
     rng: &mut ChaCha8Rng,
 ) -> Option<(usize, f64)> {
     let order = feature_order::<D>(rng);
-    // Candidate c splits on features[c] at thresholds[c]; unused slots keep τ = −∞, which
-    // sends everything right and so is never valid.
-    let mut features = [0usize; D];
+    // The threshold of each feature that is a candidate (drawn in the random trial order);
+    // a feature that is not keeps τ = −∞, which sends everything right, so its sums are
+    // computed but never valid.
     let mut thresholds = [f64::NEG_INFINITY; D];
-    let mut k = 0;
+    let mut is_candidate = [false; D];
     for &f in &order {
         let (lo, hi) = (st.lo[f], st.hi[f]);
         if hi <= lo + CONSTANT_FEATURE_TOLERANCE {
@@ -583,46 +583,44 @@ fn best_split<const D: usize>(
             // Rounding can reach hi; scikit-learn then uses lo.
             tau = lo;
         }
-        features[k] = f;
-        thresholds[k] = tau;
-        k += 1;
+        thresholds[f] = tau;
+        is_candidate[f] = true;
     }
-    if k == 0 {
+    if !is_candidate.contains(&true) {
         return None;
     }
-    // One pass accumulates both children of every candidate. Each side is summed on its own
-    // (never as total − other side), so a child of zero weight has exactly W = 0.
+    // One pass accumulates both children of every feature's candidate, indexed by feature
+    // (a fixed index per lane, so the compiler keeps the sums in vector registers). Each
+    // side is summed on its own (never as total − other side), so a child of zero weight
+    // has exactly W = 0; and W > 0 implies the child is non-empty, so no counts are needed.
     let mut wl = [0.0f64; D];
     let mut sl = [0.0f64; D];
     let mut wr = [0.0f64; D];
     let mut sr = [0.0f64; D];
-    let mut nl = [0usize; D];
     for r in records {
         let (w, wy) = (r.w.to_bits(), (r.w * r.y).to_bits());
-        for c in 0..D {
-            let left = r.x[features[c]] <= thresholds[c];
+        for d in 0..D {
+            let left = r.x[d] <= thresholds[d];
             // All-ones when left: masking the bits selects the value or +0 without a branch
             // (a multiplication by a 0/1 factor compiles to a branch here).
             let mask = 0u64.wrapping_sub(u64::from(left));
-            wl[c] += f64::from_bits(w & mask);
-            sl[c] += f64::from_bits(wy & mask);
-            wr[c] += f64::from_bits(w & !mask);
-            sr[c] += f64::from_bits(wy & !mask);
-            nl[c] += usize::from(left);
+            wl[d] += f64::from_bits(w & mask);
+            sl[d] += f64::from_bits(wy & mask);
+            wr[d] += f64::from_bits(w & !mask);
+            sr[d] += f64::from_bits(wy & !mask);
         }
     }
-    let n = records.len();
+    // The first valid candidate of highest score, in trial order.
     let mut best: Option<(usize, f64)> = None;
     let mut best_score = f64::NEG_INFINITY;
-    for c in 0..k {
-        let valid = nl[c] > 0 && nl[c] < n && wl[c] > 0.0 && wr[c] > 0.0;
-        if !valid {
+    for &f in &order {
+        if !is_candidate[f] || wl[f] <= 0.0 || wr[f] <= 0.0 {
             continue;
         }
-        let score = sl[c] * sl[c] / wl[c] + sr[c] * sr[c] / wr[c];
+        let score = sl[f] * sl[f] / wl[f] + sr[f] * sr[f] / wr[f];
         if score > best_score {
             best_score = score;
-            best = Some((features[c], thresholds[c]));
+            best = Some((f, thresholds[f]));
         }
     }
     best
