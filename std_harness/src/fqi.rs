@@ -306,7 +306,12 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
     let rewards = model_rewards.as_deref().unwrap_or(&data.rewards);
 
     // Iterations 2..N_it: only non-absorbing records need max_a′ Q(s′, a′).
-    let live: Vec<usize> = (0..n).filter(|&i| !data.absorbing[i]).collect();
+    // They are visited in a space-filling-curve order of their next states: neighbouring
+    // queries walk a tree along similar paths, so the lanes of a batch walk
+    // (`Forest::predict_into`) end at similar depths. Each query's value does not depend on
+    // the order.
+    let mut live: Vec<usize> = (0..n).filter(|&i| !data.absorbing[i]).collect();
+    live.sort_by_key(|&i| morton_key(&data.next_states[i]));
     let live_next: Vec<[f64; D]> = live.iter().map(|&i| data.next_states[i]).collect();
     let mut max_q = vec![0.0; live.len()];
     let mut scratch = vec![0.0; live.len()];
@@ -329,6 +334,23 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
         std::mem::swap(&mut q, &mut next);
     }
     Ok(FqiOutput { q, model_rewards })
+}
+
+/// A Z-order (Morton) key of the first two coordinates of `x`, each quantised to 16 bits
+/// over `[0, 10]` (the Puddle World's square; other values are clamped), for ordering
+/// queries by locality.
+fn morton_key<const D: usize>(x: &[f64; D]) -> u32 {
+    let quantise = |v: f64| ((v / 10.0).clamp(0.0, 1.0) * 65535.0) as u32;
+    let spread = |mut v: u32| {
+        v &= 0xffff;
+        v = (v | (v << 8)) & 0x00ff_00ff;
+        v = (v | (v << 4)) & 0x0f0f_0f0f;
+        v = (v | (v << 2)) & 0x3333_3333;
+        (v | (v << 1)) & 0x5555_5555
+    };
+    let a = x.first().map_or(0, |&v| quantise(v));
+    let b = x.get(1).map_or(0, |&v| quantise(v));
+    spread(a) | (spread(b) << 1)
 }
 
 #[cfg(test)]
