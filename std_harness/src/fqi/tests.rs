@@ -301,3 +301,19 @@ fn invalid_input_is_rejected() {
         })
     );
 }
+
+#[test]
+fn morton_key_interleaves_the_quantised_coordinates() {
+    // x is quantised to 16 bits on [0, 10] and takes the even bits, y the odd ones.
+    assert_eq!(morton_key(&[0.0, 0.0]), 0);
+    assert_eq!(morton_key(&[10.0, 0.0]), 0x5555_5555);
+    assert_eq!(morton_key(&[0.0, 10.0]), 0xAAAA_AAAA);
+    assert_eq!(morton_key(&[10.0, 10.0]), u32::MAX);
+    // Out-of-square values are clamped.
+    assert_eq!(morton_key(&[-3.0, 12.0]), 0xAAAA_AAAA);
+    // Quantised x = 1 (bit 0) and y = 1 (bit 1): 10/65535 is exactly one step.
+    let step = 10.0 / 65535.0;
+    assert_eq!(morton_key(&[step, 0.0]), 1);
+    assert_eq!(morton_key(&[0.0, step]), 2);
+    assert_eq!(morton_key(&[step, step]), 3);
+}
