@@ -1,4 +1,4 @@
-//! Turns measurements into the markdown tables of `docs/performance.md`.
+//! Turns measurements into the markdown tables of `README.md`.
 //!
 //! Reads criterion's results (`target/criterion/**/new/{benchmark,estimates}.json`), the
 //! callgrind counts written by `scripts/perf-tables` (`target/perf/callgrind.tsv`: operation,
@@ -8,7 +8,7 @@
 //! command line. Missing measurements show as `–`.
 //!
 //! ```text
-//! cargo run --release --example perf_tables -- docs/performance.md
+//! cargo run --release --example perf_tables -- README.md
 //! ```
 
 use std::collections::BTreeMap;
@@ -136,7 +136,7 @@ fn kernel_flops(d: f64) -> f64 {
 }
 
 /// The minimal flop counts of the GP operations (D = 3), the formulas stated in
-/// `docs/performance.md`.
+/// `README.md`.
 fn gp_flops(op: &str, n: f64) -> Option<f64> {
     let fk = kernel_flops(3.0);
     let fit = n * n * n / 3.0 + fk * n * (n - 1.0) / 2.0 + n * n;

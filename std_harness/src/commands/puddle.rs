@@ -70,7 +70,7 @@ pub struct Args {
     #[arg(long, default_value_t = 6)]
     pub steps: usize,
     /// Runs: a count N (runs 0..N) or a range A..B; results merge with those in --out.
-    #[arg(long, default_value = "3")]
+    #[arg(long, default_value = "10")]
     pub runs: RunRange,
     /// Algorithms to run.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = default_algorithms())]
