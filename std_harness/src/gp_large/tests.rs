@@ -576,7 +576,7 @@ fn memoised_fit_takes_the_same_path_with_fewer_factorisations() {
     let (lower, upper) = HyperparameterBox::SPEC.log_bounds();
     let (mut asked, mut spent) = (0, 0);
     for seed in 0..4 {
-        let (zs, ys) = data(80, 20 + seed);
+        let (zs, ys) = data(50, 20 + seed);
         let options = FitOptions::default();
         let (_, report) = LargeGp::fit(&zs, &ys, &options, &mut rng(seed)).unwrap();
         for run in &report.runs {
