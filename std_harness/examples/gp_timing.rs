@@ -79,6 +79,12 @@ fn main() {
                 .filter(|r| r.merged_into.is_none())
                 .map(|r| r.evaluations)
                 .sum();
+            let factorizations: usize = report
+                .runs
+                .iter()
+                .filter(|r| r.merged_into.is_none())
+                .map(|r| r.factorizations)
+                .sum();
             let grads: usize = report
                 .runs
                 .iter()
@@ -86,8 +92,8 @@ fn main() {
                 .map(|r| r.gradients)
                 .sum();
             println!(
-                "  {name}: fit {:.2} s, {evals} values + {grads} gradients on all data, \
-                 per start {:?}; LML {:.6}, {:?}",
+                "  {name}: fit {:.2} s, {evals} values ({factorizations} factorisations) + \
+                 {grads} gradients on all data, per start {:?}; LML {:.6}, {:?}",
                 t_fit,
                 report
                     .runs

@@ -459,3 +459,147 @@ fn reproduces_every_reference_source_gp() {
         }
     }
 }
+
+/// Distance in units in the last place between two non-negative finite doubles.
+fn ulps(a: f64, b: f64) -> u64 {
+    a.to_bits().abs_diff(b.to_bits())
+}
+
+#[test]
+fn fast_exp_is_within_one_ulp_of_libm() {
+    let check = |x: f64| {
+        let (fast, libm) = (exp_nonpositive(x), x.exp());
+        assert!(
+            ulps(fast, libm) <= 1,
+            "exp({x:e}): fast {fast:e} vs libm {libm:e} ({} ulp)",
+            ulps(fast, libm)
+        );
+    };
+    // Exact points and the smallest arguments.
+    assert_eq!(exp_nonpositive(0.0), 1.0);
+    assert_eq!(exp_nonpositive(-0.0), 1.0);
+    for x in [-1e-300, -1e-20, -1e-17, -1e-9, -f64::MIN_POSITIVE, -5e-324] {
+        check(x);
+    }
+    // A dense grid over the whole range of normal results, and random points in decades
+    // down to the smallest (the kernel's k·d² spans all of them).
+    let mut x = 0.0;
+    while x > -708.0 {
+        check(x);
+        x -= 1e-3;
+    }
+    let mut r = rng(11);
+    for decade in -20..3 {
+        for _ in 0..20_000 {
+            check(
+                -(10f64)
+                    .powf(decade as f64 + awfqi::rng::uniform_f64(&mut r))
+                    .min(708.0),
+            );
+        }
+    }
+    // Around multiples of ln 2 / 2, where the reduction switches k.
+    for m in 1..2000 {
+        let x0 = -(m as f64) * std::f64::consts::LN_2 / 2.0;
+        if x0 < -708.0 {
+            break;
+        }
+        for i in -3..=3 {
+            check(f64::from_bits((x0.to_bits() as i64 + i) as u64));
+        }
+    }
+}
+
+#[test]
+fn fast_exp_underflows_gradually_then_to_zero() {
+    // Subnormal results (x between −745.13 and −708.4) within one subnormal step of libm's.
+    let mut x = -708.0;
+    while x > -745.2 {
+        let (fast, libm) = (exp_nonpositive(x), x.exp());
+        assert!(ulps(fast, libm) <= 1, "exp({x}): {fast:e} vs {libm:e}");
+        x -= 1e-3;
+    }
+    assert_eq!(exp_nonpositive(-745.0), (-745.0f64).exp());
+    assert!(exp_nonpositive(-745.0) > 0.0);
+    for x in [
+        -745.2,
+        -746.0,
+        -800.0,
+        -1e10,
+        -1e300,
+        f64::MIN,
+        f64::NEG_INFINITY,
+    ] {
+        assert_eq!(exp_nonpositive(x), 0.0, "exp({x})");
+    }
+}
+
+#[test]
+fn kernel_column_matches_its_scalar_definition() {
+    // The dispatched (vector) column, over an odd length that leaves a remainder after the
+    // vector lanes, is bitwise the scalar function applied elementwise.
+    let mut r = rng(12);
+    let d2: Vec<f64> = (0..1003)
+        .map(|i| match i % 5 {
+            0 => 0.0,
+            1 => 1e4 * awfqi::rng::uniform_f64(&mut r),
+            _ => 3.0 * awfqi::rng::uniform_f64(&mut r),
+        })
+        .collect();
+    for (k, c) in [(-0.5, 1.0), (-3.7, 42.0), (-1e-6, 1e-5), (-1e3, 1e5)] {
+        let (mut e, mut out) = (vec![f64::NAN; d2.len()], vec![f64::NAN; d2.len()]);
+        kernel_column(k, c, &d2, &mut e, &mut out);
+        for ((&d, &ev), &o) in d2.iter().zip(&e).zip(&out) {
+            assert_eq!(ev.to_bits(), exp_nonpositive(k * d).to_bits());
+            assert_eq!(o.to_bits(), (c * exp_nonpositive(k * d)).to_bits());
+            assert!(ulps(ev, (k * d).exp()) <= 1);
+        }
+    }
+}
+
+/// The objective without the memo: every value is a factorisation.
+struct PlainNegativeLml<'e, 'a>(&'e mut LikelihoodEvaluator<'a, 3>);
+
+impl optimizer::Objective<3> for PlainNegativeLml<'_, '_> {
+    fn value(&mut self, x: &[f64; 3]) -> Option<f64> {
+        self.0.value(x).map(|v| -v)
+    }
+    fn gradient(&mut self) -> [f64; 3] {
+        self.0.gradient().map(|g| g.map(|v| -v)).unwrap()
+    }
+}
+
+#[test]
+fn memoised_fit_takes_the_same_path_with_fewer_factorisations() {
+    // Every optimisation of a fit is bitwise the one a memo-free objective gives from the same
+    // start (same end point, value, counts and stop), and repeated points are not refactorised.
+    let (lower, upper) = HyperparameterBox::SPEC.log_bounds();
+    let (mut asked, mut spent) = (0, 0);
+    for seed in 0..4 {
+        let (zs, ys) = data(50, 20 + seed);
+        let options = FitOptions::default();
+        let (_, report) = LargeGp::fit(&zs, &ys, &options, &mut rng(seed)).unwrap();
+        for run in &report.runs {
+            let mut eval = LikelihoodEvaluator::new(&zs, &ys, Par::Seq).unwrap();
+            let m = optimizer::minimize(
+                &mut PlainNegativeLml(&mut eval),
+                &run.start,
+                &lower,
+                &upper,
+                &options.optimizer,
+            );
+            assert_eq!(m.x, run.theta, "seed {seed}: {run:?}");
+            assert_eq!((-m.f).to_bits(), run.log_marginal_likelihood.to_bits());
+            assert_eq!(m.evaluations, run.evaluations);
+            assert_eq!(m.gradients, run.gradients);
+            assert_eq!(m.stop, run.stop);
+            assert!(run.factorizations <= run.evaluations + run.gradients);
+            asked += run.evaluations;
+            spent += run.factorizations;
+        }
+    }
+    assert!(
+        spent < asked,
+        "no repeated point: the memo was not exercised"
+    );
+}
