@@ -6,14 +6,15 @@
 //!
 //! `cargo run --release -p awfqi-harness --example gp_eval_count [-- N1 N2 ...]` (default 500 1000)
 
-use awfqi::env::{Dynamics, PUDDLE_HORIZON, PuddleWorld};
-use awfqi::policy::UniformPolicy;
 use awfqi_harness::gp_large::optimizer::{self, Objective};
 use awfqi_harness::gp_large::{
     FitOptions, HyperparameterBox, LargeGp, LikelihoodEvaluator, Parallelism,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
+
+#[path = "common/mod.rs"]
+mod common;
 
 struct Logged<'e, 'a> {
     eval: &'e mut LikelihoodEvaluator<'a, 3>,
@@ -40,32 +41,9 @@ impl Objective<3> for Logged<'_, '_> {
 }
 
 fn main() {
-    let sizes: Vec<usize> = {
-        let args: Vec<usize> = std::env::args()
-            .skip(1)
-            .map(|s| s.parse().unwrap())
-            .collect();
-        if args.is_empty() {
-            vec![500, 1000]
-        } else {
-            args
-        }
-    };
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let target = PuddleWorld::<f64>::target(Dynamics::Shared);
-    let mut uniform = UniformPolicy::new(4).unwrap();
+    let sizes = common::sizes_from_args(&[500, 1000]);
     let max = *sizes.iter().max().unwrap();
-    let (mut zs, mut ys) = (Vec::new(), Vec::new());
-    while zs.len() < max {
-        target
-            .run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, |r| {
-                let t = r.transition;
-                zs.push([t.state[0], t.state[1], t.action as f64]);
-                ys.push(t.reward);
-                Ok(())
-            })
-            .unwrap();
-    }
+    let (zs, ys) = common::uniform_reward_data(max);
     let options = FitOptions::default();
     let (lower, upper) = HyperparameterBox::SPEC.log_bounds();
     for n in sizes {

@@ -10,18 +10,11 @@ use awfqi_harness::gp_large::{LikelihoodEvaluator, Parallelism};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
+#[path = "common/mod.rs"]
+mod common;
+
 fn main() {
-    let sizes: Vec<usize> = {
-        let args: Vec<usize> = std::env::args()
-            .skip(1)
-            .map(|s| s.parse().unwrap())
-            .collect();
-        if args.is_empty() {
-            vec![500, 1000, 1700]
-        } else {
-            args
-        }
-    };
+    let sizes = common::sizes_from_args(&[500, 1000, 1700]);
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let mut u = || awfqi::rng::uniform_f64(&mut rng);
     for n in sizes {

@@ -6,39 +6,17 @@
 
 use std::time::Instant;
 
-use awfqi::env::{Dynamics, PUDDLE_HORIZON, PuddleWorld};
-use awfqi::policy::UniformPolicy;
 use awfqi_harness::gp_large::{FitOptions, FitStrategy, LargeGp, LikelihoodEvaluator, Parallelism};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
+#[path = "common/mod.rs"]
+mod common;
+
 fn main() {
-    let sizes: Vec<usize> = {
-        let args: Vec<usize> = std::env::args()
-            .skip(1)
-            .map(|s| s.parse().unwrap())
-            .collect();
-        if args.is_empty() {
-            vec![500, 1700]
-        } else {
-            args
-        }
-    };
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let target = PuddleWorld::<f64>::target(Dynamics::Shared);
-    let mut uniform = UniformPolicy::new(4).unwrap();
+    let sizes = common::sizes_from_args(&[500, 1700]);
     let max = *sizes.iter().max().unwrap();
-    let (mut zs, mut ys) = (Vec::new(), Vec::new());
-    while zs.len() < max {
-        target
-            .run_episode_with(&mut uniform, PUDDLE_HORIZON, &mut rng, |r| {
-                let t = r.transition;
-                zs.push([t.state[0], t.state[1], t.action as f64]);
-                ys.push(t.reward);
-                Ok(())
-            })
-            .unwrap();
-    }
+    let (zs, ys) = common::uniform_reward_data(max);
     for n in sizes {
         let (z, y) = (&zs[..n], &ys[..n]);
         let mut eval = LikelihoodEvaluator::new(z, y, Parallelism::Seq).unwrap();
