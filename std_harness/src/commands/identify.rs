@@ -8,7 +8,7 @@
 //! policy of the most probable candidate, as the thesis) or belief-weighted (greedy in
 //! Σ_θ b_θ Q*_θ) — is evaluated exactly in the true MDP from (0, 0).
 //!
-//! Seeding (spec §1's [CHOICE]): every random stream is a ChaCha8 generator seeded from
+//! Seeding (spec §1's \[CHOICE\]): every random stream is a ChaCha8 generator seeded from
 //! a hash of (`--seed`, purpose, run index, criterion, budget). No stream depends on
 //! thread scheduling, on the other criteria or budgets requested, or on `--runs`
 //! addressing, so `--runs 0..50` and `--runs 50..100` reproduce exactly the per-run

@@ -79,7 +79,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "shared")]
     pub dynamics: DynamicsArg,
     /// Source data: `published` (the reference runs' data, embedded), `generate` (fresh, as
-    /// spec §6; written to <out>/sources), or a directory with
+    /// spec §6; written to `<out>/sources`), or a directory with
     /// `{shared|puddle}_dynamics_source_{1,2,3}.csv` in the published layout.
     #[arg(long, default_value = "published")]
     pub sources: String,

@@ -6,7 +6,7 @@
 //! - **total reward**: the sum of the per-step means (the area under the curve, one unit
 //!   per step);
 //! - **transfer ratio**: `(total − total_FQI) / |total_FQI|`, positive when the algorithm
-//!   collects more reward over the curve than FQI ([CHOICE]: the returns are negative, so
+//!   collects more reward over the curve than FQI (\[CHOICE\]: the returns are negative, so
 //!   the textbook ratio of areas would invert its meaning; this relative difference keeps
 //!   "larger is better");
 //! - **time to threshold**: the first `n_episodes` at which the mean reaches the threshold

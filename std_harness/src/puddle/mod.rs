@@ -15,7 +15,7 @@
 //!   transfer ratio, time to threshold);
 //! - [`figures`]: learning curves and sample scatters.
 //!
-//! **Seeding** (spec §1's [CHOICE]): every random stream is a ChaCha8 generator seeded from
+//! **Seeding** (spec §1's \[CHOICE\]): every random stream is a ChaCha8 generator seeded from
 //! a hash of the experiment seed and a purpose: (seed, RUN, algorithm, run index) for a run,
 //! (seed, SCORE_TABLE) for the realistic tables, (seed, SOURCE_GENERATION, source) for
 //! generated source data. No stream depends on thread scheduling or on which other

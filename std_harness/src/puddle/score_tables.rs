@@ -3,7 +3,7 @@
 //! of GPs fitted on each source's data), the population variance over the sources per row,
 //! and drawing rows with probability proportional to `V_r`.
 //!
-//! A table is built once per experiment and shared by every run (§11.2 [CHOICE]).
+//! A table is built once per experiment and shared by every run (§11.2 \[CHOICE\]).
 
 use awfqi::alias::{AliasEntry, AliasTable};
 use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
@@ -150,7 +150,7 @@ impl ScoreTableData {
         self.rows.is_empty()
     }
 
-    /// The sampling weights of §11.3: `V_r`, or all 1 when it sums to 0 [CHOICE].
+    /// The sampling weights of §11.3: `V_r`, or all 1 when it sums to 0 \[CHOICE\].
     pub fn sampling_weights(&self) -> Vec<f64> {
         let w: Vec<f64> = self.values.iter().map(|v| v.reward).collect();
         if w.iter().all(|&x| x <= 0.0) {

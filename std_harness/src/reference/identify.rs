@@ -104,7 +104,7 @@ pub fn posterior(candidates: &[TabularMdp], prior: &[f64], data: &[Observation])
     unnormalised.iter().map(|u| u / total).collect()
 }
 
-/// Var_b[x] = Σ b x² − (Σ b x)² with b normalised, computed two-pass (centred).
+/// `Var_b[x]` = Σ b x² − (Σ b x)² with b normalised, computed two-pass (centred).
 pub fn belief_variance(belief: &[f64], x: &[f64]) -> f64 {
     let total: f64 = belief.iter().sum();
     let mean: f64 = belief.iter().zip(x).map(|(b, x)| b * x).sum::<f64>() / total;
@@ -258,7 +258,7 @@ pub fn mutual_information_score_exact(candidates: &[TabularMdp], belief: &[f64])
 }
 
 /// Value iteration as spec §10.2 states it (synchronous sweeps from V ≡ 0, stop when
-/// ‖V_{k+1} − V_k‖∞ < `tolerance` or after `max_sweeps`). Returns (V, Q[s][a]).
+/// ‖V_{k+1} − V_k‖∞ < `tolerance` or after `max_sweeps`). Returns `(V, Q[s][a])`.
 pub fn value_iteration(
     mdp: &TabularMdp,
     gamma: f64,
