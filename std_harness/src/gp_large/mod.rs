@@ -368,6 +368,24 @@ fn exp_nonpositive(x: f64) -> f64 {
     y * pow2(k1) * pow2(k2)
 }
 
+/// Calls the AVX-512 build of a function when the CPU has AVX-512F, else its AVX2 build
+/// when it has AVX2, else the portable one (on x86-64; elsewhere always the portable one).
+macro_rules! widest_vectors {
+    ($avx512:ident, $avx2:ident, $generic:ident, ($($arg:expr),*)) => {{
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            return unsafe { $avx512($($arg),*) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { $avx2($($arg),*) };
+        }
+        $generic($($arg),*)
+    }};
+}
+
 /// One column of the kernel matrix: `e = exp(k·d²)` ([`exp_nonpositive`]) and `out = c·e`.
 #[inline(always)]
 fn kernel_column_generic(k: f64, c: f64, d2: &[f64], e: &mut [f64], out: &mut [f64]) {
@@ -393,17 +411,12 @@ fn kernel_column_avx512(k: f64, c: f64, d2: &[f64], e: &mut [f64], out: &mut [f6
 
 /// [`kernel_column_generic`] with the widest vectors the CPU has (bitwise the same results).
 fn kernel_column(k: f64, c: f64, d2: &[f64], e: &mut [f64], out: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU supports AVX-512F (checked just above).
-        return unsafe { kernel_column_avx512(k, c, d2, e, out) };
-    }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above).
-        return unsafe { kernel_column_avx2(k, c, d2, e, out) };
-    }
-    kernel_column_generic(k, c, d2, e, out);
+    widest_vectors!(
+        kernel_column_avx512,
+        kernel_column_avx2,
+        kernel_column_generic,
+        (k, c, d2, e, out)
+    )
 }
 
 /// One column's share of the gradient sums: `Σ tᵢ` and `Σ tᵢ d²ᵢ` with
@@ -466,17 +479,12 @@ fn gradient_column_avx2(kinv: &[f64], alpha: &[f64], aj: f64, e: &[f64], d2: &[f
 
 /// [`gradient_column_generic`] with the widest vectors the CPU has (bitwise the same results).
 fn gradient_column(kinv: &[f64], alpha: &[f64], aj: f64, e: &[f64], d2: &[f64]) -> (f64, f64) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU supports AVX-512F (checked just above).
-        return unsafe { gradient_column_avx512(kinv, alpha, aj, e, d2) };
-    }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above).
-        return unsafe { gradient_column_avx2(kinv, alpha, aj, e, d2) };
-    }
-    gradient_column_generic(kinv, alpha, aj, e, d2)
+    widest_vectors!(
+        gradient_column_avx512,
+        gradient_column_avx2,
+        gradient_column_generic,
+        (kinv, alpha, aj, e, d2)
+    )
 }
 
 /// Evaluates the log marginal likelihood and its gradient at many `θ` for fixed data,
