@@ -2,7 +2,8 @@
 //! reference configuration, 6 steps × 10 episodes, 60 iterations, 50 trees, evaluation
 //! included, in at most 5 s).
 //!
-//! `cargo run --release -p awfqi-harness --example fqi_timing [-- SEED [SOURCES_DIR [run-only]]]`
+//! `cargo run --release -p awfqi-harness --example fqi_timing [-- SEED [SOURCES_DIR|- [run-only]]]`
+//! (without a directory, or with `-`, the published sources embedded in the harness)
 //!
 //! With `run-only` only part (2) runs, so `perf stat` or `time` report its CPU time alone
 //! (wall time on a shared machine includes waiting for the CPU).
@@ -18,35 +19,25 @@ use std::time::Instant;
 use awfqi::env::{Dynamics, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
 use awfqi_harness::fqi::{Dataset, FqiOptions, fqi};
+use awfqi_harness::puddle::sources::SourceSet;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
+/// The shared-dynamics source records: the published ones (embedded in the harness), or
+/// those of `dir` when one is given (empty or `-`: published).
 fn read_sources(dir: &str) -> Dataset<2> {
-    let mut data = Dataset::new();
-    for k in 1..=3 {
-        let path = format!("{dir}/shared_dynamics_source_{k}.csv");
-        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        for line in text.lines().skip(1) {
-            let v: Vec<f64> = line.split(',').map(|f| f.parse().unwrap()).collect();
-            data.states.push([v[1], v[2]]);
-            data.actions.push(v[3] as usize);
-            data.rewards.push(v[4]);
-            data.next_states.push([v[5], v[6]]);
-            data.absorbing.push(v[7] != 0.0);
-        }
-    }
-    data
+    let set = if dir.is_empty() || dir == "-" {
+        SourceSet::published(Dynamics::Shared)
+    } else {
+        SourceSet::read_dir(std::path::Path::new(dir), Dynamics::Shared)
+    };
+    set.unwrap_or_else(|e| panic!("{dir}: {e:#}")).union()
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let seed: u64 = args.get(1).map_or(0, |s| s.parse().unwrap());
-    let sources = args.get(2).cloned().unwrap_or_else(|| {
-        format!(
-            "{}/../../shared/data/puddle-sources",
-            env!("CARGO_MANIFEST_DIR")
-        )
-    });
+    let sources = args.get(2).cloned().unwrap_or_default();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let target = PuddleWorld::<f64>::target(Dynamics::Shared);
 

@@ -7,4 +7,5 @@ pub mod gp_large;
 pub mod plot;
 pub mod puddle;
 pub mod reference;
+pub mod seeding;
 pub mod trees;

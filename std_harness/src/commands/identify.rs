@@ -37,12 +37,11 @@ use awfqi::identify::{
 use awfqi::planning::{StoppingRule, evaluate_policy, greedy_policy, value_iteration};
 use awfqi::rng;
 use indicatif::{ProgressBar, ProgressStyle};
-use rand_chacha::ChaCha8Rng;
-use rand_core::SeedableRng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::plot::{Figure, LegendPosition, Panel, Series, SeriesStyle, XScale};
+use crate::seeding::stream;
 
 /// Number of candidate MDPs of the thesis study.
 const K: usize = 4;
@@ -312,21 +311,6 @@ pub struct Study {
     pub rows: Vec<Row>,
     /// Per-run records (re-plot or merge from these).
     pub records: Vec<RunRecord>,
-}
-
-/// A seeded stream: ChaCha8 from a SplitMix64 hash of the seed and the parts.
-fn stream(seed: u64, parts: &[u64]) -> ChaCha8Rng {
-    fn mix(mut z: u64) -> u64 {
-        z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    let mut h = mix(seed);
-    for &p in parts {
-        h = mix(h ^ mix(p));
-    }
-    ChaCha8Rng::seed_from_u64(h)
 }
 
 /// What every run shares: candidates, optimal Q tables, MAP returns, fixed scores.

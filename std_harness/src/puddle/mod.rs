@@ -31,9 +31,6 @@ pub mod results;
 pub mod score_tables;
 pub mod sources;
 
-use rand_chacha::ChaCha8Rng;
-use rand_core::SeedableRng;
-
 /// Stream purpose: one run of one algorithm.
 pub const RUN: u64 = 1;
 /// Stream purpose: the realistic score tables' source-GP fits.
@@ -41,17 +38,4 @@ pub const SCORE_TABLE: u64 = 2;
 /// Stream purpose: generating a source dataset.
 pub const SOURCE_GENERATION: u64 = 3;
 
-/// A seeded stream: ChaCha8 from a SplitMix64 hash of the seed and the parts.
-pub fn stream(seed: u64, parts: &[u64]) -> ChaCha8Rng {
-    fn mix(mut z: u64) -> u64 {
-        z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    let mut h = mix(seed);
-    for &p in parts {
-        h = mix(h ^ mix(p));
-    }
-    ChaCha8Rng::seed_from_u64(h)
-}
+pub use crate::seeding::stream;

@@ -39,24 +39,37 @@ impl Mode {
 /// Grid spacing of the thesis (`dx = dy = 0.1`).
 pub const GRID_SPACING: f64 = 0.1;
 
+/// Each source's records, as the core's row sets borrow them.
+fn source_slices(sources: &SourceSet) -> Vec<&[Record]> {
+    sources
+        .sources
+        .iter()
+        .map(|s| s.records.as_slice())
+        .collect()
+}
+
+/// The core's row set of `mode` over the sources' records `slices` (§11.1).
+fn row_set<'a>(
+    mode: Mode,
+    slices: &'a [&'a [Record]],
+    spacing: f64,
+) -> anyhow::Result<RowSet<'a, f64>> {
+    let grid = PointGrid::puddle(spacing)?;
+    Ok(match mode {
+        Mode::Source => RowSet::source_data(slices)?,
+        Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
+        Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, slices)?,
+    })
+}
+
 /// The rows of `mode` as `(state, action)` pairs, in the order of §11.1.
 pub fn rows(
     mode: Mode,
     sources: &SourceSet,
     spacing: f64,
 ) -> anyhow::Result<Vec<([f64; 2], usize)>> {
-    let slices: Vec<&[Record]> = sources
-        .sources
-        .iter()
-        .map(|s| s.records.as_slice())
-        .collect();
-    let grid = PointGrid::puddle(spacing)?;
-    let set = match mode {
-        Mode::Source => RowSet::source_data(&slices)?,
-        Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
-        Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, &slices)?,
-    };
-    Ok(set.iter().collect())
+    let slices = source_slices(sources);
+    Ok(row_set(mode, &slices, spacing)?.iter().collect())
 }
 
 /// A computed table: rows and their scores.
@@ -77,17 +90,8 @@ impl ScoreTableData {
     /// the core's score computation.
     pub fn oracle(mode: Mode, sources: &SourceSet, spacing: f64) -> anyhow::Result<Self> {
         let worlds = PuddleWorld::<f64>::sources(sources.dynamics);
-        let slices: Vec<&[Record]> = sources
-            .sources
-            .iter()
-            .map(|s| s.records.as_slice())
-            .collect();
-        let grid = PointGrid::puddle(spacing)?;
-        let set = match mode {
-            Mode::Source => RowSet::source_data(&slices)?,
-            Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
-            Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, &slices)?,
-        };
+        let slices = source_slices(sources);
+        let set = row_set(mode, &slices, spacing)?;
         let mut values = vec![Scores::default(); set.len()];
         ScoreTable::compute(set, &worlds, &mut values)?;
         Ok(Self {
