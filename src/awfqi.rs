@@ -202,7 +202,7 @@ pub struct Awfqi<'a, T, G, const N: usize> {
     len: usize,
     weights: &'a mut [T],
     gp: &'a mut Gp<T, N, INPUT_DIM>,
-    fqi: TabularFqi<'a, T>,
+    fqi: TabularFqi<'a, T, 2>,
     steps: usize,
 }
 
@@ -233,7 +233,7 @@ where
         samples: &'a mut [Transition<[T; 2], T>],
         weights: &'a mut [T],
         gp: &'a mut Gp<T, N, INPUT_DIM>,
-        mut fqi: TabularFqi<'a, T>,
+        mut fqi: TabularFqi<'a, T, 2>,
     ) -> Result<Self> {
         config.validate()?;
         if fqi.actions() != target.num_actions() {
@@ -298,7 +298,7 @@ where
     }
 
     /// The Q-function of the last step (0 before the first).
-    pub fn q(&self) -> &TabularFqi<'a, T> {
+    pub fn q(&self) -> &TabularFqi<'a, T, 2> {
         &self.fqi
     }
 

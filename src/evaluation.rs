@@ -78,7 +78,7 @@ where
 /// Errors: those of [`evaluate`].
 pub fn evaluate_greedy<T: Real, R: Rng + ?Sized>(
     env: &PuddleWorld<T>,
-    q: &TabularFqi<'_, T>,
+    q: &TabularFqi<'_, T, 2>,
     rng: &mut R,
 ) -> Result<Evaluation<T>> {
     let mut greedy = |s: &[T; 2]| q.greedy_action(*s);

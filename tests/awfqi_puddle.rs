@@ -58,8 +58,8 @@ const TEST_STEPS: usize = 3;
 const BUDGET: usize = 50;
 const HORIZON: usize = 50;
 
-fn grid() -> CellGrid<T> {
-    CellGrid::square(0.0, 10.0, CELLS).unwrap()
+fn grid() -> CellGrid<T, 2> {
+    CellGrid::cube(0.0, 10.0, CELLS).unwrap()
 }
 
 fn entries() -> Vec<FqiEntry<T>> {
@@ -85,7 +85,7 @@ fn plain_fqi_on_episodes(
     steps: usize,
     batch: usize,
     rng: &mut ChaCha8Rng,
-    mut after_step: impl FnMut(usize, &TabularFqi<'_, T>, &[Record]),
+    mut after_step: impl FnMut(usize, &TabularFqi<'_, T, 2>, &[Record]),
 ) -> Vec<Record> {
     let mut storage = entries();
     let mut fqi = TabularFqi::new(grid(), PUDDLE_ACTIONS, &mut storage).unwrap();
@@ -212,7 +212,7 @@ impl Setup {
         scores: &[Scores<T>],
         steps: usize,
         seed: u64,
-        mut after_step: impl FnMut(usize, &TabularFqi<'_, T>, &[Record]),
+        mut after_step: impl FnMut(usize, &TabularFqi<'_, T, 2>, &[Record]),
     ) {
         let table = ScoreTable::from_parts(self.rows, scores).unwrap();
         let mut alias = vec![AliasEntry::default(); table.len()];
@@ -265,7 +265,7 @@ fn uniform_return(n: usize, seed: u64) -> T {
         .mean_return
 }
 
-fn evaluate_q(q: &TabularFqi<'_, T>, seed: u64) -> Evaluation<T> {
+fn evaluate_q(q: &TabularFqi<'_, T, 2>, seed: u64) -> Evaluation<T> {
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
     evaluate_greedy(&target, q, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap()
 }

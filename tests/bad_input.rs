@@ -837,7 +837,7 @@ fn fqi_calls<T: Real>() {
         inv("cells")
     );
     assert!(matches!(
-        err(CellGrid::square(t::<T>(0.0), t(1.0), usize::MAX)),
+        err(CellGrid::<T, 2>::cube(t::<T>(0.0), t(1.0), usize::MAX)),
         Error::CapacityExceeded { .. }
     ));
     for d in [-0.01, 1.01] {
@@ -855,7 +855,7 @@ fn fqi_calls<T: Real>() {
         inv("min_weight")
     );
 
-    let grid = CellGrid::square(t::<T>(0.0), t(10.0), 3).unwrap();
+    let grid = CellGrid::cube(t::<T>(0.0), t(10.0), 3).unwrap();
     let mut storage = vec![FqiEntry::<T>::EMPTY; 36];
     assert_eq!(err(TabularFqi::new(grid, 0, &mut storage)), inv("actions"));
     assert_eq!(
@@ -1102,7 +1102,7 @@ fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
         &mut scores,
     )
     .unwrap();
-    let grid = CellGrid::square(0.0, 10.0, 3).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 3).unwrap();
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
     let blank = record::<T>(0);
     let mut gp = Gp::<T, 8, 3>::empty();

@@ -67,7 +67,7 @@ fn fqi_refuses_rewards_whose_values_would_overflow() {
     };
     let samples: Vec<_> = (0..12).map(step).collect();
     let weights = [1e30; 12];
-    let grid = CellGrid::square(0.0, 10.0, 5).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 5).unwrap();
     let mut storage = vec![FqiEntry::<f64>::EMPTY; 100];
     let mut fqi = TabularFqi::new(grid, 4, &mut storage).unwrap();
     let config = FqiConfig::new(1.0, 11, EmptyCells::Nearest).unwrap();

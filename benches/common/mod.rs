@@ -221,7 +221,7 @@ impl<T: Real> FqiCase<T> {
     /// A weighted FQI fit with `iterations` iterations (1 = the reward model only; each
     /// further iteration is one sweep over the samples and the table).
     pub fn fit(&mut self, iterations: usize) -> Result<T> {
-        let grid = CellGrid::square(T::ZERO, T::from_f64(10.0), FQI_CELLS)?;
+        let grid = CellGrid::cube(T::ZERO, T::from_f64(10.0), FQI_CELLS)?;
         let mut fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut self.storage)?;
         let config = FqiConfig::new(
             T::from_f64(0.99),
@@ -448,7 +448,7 @@ impl<T: Real> AwfqiCase<T> {
             .map(|(r, p)| SourceData::new(r, p).expect("source data"))
             .collect();
         let data: &'static [SourceData<'static, T>] = data.leak();
-        let grid = CellGrid::square(T::ZERO, T::from_f64(10.0), AWFQI_CELLS).expect("grid");
+        let grid = CellGrid::cube(T::ZERO, T::from_f64(10.0), AWFQI_CELLS).expect("grid");
         let fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut case.fqi).expect("fqi");
         Awfqi::new(
             AwfqiConfig::thesis(AWFQI_BUDGET),

@@ -35,7 +35,7 @@ fn run<T: Real>(b: &mut Bytes) {
             }
         }
     } else {
-        CellGrid::square(T::ZERO, T::from_f64(10.0), 1 + b.index(6)).expect("a valid grid")
+        CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(6)).expect("a valid grid")
     };
     let actions = b.index(5);
     let mut storage = [FqiEntry::<T>::EMPTY; 6 * 6 * 4];
@@ -103,7 +103,7 @@ fn run<T: Real>(b: &mut Bytes) {
         transitions.push(weights(b));
         samples.push(set);
     }
-    let sets: Vec<SampleSet<'_, T>> = samples
+    let sets: Vec<SampleSet<'_, T, 2>> = samples
         .iter()
         .zip(&rewards)
         .zip(&transitions)

@@ -110,7 +110,7 @@ fn a_step_queries_weighs_and_fits_as_specified() {
     let n_source = fx.source_records();
     let mut weights = vec![0.0; n_source];
     let mut gp = Gp::<f64, 16, 3>::empty();
-    let grid = CellGrid::square(0.0, 10.0, 11).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 11).unwrap();
     let mut entries = vec![FqiEntry::default(); 11 * 11 * 4];
     let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
     let target = PuddleWorld::target(Dynamics::Shared);
@@ -233,7 +233,7 @@ fn same_seed_same_run() {
         let mut samples = vec![blank(); 10];
         let mut weights = vec![0.0; fx.source_records()];
         let mut gp = Gp::<f64, 8, 3>::empty();
-        let grid = CellGrid::square(0.0, 10.0, 5).unwrap();
+        let grid = CellGrid::cube(0.0, 10.0, 5).unwrap();
         let mut entries = vec![FqiEntry::default(); 100];
         let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
         let mut kernel = Awfqi::new(
@@ -268,7 +268,7 @@ fn construction_checks_storage_and_configuration() {
     let table = ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
     let mut alias = vec![AliasEntry::default(); table.len()];
     let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
-    let grid = CellGrid::square(0.0, 10.0, 3).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 3).unwrap();
     let target = PuddleWorld::target(Dynamics::Shared);
     let n_source = fx.source_records();
     let mut samples = vec![blank(); 10];

@@ -186,7 +186,7 @@ pub fn awfqi_puddle<
     });
     let [a, b, c] = data;
     let data = [a?, b?, c?];
-    let table = TabularFqi::new(CellGrid::square(0.0, 10.0, run.cells)?, PUDDLE_ACTIONS, fqi)?;
+    let table = TabularFqi::new(CellGrid::cube(0.0, 10.0, run.cells)?, PUDDLE_ACTIONS, fqi)?;
     let target = PuddleWorld::target(Dynamics::Shared);
     let mut kernel = Awfqi::new(
         config,

@@ -188,7 +188,7 @@ pub fn run(
     let source_records: usize = setup.records.iter().map(Vec::len).sum();
     let mut weights = vec![0.0; source_records];
     let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
-    let grid = CellGrid::square(0.0, 10.0, CELLS)?;
+    let grid = CellGrid::cube(0.0, 10.0, CELLS)?;
     let mut storage = vec![FqiEntry::default(); CELLS * CELLS * PUDDLE_ACTIONS];
     let fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut storage)?;
     let config = AwfqiConfig::thesis(budget);

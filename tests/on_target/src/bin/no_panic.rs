@@ -408,7 +408,7 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
         [num(10.0), num(10.0)],
         [index(3), index(3)],
     )
-    .or_else(|_| CellGrid::square(num::<T>(0.0), num(10.0), index(3)));
+    .or_else(|_| CellGrid::cube(num::<T>(0.0), num(10.0), index(3)));
     if let Ok(grid) = grid {
         keep((
             grid.cells(),
@@ -422,7 +422,7 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
             grid.coordinates(index(4)),
             grid.center(index(4)),
         ));
-        keep(TabularFqi::<T>::required_entries(&grid, index(4)));
+        keep(TabularFqi::<T, 2>::required_entries(&grid, index(4)));
         let mut storage = [FqiEntry::<T>::EMPTY; 36];
         if let Ok(mut fqi) = TabularFqi::new(grid, index(4), &mut storage) {
             let empty = match index(1) {
@@ -559,7 +559,7 @@ fn kernel<T: Real>(
     let mut weights = [T::ZERO; 12];
     let mut gp = Gp::<T, 8, 3>::empty();
     let mut storage = [FqiEntry::<T>::EMPTY; 36];
-    let Ok(grid) = CellGrid::square(num::<T>(0.0), num(10.0), index(3)) else {
+    let Ok(grid) = CellGrid::cube(num::<T>(0.0), num(10.0), index(3)) else {
         return;
     };
     let Ok(fqi) = TabularFqi::new(grid, 4, &mut storage) else {
