@@ -111,7 +111,10 @@ impl RecordGp {
         rng: &mut R,
     ) -> anyhow::Result<Self> {
         let inputs: Vec<[f64; 3]> = records.iter().map(input).collect();
-        let targets: Vec<f64> = records.iter().map(|r| output.of(r)).collect();
+        let targets = records
+            .iter()
+            .map(|r| output.of(r))
+            .collect::<awfqi::Result<Vec<f64>>>()?;
         let (gp, _) = LargeGp::fit(&inputs, &targets, &options.fit_options(), rng)?;
         Ok(Self { gp })
     }
@@ -179,8 +182,8 @@ impl SourceGps {
         rng: &mut R,
     ) -> anyhow::Result<Self> {
         let reward = RecordGp::fit(records, Output::Reward, options, rng)?;
-        let next_x = RecordGp::fit(records, Output::NextX, options, rng)?;
-        let next_y = RecordGp::fit(records, Output::NextY, options, rng)?;
+        let next_x = RecordGp::fit(records, Output::NextState(0), options, rng)?;
+        let next_y = RecordGp::fit(records, Output::NextState(1), options, rng)?;
         Ok(Self {
             gps: [reward, next_x, next_y],
         })

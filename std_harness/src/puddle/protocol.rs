@@ -8,8 +8,8 @@
 
 use std::time::Instant;
 
-use awfqi::env::{Dynamics, PUDDLE_HORIZON, PuddleWorld};
-use awfqi::evaluation::{EVALUATION_ROLLOUTS, evaluate};
+use awfqi::env::{Dynamics, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON, PuddleWorld};
+use awfqi::evaluation::{EvaluationProtocol, evaluate};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -44,7 +44,7 @@ impl Protocol {
             steps,
             episodes_per_step,
             epsilon: 0.3,
-            rollouts: EVALUATION_ROLLOUTS,
+            rollouts: PUDDLE_EVALUATION_ROLLOUTS,
             iterations: 60,
             trees: 50,
         }
@@ -204,7 +204,11 @@ pub fn evaluate_step(
     rng: &mut ChaCha8Rng,
 ) -> anyhow::Result<StepRecord> {
     let mut policy = |s: &[f64; 2]| Ok(greedy(s));
-    let eval = evaluate(target, &mut policy, protocol.rollouts, rng)?;
+    let rollouts = EvaluationProtocol {
+        rollouts: protocol.rollouts,
+        ..target.evaluation_protocol()
+    };
+    let eval = evaluate(target, &mut policy, &rollouts, rng)?;
     Ok(StepRecord {
         step: k,
         n_episodes: k * protocol.episodes_per_step,
@@ -212,7 +216,7 @@ pub fn evaluate_step(
         perf_disc_greedy_mean: eval.mean_return,
         perf_disc_greedy_std: eval.standard_error,
         perf_disc_greedy_steps: eval.mean_steps,
-        perf_disc_greedy_goals: eval.reached_goal,
+        perf_disc_greedy_goals: eval.absorbed,
         seconds: start.elapsed().as_secs_f64(),
         diagnostics,
     })

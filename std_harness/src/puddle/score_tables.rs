@@ -7,7 +7,7 @@
 
 use awfqi::alias::{AliasEntry, AliasTable};
 use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::score::{PointGrid, RowSet, ScoreTable, Scores};
+use awfqi::score::{RowSet, ScoreTable, Scores};
 use rand_chacha::ChaCha8Rng;
 
 use super::gp::{GpOptions, SourceGps};
@@ -53,8 +53,8 @@ fn row_set<'a>(
     mode: Mode,
     slices: &'a [&'a [Record]],
     spacing: f64,
-) -> anyhow::Result<RowSet<'a, f64>> {
-    let grid = PointGrid::puddle(spacing)?;
+) -> anyhow::Result<RowSet<'a, f64, 2>> {
+    let grid = PuddleWorld::score_grid(spacing)?;
     Ok(match mode {
         Mode::Source => RowSet::source_data(slices)?,
         Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
@@ -82,7 +82,7 @@ pub struct ScoreTableData {
     /// The rows.
     pub rows: Vec<([f64; 2], usize)>,
     /// Their scores `(V_r, V_x, V_y)`.
-    pub values: Vec<Scores<f64>>,
+    pub values: Vec<Scores<f64, 2>>,
 }
 
 impl ScoreTableData {
@@ -132,8 +132,7 @@ impl ScoreTableData {
         let values = (0..rows.len())
             .map(|i| Scores {
                 reward: variance(0, i),
-                next_x: variance(1, i),
-                next_y: variance(2, i),
+                next_state: [variance(1, i), variance(2, i)],
             })
             .collect();
         Ok(Self {
@@ -222,12 +221,7 @@ mod tests {
         let sources = SourceSet::published(Dynamics::Shared).unwrap();
         let table = ScoreTableData::oracle(Mode::Grid, &sources, 0.1).unwrap();
         // Shared dynamics: the mean next states agree, so V_x = V_y = 0 exactly.
-        assert!(
-            table
-                .values
-                .iter()
-                .all(|v| v.next_x == 0.0 && v.next_y == 0.0)
-        );
+        assert!(table.values.iter().all(|v| v.next_state == [0.0, 0.0]));
         // At (2, 2) source 2 has a puddle (r̄ = −22.53) and sources 1, 3 do not
         // (r̄ = −1.000074): population variance = (2/9)·(21.527397)² ≈ 102.98.
         let i = table

@@ -142,13 +142,14 @@ impl<'e> Iwfqi<'e> {
         }
         let mut ws = vec![1.0; self.sources.len()];
         if transition_on {
-            for (d, output) in [Output::NextX, Output::NextY].into_iter().enumerate() {
+            for d in 0..2 {
+                let output = Output::NextState(d);
                 let gp_d = RecordGp::fit(target, output, &options.gp, rng)?;
                 let mut offset = 0;
                 for s in sources {
                     let zs: Vec<[f64; 3]> = s.records.iter().map(input).collect();
                     let post = gp_d.posteriors(&zs, options.noise);
-                    let ys: Vec<f64> = s.records.iter().map(|r| output.of(r)).collect();
+                    let ys: Vec<f64> = s.records.iter().map(|r| r.next_state[d]).collect();
                     let mut out = vec![0.0; ys.len()];
                     transition.weights_into(&ys, &post, &s.next_state[d], &mut out)?;
                     for (w, o) in ws[offset..offset + out.len()].iter_mut().zip(out) {
