@@ -2,6 +2,7 @@
 //! reference implementation (f64, heap, written for clarity) that the core is tested against.
 
 pub mod commands;
+pub mod domains;
 pub mod fqi;
 pub mod gp_large;
 pub mod plot;
