@@ -5,6 +5,7 @@
 //! reference, `docs/algorithms.md` at the repository root.
 
 pub mod commands;
+pub mod domains;
 pub mod fqi;
 pub mod gp_large;
 pub mod plot;

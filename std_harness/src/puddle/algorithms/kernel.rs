@@ -176,7 +176,7 @@ pub fn run(
         .zip(&setup.posteriors)
         .map(|(r, p)| SourceData::new(r, p))
         .collect::<awfqi::Result<_>>()?;
-    let budget = protocol.budget();
+    let budget = experiment.budget();
     let blank = to_f32(&Transition {
         state: [0.0; 2],
         action: 0,
@@ -192,9 +192,12 @@ pub fn run(
     let mut storage = vec![FqiEntry::default(); CELLS * CELLS * PUDDLE_ACTIONS];
     let fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut storage)?;
     let config = AwfqiConfig::thesis(budget);
+    let dynamics = protocol
+        .dynamics
+        .ok_or_else(|| anyhow::anyhow!("awfqi-kernel runs on Puddle World only"))?;
     let mut kernel = Awfqi::new(
         config,
-        PuddleWorld::target(protocol.dynamics),
+        PuddleWorld::target(dynamics),
         sampler,
         &data,
         &mut samples,
@@ -202,7 +205,6 @@ pub fn run(
         &mut *gp,
         fqi,
     )?;
-    let target = protocol.target();
     let mut steps = Vec::new();
     for k in 1..=protocol.steps {
         let start = Instant::now();
@@ -225,8 +227,8 @@ pub fn run(
         let q = kernel.q();
         let greedy = |s: &[f64; 2]| q.greedy_action([s[0] as T, s[1] as T]).unwrap_or(0);
         let record = evaluate_step(
+            &experiment.domain,
             protocol,
-            &target,
             k,
             &greedy,
             report.n_target_samples,
