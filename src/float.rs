@@ -66,6 +66,10 @@ pub trait Real:
     fn exp(self) -> Self;
     /// Natural logarithm (NaN for negative input, −∞ for 0).
     fn ln(self) -> Self;
+    /// Sine (radians).
+    fn sin(self) -> Self;
+    /// Cosine (radians).
+    fn cos(self) -> Self;
     /// `ln(1 + self)`, accurate near 0.
     fn ln_1p(self) -> Self;
     /// Absolute value.
@@ -100,7 +104,7 @@ pub trait Real:
 }
 
 macro_rules! impl_real {
-    ($t:ty, $sqrt:path, $exp:path, $ln:path, $ln1p:path, $abs:path, $floor:path, $fmax:path, $fmin:path) => {
+    ($t:ty, $sqrt:path, $exp:path, $ln:path, $sin:path, $cos:path, $ln1p:path, $abs:path, $floor:path, $fmax:path, $fmin:path) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -134,6 +138,14 @@ macro_rules! impl_real {
             #[inline]
             fn ln(self) -> Self {
                 $ln(self)
+            }
+            #[inline]
+            fn sin(self) -> Self {
+                $sin(self)
+            }
+            #[inline]
+            fn cos(self) -> Self {
+                $cos(self)
             }
             #[inline]
             fn ln_1p(self) -> Self {
@@ -172,6 +184,8 @@ impl_real!(
     libm::sqrtf,
     libm::expf,
     libm::logf,
+    libm::sinf,
+    libm::cosf,
     libm::log1pf,
     libm::fabsf,
     libm::floorf,
@@ -183,6 +197,8 @@ impl_real!(
     libm::sqrt,
     libm::exp,
     libm::log,
+    libm::sin,
+    libm::cos,
     libm::log1p,
     libm::fabs,
     libm::floor,
@@ -228,6 +244,8 @@ mod tests {
         assert!((Real::sqrt(2.0f64) - core::f64::consts::SQRT_2).abs() < 1e-15);
         assert!((Real::exp(1.0f32) - core::f32::consts::E).abs() < 1e-6);
         assert_eq!(Real::ln(1.0f64), 0.0);
+        assert!((Real::sin(core::f64::consts::FRAC_PI_6) - 0.5).abs() < 1e-15);
+        assert!((Real::cos(core::f32::consts::FRAC_PI_3) - 0.5).abs() < 1e-6);
         assert_eq!(<f32 as Real>::from_f64(0.5), 0.5f32);
         assert!(Real::max(f64::NAN, 1.0) == 1.0);
     }

@@ -5,6 +5,7 @@
 //! A greedy policy is any closure `FnMut(&S) -> Result<usize>` (blanket implementation);
 //! it returns `Result` because evaluating a learned Q-function can fail.
 
+use crate::rng::uniform_index;
 use crate::{Error, Real, Result, rng};
 use rand_core::Rng;
 
@@ -29,14 +30,6 @@ where
     fn action<R: Rng + ?Sized>(&mut self, state: &S, _rng: &mut R) -> Result<usize> {
         self(state)
     }
-}
-
-/// An index drawn uniformly from `0..n` (`n >= 1`); consumes one `u64`.
-///
-/// Uses the high half of the 128-bit product `u64 · n`, which is exactly uniform when `n`
-/// is a power of two (as Puddle World's 4 actions are) and has bias below n/2⁶⁴ otherwise.
-fn uniform_index<R: Rng + ?Sized>(rng: &mut R, n: usize) -> usize {
-    ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
 }
 
 /// The uniform policy of spec §3.1: each of `num_actions` actions with probability

@@ -50,6 +50,15 @@ pub fn uniform_in<T: Real, R: Rng + ?Sized>(rng: &mut R, low: T, high: T) -> Res
     })
 }
 
+/// An index drawn uniformly from `0..n` (`n >= 1`; `n == 0` gives 0); consumes one `u64`.
+///
+/// Uses the high half of the 128-bit product `u64 · n`, which is exactly uniform when `n`
+/// is a power of two (as Puddle World's 4 actions are) and has bias below n/2⁶⁴ otherwise.
+#[inline]
+pub fn uniform_index<R: Rng + ?Sized>(rng: &mut R, n: usize) -> usize {
+    ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
+}
+
 /// Attempts of the polar method before its (probability < 10⁻⁴²) fallback.
 const POLAR_ATTEMPTS: usize = 64;
 

@@ -124,3 +124,32 @@ fn puddle_step_golden_values_follow_spec_2_3() {
         "golden.rs is stale; recomputed:\nSTEP_EXPECTED = {computed:?}"
     );
 }
+
+#[allow(dead_code, clippy::type_complexity, clippy::approx_constant)]
+#[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+mod iwfqi_golden {
+    include!("data/iwfqi_domains_golden.rs");
+}
+
+/// The on-target Dam and Acrobot cases are rows of the table the published definitions
+/// produced (`scripts/golden/iwfqi_domains.py`, `tests/data/iwfqi_domains_golden.rs`).
+#[test]
+fn iwfqi_domain_golden_values_are_the_published_definitions() {
+    for (&(k, s, a), &(r, next)) in golden::ACROBOT_CASES.iter().zip(&golden::ACROBOT_EXPECTED) {
+        let row = iwfqi_golden::ACROBOT
+            .iter()
+            .find(|row| row.0 == k && row.1 == s && row.2 == a)
+            .expect("every on-target Acrobot case is a golden row");
+        assert!(close(row.3, r) && row.4.iter().zip(&next).all(|(x, y)| close(*x, *y)));
+    }
+    for (&(k, s, a), &(r, mean)) in golden::DAM_CASES.iter().zip(&golden::DAM_EXPECTED) {
+        let row = iwfqi_golden::DAM
+            .iter()
+            .find(|row| row.0 == k && row.1 == s && row.2 == a)
+            .expect("every on-target Dam case is a golden row");
+        assert!(
+            close(row.3, r) && close(row.6, mean),
+            "{row:?} vs {r}, {mean}"
+        );
+    }
+}

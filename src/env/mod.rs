@@ -9,10 +9,17 @@
 //! - [`GridWorld`]: the finite 10×10 Grid World of spec §10.4, exposed as a [`FiniteMdp`]
 //!   whose exact transition probabilities and Gaussian reward models feed the
 //!   identification scores and beliefs.
+//! - [`Dam`]: the IWFQI paper's water reservoir (2-D state, eight releases).
+//! - [`Acrobot`]: the IWFQI paper's multitask Acrobot (4-D state, two torques, swing-up or
+//!   rotate).
 
+mod acrobot;
+mod dam;
 mod grid;
 mod puddle;
 
+pub use acrobot::*;
+pub use dam::*;
 pub use grid::GridWorld;
 pub use grid::{GRID_ACTIONS, THESIS_GOALS};
 pub use puddle::*;
@@ -57,7 +64,8 @@ impl<T: Real, const D: usize> Transition<[T; D], T> {
 /// This is the only access the active algorithms have to a target task (thesis §4.1.1):
 /// the budget is counted in calls to [`GenerativeModel::query`].
 pub trait GenerativeModel<T: Real> {
-    /// The state type (`[T; 2]` for Puddle World, a cell index for Grid World).
+    /// The state type (`[T; 2]` for Puddle World and the Dam, `[T; 4]` for Acrobot, a cell
+    /// index for Grid World).
     type State: Copy;
 
     /// Number of actions; valid actions are `0..num_actions()`.

@@ -16,7 +16,7 @@
 //! prefix, say) need no new code. Each call starts from scratch: there is no warm start across
 //! experiment steps (spec §5).
 
-use crate::trees::{ActionForests, DEFAULT_TREES};
+use crate::trees::{ActionForests, DEFAULT_TREES, TreeParams};
 use awfqi::env::Transition;
 use awfqi::{Error, Result};
 use rand_core::Rng;
@@ -173,6 +173,8 @@ pub struct FqiOptions<'a> {
     /// Iteration 1 fits only the first this many records (`None`: all). With
     /// [`Rewards::FirstIterationModel`] this is SDT's reward model on the target records.
     pub first_iteration_records: Option<usize>,
+    /// Growth limits of every forest (default: fully grown trees, spec §4.1).
+    pub tree: TreeParams,
 }
 
 impl<'a> FqiOptions<'a> {
@@ -188,6 +190,7 @@ impl<'a> FqiOptions<'a> {
             transition_weights: None,
             rewards: Rewards::Observed,
             first_iteration_records: None,
+            tree: TreeParams::FULLY_GROWN,
         }
     }
 
@@ -228,6 +231,7 @@ impl<'a> FqiOptions<'a> {
                 parameter: "num_actions",
             });
         }
+        self.tree.validate()?;
         if !(0.0..=1.0).contains(&self.gamma) {
             return Err(Error::OutOfRange { parameter: "gamma" });
         }
@@ -286,7 +290,7 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
 
     // Iteration 1: y = r.
     let m = options.first_iteration_records.unwrap_or(n);
-    let mut q = ActionForests::zero(options.num_actions);
+    let mut q = ActionForests::zero_with(options.num_actions, options.tree);
     q.refit(
         &data.states[..m],
         &data.actions[..m],
@@ -311,12 +315,13 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
     // (`Forest::predict_into`) end at similar depths. Each query's value does not depend on
     // the order.
     let mut live: Vec<usize> = (0..n).filter(|&i| !data.absorbing[i]).collect();
-    live.sort_by_key(|&i| morton_key(&data.next_states[i]));
+    let bounds = bounding_box(live.iter().map(|&i| &data.next_states[i]));
+    live.sort_by_key(|&i| morton_key(&data.next_states[i], &bounds));
     let live_next: Vec<[f64; D]> = live.iter().map(|&i| data.next_states[i]).collect();
     let mut max_q = vec![0.0; live.len()];
     let mut scratch = vec![0.0; live.len()];
     let mut targets = vec![0.0; n];
-    let mut next = ActionForests::zero(options.num_actions);
+    let mut next = ActionForests::zero_with(options.num_actions, options.tree);
     for _ in 1..options.iterations {
         q.max_over_actions_into(&live_next, &mut max_q, &mut scratch)?;
         targets.copy_from_slice(rewards);
@@ -336,11 +341,27 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
     Ok(FqiOutput { q, model_rewards })
 }
 
+/// Per-coordinate `(min, max)` of the first two coordinates of `points` (`(0, 0)` when
+/// there are none), the box [`morton_key`] quantises over.
+fn bounding_box<'a, const D: usize>(points: impl Iterator<Item = &'a [f64; D]>) -> [(f64, f64); 2] {
+    let mut bounds = [(f64::INFINITY, f64::NEG_INFINITY); 2];
+    for p in points {
+        for (b, &v) in bounds.iter_mut().zip(p.iter()) {
+            *b = (b.0.min(v), b.1.max(v));
+        }
+    }
+    bounds.map(|(lo, hi)| if lo <= hi { (lo, hi) } else { (0.0, 0.0) })
+}
+
 /// A Z-order (Morton) key of the first two coordinates of `x`, each quantised to 16 bits
-/// over `[0, 10]` (the Puddle World's square; other values are clamped), for ordering
-/// queries by locality.
-fn morton_key<const D: usize>(x: &[f64; D]) -> u32 {
-    let quantise = |v: f64| ((v / 10.0).clamp(0.0, 1.0) * 65535.0) as u32;
+/// over its range in `bounds` (values outside are clamped), for ordering queries by
+/// locality.
+fn morton_key<const D: usize>(x: &[f64; D], bounds: &[(f64, f64); 2]) -> u32 {
+    let quantise = |v: f64, (lo, hi): (f64, f64)| {
+        let span = hi - lo;
+        let t = if span > 0.0 { (v - lo) / span } else { 0.0 };
+        (t.clamp(0.0, 1.0) * 65535.0) as u32
+    };
     let spread = |mut v: u32| {
         v &= 0xffff;
         v = (v | (v << 8)) & 0x00ff_00ff;
@@ -348,8 +369,8 @@ fn morton_key<const D: usize>(x: &[f64; D]) -> u32 {
         v = (v | (v << 2)) & 0x3333_3333;
         (v | (v << 1)) & 0x5555_5555
     };
-    let a = x.first().map_or(0, |&v| quantise(v));
-    let b = x.get(1).map_or(0, |&v| quantise(v));
+    let a = x.first().map_or(0, |&v| quantise(v, bounds[0]));
+    let b = x.get(1).map_or(0, |&v| quantise(v, bounds[1]));
     spread(a) | (spread(b) << 1)
 }
 

@@ -23,6 +23,10 @@ enum Command {
     Identify(commands::identify::Args),
     /// Puddle World transfer experiments: every algorithm on the protocol of spec §3.
     Puddle(commands::puddle::Args),
+    /// The IWFQI paper's water reservoir (Dam): every algorithm on the protocol of spec §3.
+    Dam(commands::transfer::Args),
+    /// The IWFQI paper's multitask Acrobot: every algorithm on the protocol of spec §3.
+    Acrobot(commands::transfer::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -31,5 +35,7 @@ fn main() -> anyhow::Result<()> {
         Command::Gp(args) => commands::gp::run(&args),
         Command::Identify(args) => commands::identify::run(&args),
         Command::Puddle(args) => commands::puddle::run(&args),
+        Command::Dam(args) => commands::dam::run(&args),
+        Command::Acrobot(args) => commands::acrobot::run(&args),
     }
 }

@@ -66,6 +66,63 @@ pub const MIN_IMPURITY: f64 = 1e-7;
 /// (scikit-learn's `FEATURE_THRESHOLD`, spec §4.1).
 pub const CONSTANT_FEATURE_TOLERANCE: f64 = 1e-7;
 
+/// The growth limits of scikit-learn's `min_samples_split` and `min_samples_leaf`: a node
+/// with fewer than `min_samples_split` samples, or fewer than `2·min_samples_leaf`, is a
+/// leaf, and a candidate split that leaves fewer than `min_samples_leaf` samples on a side
+/// is invalid (rejected like a zero-weight child, before the scores are compared).
+///
+/// The defaults (2 and 1) are the fully grown trees of spec §4.1; the IWFQI paper's Dam
+/// runs use `min_samples_split = 20`, its Acrobot runs `5` and `2`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct TreeParams {
+    /// Fewest samples a node needs to be split (≥ 2).
+    pub min_samples_split: usize,
+    /// Fewest samples each child of a split must keep (≥ 1).
+    pub min_samples_leaf: usize,
+}
+
+impl Default for TreeParams {
+    /// Fully grown trees (spec §4.1): 2 and 1.
+    fn default() -> Self {
+        Self::FULLY_GROWN
+    }
+}
+
+impl TreeParams {
+    /// Fully grown trees (spec §4.1): `min_samples_split = 2`, `min_samples_leaf = 1`.
+    pub const FULLY_GROWN: Self = Self {
+        min_samples_split: 2,
+        min_samples_leaf: 1,
+    };
+
+    /// `true` for [`TreeParams::FULLY_GROWN`].
+    pub fn is_fully_grown(&self) -> bool {
+        *self == Self::FULLY_GROWN
+    }
+
+    /// Checks `min_samples_split ≥ 2` and `min_samples_leaf ≥ 1`.
+    ///
+    /// Errors: [`Error::InvalidParameter`] naming the offending field.
+    pub fn validate(&self) -> Result<()> {
+        if self.min_samples_split < 2 {
+            return Err(Error::InvalidParameter {
+                parameter: "min_samples_split",
+            });
+        }
+        if self.min_samples_leaf < 1 {
+            return Err(Error::InvalidParameter {
+                parameter: "min_samples_leaf",
+            });
+        }
+        Ok(())
+    }
+
+    /// The fewest samples a node must hold to be split at all.
+    fn min_node(&self) -> usize {
+        self.min_samples_split.max(2 * self.min_samples_leaf)
+    }
+}
+
 /// One node of the flat arena: 16 bytes.
 ///
 /// A split sends `x[feature] ≤ threshold` to `left` and the rest to `left + 1` (the two
@@ -216,6 +273,30 @@ impl<const D: usize> Forest<D> {
         n_trees: usize,
         rng: &mut R,
     ) -> Result<()> {
+        self.refit_with(
+            states,
+            targets,
+            weights,
+            n_trees,
+            &TreeParams::FULLY_GROWN,
+            rng,
+        )
+    }
+
+    /// [`Forest::refit`] with the growth limits `params` (the same draws as fully grown
+    /// trees: limits only turn nodes into leaves and reject candidates).
+    ///
+    /// Errors: as [`Forest::fit`], plus invalid `params` ([`TreeParams::validate`]).
+    pub fn refit_with<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        params: &TreeParams,
+        rng: &mut R,
+    ) -> Result<()> {
+        params.validate()?;
         if n_trees == 0 {
             return Err(Error::InvalidParameter {
                 parameter: "n_trees",
@@ -227,7 +308,7 @@ impl<const D: usize> Forest<D> {
         if states.len() > limit || n_trees.saturating_mul(2 * states.len()) > u32::MAX as usize {
             return Err(Error::CapacityExceeded { capacity: limit });
         }
-        self.grow(states, targets, weights, n_trees, rng);
+        self.grow(states, targets, weights, n_trees, params, rng);
         Ok(())
     }
 
@@ -238,6 +319,7 @@ impl<const D: usize> Forest<D> {
         targets: &[f64],
         weights: &[f64],
         n_trees: usize,
+        params: &TreeParams,
         rng: &mut R,
     ) {
         self.nodes.clear();
@@ -272,6 +354,7 @@ impl<const D: usize> Forest<D> {
             let mut tree = Tree {
                 nodes: &mut self.nodes,
                 values: &mut self.values,
+                params,
             };
             tree.grow(&mut ws.first, &mut ws.second, &mut ws.stack, &mut tree_rng);
         }
@@ -428,10 +511,11 @@ fn feature_order<const D: usize>(rng: &mut ChaCha8Rng) -> [usize; D] {
     order
 }
 
-/// The arena one tree is appended to.
+/// The arena one tree is appended to, and the growth limits.
 struct Tree<'a> {
     nodes: &'a mut Vec<Node>,
     values: &'a mut Vec<f64>,
+    params: &'a TreeParams,
 }
 
 impl Tree<'_> {
@@ -478,7 +562,7 @@ impl Tree<'_> {
             let impurity = st.q / st.w - value * value;
             // A zero-weight node (impurity NaN) is a leaf too; only a degenerate root could
             // be one, and the forest never grows it.
-            if impurity <= MIN_IMPURITY || impurity.is_nan() {
+            if impurity <= MIN_IMPURITY || impurity.is_nan() || src.len() < self.params.min_node() {
                 continue;
             }
             if let [a, b] = src {
@@ -491,7 +575,12 @@ impl Tree<'_> {
                 }
                 continue;
             }
-            let Some((feature, threshold)) = best_split(src, &st, rng) else {
+            let split = if self.params.min_samples_leaf > 1 {
+                best_split_counted(src, &st, self.params.min_samples_leaf, rng)
+            } else {
+                best_split(src, &st, rng)
+            };
+            let Some((feature, threshold)) = split else {
                 continue;
             };
             let mid = start + partition_into(src, dst, feature, threshold);
@@ -629,6 +718,65 @@ fn best_split<const D: usize>(
     best
 }
 
+/// [`best_split`] with the `min_samples_leaf` rule: the same draws, and a candidate is
+/// valid only when both children also keep at least `min_leaf` samples.
+#[inline(never)]
+fn best_split_counted<const D: usize>(
+    records: &[Record<D>],
+    st: &NodeStats<D>,
+    min_leaf: usize,
+    rng: &mut ChaCha8Rng,
+) -> Option<(usize, f64)> {
+    let order = feature_order::<D>(rng);
+    let mut thresholds = [f64::NEG_INFINITY; D];
+    let mut is_candidate = [false; D];
+    for &f in &order {
+        let (lo, hi) = (st.lo[f], st.hi[f]);
+        if hi <= lo + CONSTANT_FEATURE_TOLERANCE {
+            continue;
+        }
+        let mut tau = lo + awfqi::rng::uniform_f64(rng) * (hi - lo);
+        if tau >= hi {
+            tau = lo;
+        }
+        thresholds[f] = tau;
+        is_candidate[f] = true;
+    }
+    if !is_candidate.contains(&true) {
+        return None;
+    }
+    let (mut wl, mut sl, mut wr, mut sr) = ([0.0f64; D], [0.0f64; D], [0.0f64; D], [0.0f64; D]);
+    let mut nl = [0usize; D];
+    for r in records {
+        let wy = r.w * r.y;
+        for d in 0..D {
+            if r.x[d] <= thresholds[d] {
+                wl[d] += r.w;
+                sl[d] += wy;
+                nl[d] += 1;
+            } else {
+                wr[d] += r.w;
+                sr[d] += wy;
+            }
+        }
+    }
+    let n = records.len();
+    let mut best: Option<(usize, f64)> = None;
+    let mut best_score = f64::NEG_INFINITY;
+    for &f in &order {
+        let too_small = nl[f] < min_leaf || n - nl[f] < min_leaf;
+        if !is_candidate[f] || too_small || wl[f] <= 0.0 || wr[f] <= 0.0 {
+            continue;
+        }
+        let score = sl[f] * sl[f] / wl[f] + sr[f] * sr[f] / wr[f];
+        if score > best_score {
+            best_score = score;
+            best = Some((f, thresholds[f]));
+        }
+    }
+    best
+}
+
 /// Copies `src` into `dst` with the records of `x[feature] ≤ threshold` first (in order)
 /// and the others after them (in reverse order); returns the number of the former.
 /// Branch-free: every record is written to both ends and one cursor advances.
@@ -659,6 +807,8 @@ fn partition_into<const D: usize>(
 #[derive(Debug, Clone)]
 pub struct ActionForests<const D: usize = 2> {
     forests: Vec<Forest<D>>,
+    /// The growth limits of every refit.
+    params: TreeParams,
     /// Per-action gathered training data, reused across refits.
     buffers: Vec<ActionBuffer<D>>,
 }
@@ -673,7 +823,13 @@ struct ActionBuffer<const D: usize> {
 impl<const D: usize> ActionForests<D> {
     /// `num_actions` empty forests: `Q ≡ 0` (the `Q₀` of FQI).
     pub fn zero(num_actions: usize) -> Self {
+        Self::zero_with(num_actions, TreeParams::FULLY_GROWN)
+    }
+
+    /// [`ActionForests::zero`] whose refits grow trees with the limits `params`.
+    pub fn zero_with(num_actions: usize, params: TreeParams) -> Self {
         Self {
+            params,
             forests: (0..num_actions).map(|_| Forest::empty()).collect(),
             buffers: (0..num_actions).map(|_| ActionBuffer::default()).collect(),
         }
@@ -746,7 +902,14 @@ impl<const D: usize> ActionForests<D> {
             buf.weights.push(w);
         }
         for (forest, buf) in self.forests.iter_mut().zip(&self.buffers) {
-            forest.refit(&buf.states, &buf.targets, &buf.weights, n_trees, rng)?;
+            forest.refit_with(
+                &buf.states,
+                &buf.targets,
+                &buf.weights,
+                n_trees,
+                &self.params,
+                rng,
+            )?;
         }
         Ok(())
     }

@@ -1,6 +1,9 @@
 //! One module per subcommand of `awfqi-harness`.
 
+pub mod acrobot;
+pub mod dam;
 pub mod demo;
 pub mod gp;
 pub mod identify;
 pub mod puddle;
+pub mod transfer;

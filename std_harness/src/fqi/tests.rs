@@ -304,16 +304,27 @@ fn invalid_input_is_rejected() {
 
 #[test]
 fn morton_key_interleaves_the_quantised_coordinates() {
-    // x is quantised to 16 bits on [0, 10] and takes the even bits, y the odd ones.
-    assert_eq!(morton_key(&[0.0, 0.0]), 0);
-    assert_eq!(morton_key(&[10.0, 0.0]), 0x5555_5555);
-    assert_eq!(morton_key(&[0.0, 10.0]), 0xAAAA_AAAA);
-    assert_eq!(morton_key(&[10.0, 10.0]), u32::MAX);
-    // Out-of-square values are clamped.
-    assert_eq!(morton_key(&[-3.0, 12.0]), 0xAAAA_AAAA);
-    // Quantised x = 1 (bit 0) and y = 1 (bit 1): 10/65535 is exactly one step.
+    // x is quantised to 16 bits on its range [0, 10] and takes the even bits, y (range
+    // [0, 20]) the odd ones.
+    let pts = [[0.0, 0.0], [10.0, 20.0], [5.0, 7.0]];
+    let b = bounding_box(pts.iter());
+    assert_eq!(b, [(0.0, 10.0), (0.0, 20.0)]);
+    assert_eq!(morton_key(&[0.0, 0.0], &b), 0);
+    assert_eq!(morton_key(&[10.0, 0.0], &b), 0x5555_5555);
+    assert_eq!(morton_key(&[0.0, 20.0], &b), 0xAAAA_AAAA);
+    assert_eq!(morton_key(&[10.0, 20.0], &b), u32::MAX);
+    // Values outside the box are clamped.
+    assert_eq!(morton_key(&[-3.0, 24.0], &b), 0xAAAA_AAAA);
+    // Quantised x = 1 (bit 0) and y = 1 (bit 1): range/65535 is exactly one step.
     let step = 10.0 / 65535.0;
-    assert_eq!(morton_key(&[step, 0.0]), 1);
-    assert_eq!(morton_key(&[0.0, step]), 2);
-    assert_eq!(morton_key(&[step, step]), 3);
+    assert_eq!(morton_key(&[step, 0.0], &b), 1);
+    assert_eq!(morton_key(&[0.0, 2.0 * step], &b), 2);
+    assert_eq!(morton_key(&[step, 2.0 * step], &b), 3);
+    // A degenerate box (one point, or none) gives key 0.
+    let one = bounding_box([[4.0, 4.0]].iter());
+    assert_eq!(morton_key(&[4.0, 4.0], &one), 0);
+    assert_eq!(
+        bounding_box(std::iter::empty::<&[f64; 2]>()),
+        [(0.0, 0.0); 2]
+    );
 }

@@ -38,6 +38,7 @@
 //! [`Par`] given in [`FitOptions::parallelism`] (sequential by default: experiments
 //! parallelise across runs).
 
+pub mod fixed;
 pub mod optimizer;
 
 use awfqi::{Error, Result};

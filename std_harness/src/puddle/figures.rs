@@ -7,6 +7,7 @@ use crate::plot::{Figure, LegendPosition, Panel, Series, SeriesStyle, XScale};
 
 use super::results::SummaryRow;
 use super::sources::SourceSet;
+use crate::domains::Domain;
 
 /// Curves as `(label, colour, summary rows)`.
 pub type Curves = [(String, usize, Vec<SummaryRow>)];
@@ -52,8 +53,15 @@ pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Fig
 }
 
 /// One panel per algorithm: the source states (yellow) and the target states the algorithm
-/// collected in one run over all steps (coloured).
-pub fn sample_scatter(sources: &SourceSet, samples: &[(String, usize, Vec<[f64; 3]>)]) -> Figure {
+/// collected in one run over all steps (coloured), on the first two state coordinates.
+pub fn sample_scatter<const D: usize>(
+    domain: &Domain<D>,
+    sources: &SourceSet<D>,
+    samples: &[(String, usize, Vec<[f64; 3]>)],
+) -> Figure {
+    let axis = |d: usize| domain.state_names.get(d).copied().unwrap_or("").to_string();
+    let (lo, hi) = domain.state_bounds.get(1).copied().unwrap_or((0.0, 1.0));
+    let pad = 0.05 * (hi - lo);
     let source_points: Vec<(f64, f64)> = sources
         .sources
         .iter()
@@ -63,10 +71,10 @@ pub fn sample_scatter(sources: &SourceSet, samples: &[(String, usize, Vec<[f64; 
         .iter()
         .map(|(name, color, pts)| Panel {
             title: format!("{name} ({} samples)", pts.len()),
-            x_label: "x".into(),
-            y_label: "y".into(),
+            x_label: axis(0),
+            y_label: axis(1),
             x_scale: XScale::Linear,
-            y_range: Some((-0.5, 10.5)),
+            y_range: Some((lo - pad, hi + pad)),
             series: vec![
                 Series {
                     label: "source states".into(),

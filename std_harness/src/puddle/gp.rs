@@ -1,21 +1,84 @@
-//! The GP fits of the puddle experiments (spec §4.2, §6, §7.2, §11.2) on top of the large-N
-//! f64 GP [`crate::gp_large`]: inputs `z = (s_x, s_y, a)`, one scalar output per GP, the
-//! reference's fitting procedure (initial values plus restarts, last `max_gp` samples), and
-//! the noise subtraction of the predicted standard deviations.
+//! The GP fits of the transfer experiments (spec §4.2, §6, §7.2, §11.2) on records of any
+//! domain: inputs `z = (s, value(a))` ([`crate::domains::Domain::input`]), one scalar
+//! output per GP, and either the reference's fitting procedure (initial values plus
+//! restarts, last `max_gp` records, [`crate::gp_large::LargeGp`]) or the fixed kernels of
+//! the IWFQI paper's Dam and Acrobot runs ([`crate::gp_large::fixed::FixedGp`]), and the
+//! noise subtraction of the predicted standard deviations.
 
-use awfqi::dataset::Output;
 use awfqi::weights::{NoiseSubtraction, Posterior};
 use rand_core::Rng;
 
-use super::sources::Record;
+use crate::domains::{Domain, GP_INPUT, GpInput, Record};
+use crate::gp_large::fixed::{FixedGp, FixedKernel};
 use crate::gp_large::{self, FitOptions, LargeGp};
 
-/// The input `z = (s_x, s_y, a)` of a record (the action as a plain real coordinate, §1).
-pub fn input(r: &Record) -> [f64; 3] {
-    [r.state[0], r.state[1], r.action as f64]
+/// Which value of a record a GP models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Output {
+    /// The reward `r`.
+    Reward,
+    /// Next-state coordinate `d`.
+    Next(usize),
 }
 
-/// How the GPs are fitted: restarts, the training cap and the search strategy.
+impl Output {
+    /// The modelled value of `r`.
+    pub fn of<const D: usize>(self, r: &Record<D>) -> f64 {
+        match self {
+            Output::Reward => r.reward,
+            Output::Next(d) => r.next_state.get(d).copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
+/// How a GP's kernel is obtained.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub enum KernelSpec {
+    /// Constant × isotropic RBF plus white noise, fitted by marginal likelihood (§4.2).
+    Fitted,
+    /// A fixed kernel (the Dam's and Acrobot's published ones).
+    Fixed(FixedKernel),
+}
+
+/// One GP of an experiment: its kernel and whether the fitted noise is subtracted from its
+/// predicted stds.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct GpSpec {
+    /// The kernel.
+    pub kernel: KernelSpec,
+    /// `false`: stds are used as predicted (the reference's `subtract_noise_* = False`).
+    pub subtract_noise: bool,
+}
+
+impl GpSpec {
+    /// Spec §4.2's fitted GP with noise subtraction (Puddle World).
+    pub fn fitted() -> Self {
+        Self {
+            kernel: KernelSpec::Fitted,
+            subtract_noise: true,
+        }
+    }
+
+    /// A fixed kernel, with or without noise subtraction.
+    pub fn fixed(kernel: FixedKernel, subtract_noise: bool) -> Self {
+        Self {
+            kernel: KernelSpec::Fixed(kernel),
+            subtract_noise,
+        }
+    }
+
+    /// The noise subtraction this GP applies when the experiment asks for `requested`
+    /// (a GP without subtraction keeps its stds).
+    pub fn noise(&self, requested: NoiseSubtraction) -> NoiseSubtraction {
+        if self.subtract_noise {
+            requested
+        } else {
+            NoiseSubtraction::Off
+        }
+    }
+}
+
+/// How the fitted GPs are fitted: restarts, the training cap and the search strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct GpOptions {
     /// Optimisations from random starts after the one from the initial values (spec: 10).
@@ -80,10 +143,16 @@ impl GpOptions {
     }
 }
 
+#[derive(Debug, Clone)]
+enum Model {
+    Fitted(LargeGp<GP_INPUT>),
+    Fixed(FixedGp<GP_INPUT>),
+}
+
 /// A GP fitted on one output of a set of records.
 #[derive(Debug, Clone)]
 pub struct RecordGp {
-    gp: LargeGp<3>,
+    model: Model,
 }
 
 /// What a fit reached: for the per-step diagnostics.
@@ -91,65 +160,129 @@ pub struct RecordGp {
 pub struct GpSummary {
     /// Training points used.
     pub points: usize,
-    /// Fitted signal variance `c`.
+    /// Fitted signal variance `c` (fixed kernels: the sum of their terms').
     pub signal_variance: f64,
-    /// Fitted length scale `ℓ`.
+    /// Fitted length scale `ℓ` (fixed kernels: the first term's first one).
     pub length_scale: f64,
     /// Fitted noise variance `σ²ₙ`.
     pub noise_variance: f64,
-    /// Log marginal likelihood at the optimum.
+    /// Log marginal likelihood at the optimum (fixed kernels: the jitter used instead,
+    /// negated, so a retried factorisation shows).
     pub log_marginal_likelihood: f64,
 }
 
 impl RecordGp {
-    /// Fits a GP on `output` of `records` (§4.2: fresh initial hyperparameters, restarts,
-    /// the last `max_gp` records).
+    /// Fits a GP with `spec` on `(inputs, targets)`, the last `options.max_gp` of them
+    /// (§4.2: fresh initial hyperparameters and restarts for a fitted kernel; a fixed one
+    /// is conditioned, split exactly along coordinate `split` when it decorrelates there).
     pub fn fit<R: Rng + ?Sized>(
-        records: &[Record],
+        inputs: &[GpInput],
+        targets: &[f64],
+        spec: &GpSpec,
+        options: &GpOptions,
+        split: Option<usize>,
+        rng: &mut R,
+    ) -> anyhow::Result<Self> {
+        let model = match &spec.kernel {
+            KernelSpec::Fitted => {
+                let (gp, _) = LargeGp::fit(inputs, targets, &options.fit_options(), rng)?;
+                Model::Fitted(gp)
+            }
+            KernelSpec::Fixed(kernel) => {
+                let skip = inputs.len().saturating_sub(options.max_gp);
+                let gp = FixedGp::fit(
+                    &inputs[skip..],
+                    &targets[skip..],
+                    kernel,
+                    split,
+                    faer::Par::Seq,
+                )?;
+                Model::Fixed(gp)
+            }
+        };
+        Ok(Self { model })
+    }
+
+    /// Fits `output` of `records` of `domain` (the action coordinate is the split one).
+    pub fn fit_records<const D: usize, R: Rng + ?Sized>(
+        domain: &Domain<D>,
+        records: &[Record<D>],
         output: Output,
+        spec: &GpSpec,
         options: &GpOptions,
         rng: &mut R,
     ) -> anyhow::Result<Self> {
-        let inputs: Vec<[f64; 3]> = records.iter().map(input).collect();
-        let targets = records
-            .iter()
-            .map(|r| output.of(r))
-            .collect::<awfqi::Result<Vec<f64>>>()?;
-        let (gp, _) = LargeGp::fit(&inputs, &targets, &options.fit_options(), rng)?;
-        Ok(Self { gp })
+        let inputs: Vec<GpInput> = records.iter().map(|r| domain.input(r)).collect();
+        let targets: Vec<f64> = records.iter().map(|r| output.of(r)).collect();
+        Self::fit(&inputs, &targets, spec, options, Some(D), rng)
     }
 
     /// Hyperparameters and likelihood reached.
     pub fn summary(&self) -> GpSummary {
-        let h = self.gp.hyperparameters();
-        GpSummary {
-            points: self.gp.len(),
-            signal_variance: h.signal_variance,
-            length_scale: h.length_scale,
-            noise_variance: h.noise_variance,
-            log_marginal_likelihood: self.gp.log_marginal_likelihood(),
+        match &self.model {
+            Model::Fitted(gp) => {
+                let h = gp.hyperparameters();
+                GpSummary {
+                    points: gp.len(),
+                    signal_variance: h.signal_variance,
+                    length_scale: h.length_scale,
+                    noise_variance: h.noise_variance,
+                    log_marginal_likelihood: gp.log_marginal_likelihood(),
+                }
+            }
+            Model::Fixed(gp) => {
+                let k = gp.kernel();
+                GpSummary {
+                    points: gp.len(),
+                    signal_variance: k.terms.iter().map(|t| t.signal_variance).sum(),
+                    length_scale: k
+                        .terms
+                        .first()
+                        .and_then(|t| t.length_scales.first())
+                        .copied()
+                        .unwrap_or(f64::NAN),
+                    noise_variance: k.noise_variance,
+                    log_marginal_likelihood: -gp.jitter(),
+                }
+            }
+        }
+    }
+
+    fn noise_variance(&self) -> f64 {
+        match &self.model {
+            Model::Fitted(gp) => gp.hyperparameters().noise_variance,
+            Model::Fixed(gp) => gp.kernel().noise_variance,
+        }
+    }
+
+    fn predict_into(&self, zs: &[GpInput], means: &mut [f64], stds: &mut [f64]) {
+        let result = match &self.model {
+            Model::Fitted(gp) => gp.predict_into(zs, means, stds),
+            Model::Fixed(gp) => gp.predict_into(zs, means, stds),
+        };
+        if result.is_err() {
+            // Only a query correlated with several split blocks fails: report it as
+            // unknown (NaN means give weight 0 downstream, never a wrong weight).
+            means.fill(f64::NAN);
+            stds.fill(f64::NAN);
         }
     }
 
     /// Posterior means at `zs`.
-    pub fn means(&self, zs: &[[f64; 3]]) -> Vec<f64> {
+    pub fn means(&self, zs: &[GpInput]) -> Vec<f64> {
         let mut means = vec![0.0; zs.len()];
         let mut stds = vec![0.0; zs.len()];
-        self.gp
-            .predict_into(zs, &mut means, &mut stds)
-            .expect("output lengths match the inputs");
+        self.predict_into(zs, &mut means, &mut stds);
         means
     }
 
     /// Posteriors `(μ, σ)` at `zs` as one batch, the predictive stds (which include the
     /// noise) turned into stds of the mean function by `noise` (§4.2; `Off` keeps them).
-    pub fn posteriors(&self, zs: &[[f64; 3]], noise: NoiseSubtraction) -> Vec<Posterior<f64>> {
+    pub fn posteriors(&self, zs: &[GpInput], noise: NoiseSubtraction) -> Vec<Posterior<f64>> {
         let mut means = vec![0.0; zs.len()];
         let mut stds = vec![0.0; zs.len()];
-        self.gp
-            .predict_into(zs, &mut means, &mut stds)
-            .expect("output lengths match the inputs");
-        let sigma2 = self.gp.hyperparameters().noise_variance;
+        self.predict_into(zs, &mut means, &mut stds);
+        let sigma2 = self.noise_variance();
         match noise {
             NoiseSubtraction::Reference => {
                 gp_large::subtract_noise(&mut stds, sigma2, gp_large::NoiseSubtraction::Reference);
@@ -167,44 +300,77 @@ impl RecordGp {
     }
 }
 
-/// The three GPs of one source (reward, next x, next y; §6 step 3, §11.2).
+/// The GPs of one source: the reward's, then one per listed next-state coordinate (§6 step
+/// 3, §11.2).
 #[derive(Debug, Clone)]
 pub struct SourceGps {
-    /// Reward, next-x and next-y GPs.
-    pub gps: [RecordGp; 3],
+    /// The GPs, in the order of `outputs`.
+    pub gps: Vec<RecordGp>,
+    /// What each GP models.
+    pub outputs: Vec<Output>,
+    /// Their specs.
+    specs: Vec<GpSpec>,
 }
 
 impl SourceGps {
-    /// Fits the three GPs on all records of a source (in the order reward, next x, next y).
-    pub fn fit<R: Rng + ?Sized>(
-        records: &[Record],
+    /// Fits one GP per output on all `records` of a source, in the order of `outputs`,
+    /// with the domain's GP of each output.
+    pub fn fit<const D: usize, R: Rng + ?Sized>(
+        domain: &Domain<D>,
+        records: &[Record<D>],
+        outputs: &[Output],
         options: &GpOptions,
         rng: &mut R,
     ) -> anyhow::Result<Self> {
-        let reward = RecordGp::fit(records, Output::Reward, options, rng)?;
-        let next_x = RecordGp::fit(records, Output::NextState(0), options, rng)?;
-        let next_y = RecordGp::fit(records, Output::NextState(1), options, rng)?;
+        let specs: Vec<GpSpec> = outputs.iter().map(|&o| domain.gp_spec(o)).collect();
+        let gps = outputs
+            .iter()
+            .zip(&specs)
+            .map(|(&o, spec)| RecordGp::fit_records(domain, records, o, spec, options, rng))
+            .collect::<anyhow::Result<_>>()?;
         Ok(Self {
-            gps: [reward, next_x, next_y],
+            gps,
+            outputs: outputs.to_vec(),
+            specs,
         })
     }
 
-    /// The three posteriors at the records' own inputs, noise-subtracted per GP over the
-    /// batch (§6 step 3).
-    pub fn posteriors_at(
+    /// The posteriors at the records' own inputs, noise-subtracted per GP over the batch
+    /// by the reference's rule where the GP subtracts at all (§6 step 3).
+    pub fn posteriors_at<const D: usize>(
         &self,
-        records: &[Record],
-        noise: NoiseSubtraction,
-    ) -> anyhow::Result<[Vec<Posterior<f64>>; 3]> {
-        let zs: Vec<[f64; 3]> = records.iter().map(input).collect();
-        Ok(std::array::from_fn(|k| self.gps[k].posteriors(&zs, noise)))
+        domain: &Domain<D>,
+        records: &[Record<D>],
+    ) -> anyhow::Result<Vec<Vec<Posterior<f64>>>> {
+        let zs: Vec<GpInput> = records.iter().map(|r| domain.input(r)).collect();
+        Ok(self
+            .gps
+            .iter()
+            .zip(&self.specs)
+            .map(|(gp, spec)| gp.posteriors(&zs, spec.noise(NoiseSubtraction::Reference)))
+            .collect())
+    }
+
+    /// The posterior means of the GPs at `zs`, in the order of the outputs: the values of
+    /// the realistic score table (§11.2), in batch.
+    pub fn means_at(&self, zs: &[GpInput]) -> Vec<Vec<f64>> {
+        self.gps.iter().map(|g| g.means(zs)).collect()
     }
 }
 
-impl SourceGps {
-    /// The posterior means of the three GPs at `zs` (reward, next x, next y): the value
-    /// triples `(ρ_r, ρ_x, ρ_y)` of the realistic score table (§11.2), in batch.
-    pub fn means_at(&self, zs: &[[f64; 3]]) -> [Vec<f64>; 3] {
-        std::array::from_fn(|k| self.gps[k].means(zs))
+impl<const D: usize> Domain<D> {
+    /// The GP the domain uses for `output`: the weighting's reward GP, the weighted
+    /// dimension's GP, or the fallback for an unweighted dimension.
+    pub fn gp_spec(&self, output: Output) -> GpSpec {
+        match output {
+            Output::Reward => self.weighting.reward.clone(),
+            Output::Next(d) => self
+                .weighting
+                .transition
+                .get(d)
+                .cloned()
+                .flatten()
+                .unwrap_or_else(|| self.weighting.transition_fallback.clone()),
+        }
     }
 }

@@ -1,9 +1,11 @@
-//! The Puddle World transfer experiments (spec §3–§9, §11–§13): the thesis's Chapter 5 and
-//! the IWFQI paper's puddle-world curves, with every baseline.
+//! The transfer experiments (spec §3–§9, §11–§13) on any [`crate::domains::Domain`]: the
+//! thesis's Chapter 5 and the IWFQI paper's Puddle World, water-reservoir (Dam) and Acrobot
+//! curves, with every baseline. (The module keeps its historical name; the protocol and the
+//! algorithms are generic over the state dimension.)
 //!
 //! - [`sources`]: source datasets (the published ones, a user's own in the same CSV layout,
-//!   or freshly generated as §6 says);
-//! - [`gp`]: the GP fits (§4.2) on records;
+//!   or freshly generated as each domain's paper says);
+//! - [`gp`]: the GP fits (§4.2, or the published fixed kernels) on records;
 //! - [`protocol`]: the common experiment protocol of §3 (episodic collection, evaluation,
 //!   per-step records);
 //! - [`algorithms`]: FQI, IWFQI (mean, heuristic, ideal weights), RBT, SDT, AWFQI and
@@ -18,7 +20,7 @@
 //! **Seeding** (spec §1's \[CHOICE\]): every random stream is a ChaCha8 generator seeded from
 //! a hash of the experiment seed and a purpose: (seed, RUN, algorithm, run index) for a run,
 //! (seed, SCORE_TABLE) for the realistic tables, (seed, SOURCE_GENERATION, source) for
-//! generated source data. No stream depends on thread scheduling or on which other
+//! generated source data, (seed, IDEAL_WEIGHTS) for the sampled means of the ideal weights. No stream depends on thread scheduling or on which other
 //! algorithms or runs are computed, so `--runs 0..5` and `--runs 5..10` give the same runs
 //! as `--runs 0..10`.
 
@@ -37,5 +39,7 @@ pub const RUN: u64 = 1;
 pub const SCORE_TABLE: u64 = 2;
 /// Stream purpose: generating a source dataset.
 pub const SOURCE_GENERATION: u64 = 3;
+/// Stream purpose: the sampled model steps of the ideal weights (the Dam's).
+pub const IDEAL_WEIGHTS: u64 = 4;
 
 pub use crate::seeding::stream;

@@ -1,27 +1,31 @@
-//! The common experiment protocol of spec §3: episodic data collection, greedy evaluation and
-//! the per-step records every algorithm writes.
+//! The common experiment protocol of spec §3, for every domain: episodic data collection,
+//! greedy evaluation and the per-step records every algorithm writes.
 //!
 //! A run resets the algorithm, then for step `k = 1..K`: collect (episodes, or generative
 //! queries for the active algorithms), learn from scratch on all data, evaluate the greedy
-//! policy with 5 rollouts from (0, 0) on the noisy target (`perf_disc_greedy`, §3.3), and
-//! append a [`StepRecord`].
+//! policy with one rollout from each of the domain's evaluation start states on the noisy
+//! target (`perf_disc_greedy`, §3.3), and append a [`StepRecord`].
 
 use std::time::Instant;
 
-use awfqi::env::{Dynamics, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON, PuddleWorld};
-use awfqi::evaluation::{EvaluationProtocol, evaluate};
+use awfqi::env::Dynamics;
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::sources::Record;
+use crate::domains::{Domain, Record};
+use crate::trees::TreeParams;
 
 /// The protocol's parameters (spec §3.2, §13).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Protocol {
-    /// Dynamics variant of the target (and sources).
-    #[serde(with = "dynamics_name")]
-    pub dynamics: Dynamics,
+    /// Puddle World's dynamics variant (absent for the other domains).
+    #[serde(
+        default,
+        with = "dynamics_name",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub dynamics: Option<Dynamics>,
     /// Steps `K`.
     pub steps: usize,
     /// Episodes per step `B` (the batch size).
@@ -34,34 +38,38 @@ pub struct Protocol {
     pub iterations: usize,
     /// Trees per forest (50).
     pub trees: usize,
+    /// Growth limits of the trees (absent when fully grown, spec §4.1).
+    #[serde(default, skip_serializing_if = "TreeParams::is_fully_grown")]
+    pub tree: TreeParams,
 }
 
 impl Protocol {
-    /// The reference protocol for a dynamics variant, `K` steps of `B` episodes.
+    /// Puddle World's reference protocol for a dynamics variant, `K` steps of `B` episodes.
     pub fn reference(dynamics: Dynamics, steps: usize, episodes_per_step: usize) -> Self {
+        let domain = crate::domains::puddle::domain(dynamics);
         Self {
-            dynamics,
-            steps,
-            episodes_per_step,
-            epsilon: 0.3,
-            rollouts: PUDDLE_EVALUATION_ROLLOUTS,
-            iterations: 60,
-            trees: 50,
+            dynamics: Some(dynamics),
+            ..Self::published(&domain, steps, episodes_per_step)
         }
     }
 
-    /// The active algorithms' per-step budget `n = H·B` (§12).
-    pub fn budget(&self) -> usize {
-        PUDDLE_HORIZON * self.episodes_per_step
-    }
-
-    /// The target task.
-    pub fn target(&self) -> PuddleWorld<f64> {
-        PuddleWorld::target(self.dynamics)
+    /// A domain's published protocol with `K` steps of `B` episodes.
+    pub fn published<const D: usize>(domain: &Domain<D>, steps: usize, episodes: usize) -> Self {
+        let p = &domain.published;
+        Self {
+            dynamics: None,
+            steps,
+            episodes_per_step: episodes,
+            epsilon: p.epsilon,
+            rollouts: domain.evaluation_starts.len(),
+            iterations: p.iterations,
+            trees: p.trees,
+            tree: p.tree,
+        }
     }
 }
 
-/// Serde of [`Dynamics`] as `"shared"` / `"puddle"`.
+/// Serde of an optional [`Dynamics`] as `"shared"` / `"puddle"`.
 pub mod dynamics_name {
     use awfqi::env::Dynamics;
     use serde::{Deserialize, Deserializer, Serializer};
@@ -75,16 +83,20 @@ pub mod dynamics_name {
     }
 
     /// Serializes a variant as its name.
-    pub fn serialize<S: Serializer>(d: &Dynamics, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(name(*d))
+    pub fn serialize<S: Serializer>(d: &Option<Dynamics>, s: S) -> Result<S::Ok, S::Error> {
+        match d {
+            Some(d) => s.serialize_str(name(*d)),
+            None => s.serialize_none(),
+        }
     }
 
     /// Parses a variant's name.
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Dynamics, D::Error> {
-        match String::deserialize(d)?.as_str() {
-            "shared" => Ok(Dynamics::Shared),
-            "puddle" => Ok(Dynamics::PuddleBased),
-            other => Err(serde::de::Error::custom(format!(
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Dynamics>, D::Error> {
+        match Option::<String>::deserialize(d)?.as_deref() {
+            None => Ok(None),
+            Some("shared") => Ok(Some(Dynamics::Shared)),
+            Some("puddle") => Ok(Some(Dynamics::PuddleBased)),
+            Some(other) => Err(serde::de::Error::custom(format!(
                 "unknown dynamics {other}"
             ))),
         }
@@ -137,6 +149,13 @@ pub struct StepRecord {
     pub perf_disc_greedy_steps: f64,
     /// Rollouts that reached the goal.
     pub perf_disc_greedy_goals: usize,
+    /// Mean over the rollouts of the average reward per step (the Dam's second criterion,
+    /// `perf_avg_greedy`; from the same rollouts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perf_avg_greedy_mean: Option<f64>,
+    /// Its standard error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perf_avg_greedy_std: Option<f64>,
     /// Wall time of the step (collection, learning, evaluation), seconds. Not written to
     /// the result files (they are identical for identical seeds); see `timing.csv`.
     #[serde(skip)]
@@ -148,35 +167,35 @@ pub struct StepRecord {
 
 /// Something the protocol can run: it collects and learns one step at a time and acts
 /// greedily on what it learned.
-pub trait Learner {
+pub trait Learner<const D: usize = 2> {
     /// Step `k` (1-based): collect this step's target data and learn from scratch on all of
     /// it.
     fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics>;
 
     /// The greedy action in `state` (ties to the smallest index).
-    fn greedy_action(&self, state: &[f64; 2]) -> usize;
+    fn greedy_action(&self, state: &[f64; D]) -> usize;
 
     /// The target records collected so far (`D₀`).
-    fn target_samples(&self) -> &[Record];
+    fn target_samples(&self) -> &[Record<D>];
 }
 
 /// Runs `K` steps of `learner` and evaluates after each; `after_step` sees each record.
-pub fn run(
+pub fn run<const D: usize>(
+    domain: &Domain<D>,
     protocol: &Protocol,
-    learner: &mut dyn Learner,
+    learner: &mut dyn Learner<D>,
     rng: &mut ChaCha8Rng,
     mut after_step: impl FnMut(&StepRecord),
 ) -> anyhow::Result<Vec<StepRecord>> {
-    let target = protocol.target();
     let mut steps = Vec::with_capacity(protocol.steps);
     for k in 1..=protocol.steps {
         let start = Instant::now();
         let diagnostics = learner.step(k, rng)?;
-        let greedy = |s: &[f64; 2]| learner.greedy_action(s);
+        let greedy = |s: &[f64; D]| learner.greedy_action(s);
         let n_target = learner.target_samples().len();
         let record = evaluate_step(
+            domain,
             protocol,
-            &target,
             k,
             &greedy,
             n_target,
@@ -193,22 +212,17 @@ pub fn run(
 /// Evaluates the greedy policy `greedy` after step `k` (§3.3) and builds the step's record;
 /// `start` is when the step began.
 #[allow(clippy::too_many_arguments)]
-pub fn evaluate_step(
+pub fn evaluate_step<const D: usize>(
+    domain: &Domain<D>,
     protocol: &Protocol,
-    target: &PuddleWorld<f64>,
     k: usize,
-    greedy: &dyn Fn(&[f64; 2]) -> usize,
+    greedy: &dyn Fn(&[f64; D]) -> usize,
     n_target_samples: usize,
     diagnostics: Diagnostics,
     start: Instant,
     rng: &mut ChaCha8Rng,
 ) -> anyhow::Result<StepRecord> {
-    let mut policy = |s: &[f64; 2]| Ok(greedy(s));
-    let rollouts = EvaluationProtocol {
-        rollouts: protocol.rollouts,
-        ..target.evaluation_protocol()
-    };
-    let eval = evaluate(target, &mut policy, &rollouts, rng)?;
+    let eval = domain.evaluate(greedy, rng)?;
     Ok(StepRecord {
         step: k,
         n_episodes: k * protocol.episodes_per_step,
@@ -216,38 +230,41 @@ pub fn evaluate_step(
         perf_disc_greedy_mean: eval.mean_return,
         perf_disc_greedy_std: eval.standard_error,
         perf_disc_greedy_steps: eval.mean_steps,
-        perf_disc_greedy_goals: eval.absorbed,
+        perf_disc_greedy_goals: eval.reached_goal,
+        perf_avg_greedy_mean: eval.average_reward.map(|a| a.0),
+        perf_avg_greedy_std: eval.average_reward.map(|a| a.1),
         seconds: start.elapsed().as_secs_f64(),
         diagnostics,
     })
 }
 
 /// A greedy policy: the action in a state.
-pub type Greedy<'a> = &'a dyn Fn(&[f64; 2]) -> usize;
+pub type Greedy<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
 
-/// Appends `B` episodes to `data` (§3.2): uniform at step 1 (`greedy` is `None`), ε-greedy
-/// around `greedy` afterwards.
-pub fn collect_episodes(
+/// Appends `B` episodes on the target to `data` (§3.2): uniform at step 1 (`greedy` is
+/// `None`), ε-greedy around `greedy` afterwards.
+pub fn collect_episodes<const D: usize>(
+    domain: &Domain<D>,
     protocol: &Protocol,
-    target: &PuddleWorld<f64>,
-    greedy: Option<Greedy<'_>>,
+    greedy: Option<Greedy<'_, D>>,
     rng: &mut ChaCha8Rng,
-    data: &mut Vec<Record>,
+    data: &mut Vec<Record<D>>,
 ) -> anyhow::Result<()> {
+    let n = domain.num_actions();
     for _ in 0..protocol.episodes_per_step {
-        let visit = |r: awfqi::env::EpisodeRecord<f64>| {
-            data.push(r.transition);
+        let visit = |_t: usize, r: Record<D>| {
+            data.push(r);
             Ok(())
         };
         match greedy {
             None => {
-                let mut uniform = UniformPolicy::new(4)?;
-                target.run_episode_with(&mut uniform, PUDDLE_HORIZON, rng, visit)?;
+                let mut uniform = UniformPolicy::new(n)?;
+                domain.run_episode(&*domain.target, &mut uniform, rng, visit)?;
             }
             Some(g) => {
-                let inner = |s: &[f64; 2]| Ok(g(s));
-                let mut policy = EpsilonGreedyPolicy::new(inner, protocol.epsilon, 4)?;
-                target.run_episode_with(&mut policy, PUDDLE_HORIZON, rng, visit)?;
+                let inner = |s: &[f64; D]| Ok(g(s));
+                let mut policy = EpsilonGreedyPolicy::new(inner, protocol.epsilon, n)?;
+                domain.run_episode(&*domain.target, &mut policy, rng, visit)?;
             }
         }
     }
@@ -257,26 +274,27 @@ pub fn collect_episodes(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::domains::puddle;
     use rand_core::SeedableRng;
 
     /// A learner that always goes right then up, to exercise the loop.
     struct Fixed {
-        data: Vec<Record>,
+        data: Vec<Record<2>>,
         protocol: Protocol,
+        domain: Domain<2>,
     }
 
     impl Learner for Fixed {
         fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
-            let target = self.protocol.target();
             let g = |s: &[f64; 2]| if s[0] < 4.5 { 0 } else { 2 };
             let greedy: Option<Greedy<'_>> = if k == 1 { None } else { Some(&g) };
-            collect_episodes(&self.protocol, &target, greedy, rng, &mut self.data)?;
+            collect_episodes(&self.domain, &self.protocol, greedy, rng, &mut self.data)?;
             Ok(Diagnostics::default())
         }
         fn greedy_action(&self, s: &[f64; 2]) -> usize {
             if s[0] < 4.5 { 0 } else { 2 }
         }
-        fn target_samples(&self) -> &[Record] {
+        fn target_samples(&self) -> &[Record<2>] {
             &self.data
         }
     }
@@ -284,13 +302,15 @@ mod tests {
     #[test]
     fn records_count_episodes_and_samples() {
         let protocol = Protocol::reference(Dynamics::Shared, 3, 2);
+        let domain = puddle::domain(Dynamics::Shared);
         let mut learner = Fixed {
             data: Vec::new(),
             protocol,
+            domain: domain.clone(),
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let mut seen = 0;
-        let steps = run(&protocol, &mut learner, &mut rng, |_| seen += 1).unwrap();
+        let steps = run(&domain, &protocol, &mut learner, &mut rng, |_| seen += 1).unwrap();
         assert_eq!(seen, 3);
         for (i, s) in steps.iter().enumerate() {
             assert_eq!(s.step, i + 1);
@@ -306,6 +326,7 @@ mod tests {
             assert_eq!(s.perf_disc_greedy_goals, 5);
             assert!(s.perf_disc_greedy_mean < -11.4);
             assert!(s.perf_disc_greedy_steps >= 12.0 && s.perf_disc_greedy_steps <= 25.0);
+            assert_eq!(s.perf_avg_greedy_mean, None);
         }
         let last = steps.last().unwrap().n_target_samples;
         assert_eq!(last, learner.data.len());
@@ -313,11 +334,31 @@ mod tests {
         let mut again = Fixed {
             data: Vec::new(),
             protocol,
+            domain: domain.clone(),
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let steps2 = run(&protocol, &mut again, &mut rng, |_| ()).unwrap();
+        let steps2 = run(&domain, &protocol, &mut again, &mut rng, |_| ()).unwrap();
         for (a, b) in steps.iter().zip(&steps2) {
             assert_eq!(a.perf_disc_greedy_mean, b.perf_disc_greedy_mean);
         }
+    }
+
+    /// The harness's evaluation replays the core's Puddle World evaluation draw for draw.
+    #[test]
+    fn puddle_evaluation_is_the_cores() {
+        let domain = puddle::domain(Dynamics::PuddleBased);
+        let greedy = |s: &[f64; 2]| if s[1] < 9.0 { 2 } else { 0 };
+        let mut a = ChaCha8Rng::seed_from_u64(4);
+        let ours = domain.evaluate(&greedy, &mut a).unwrap();
+        let target = awfqi::env::PuddleWorld::<f64>::target(Dynamics::PuddleBased);
+        let mut b = ChaCha8Rng::seed_from_u64(4);
+        let mut policy = |s: &[f64; 2]| Ok(greedy(s));
+        let protocol = target.evaluation_protocol();
+        let core = awfqi::evaluation::evaluate(&target, &mut policy, &protocol, &mut b).unwrap();
+        assert_eq!(ours.mean_return.to_bits(), core.mean_return.to_bits());
+        assert_eq!(ours.standard_error.to_bits(), core.standard_error.to_bits());
+        assert_eq!(ours.mean_steps, core.mean_steps);
+        assert_eq!(ours.reached_goal, core.absorbed);
+        assert_eq!(a, b);
     }
 }

@@ -163,6 +163,8 @@ mod tests {
             perf_disc_greedy_std: 0.0,
             perf_disc_greedy_steps: 20.0,
             perf_disc_greedy_goals: 5,
+            perf_avg_greedy_mean: None,
+            perf_avg_greedy_std: None,
             seconds: 0.0,
             diagnostics: Diagnostics::default(),
         }

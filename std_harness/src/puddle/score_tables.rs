@@ -1,17 +1,19 @@
-//! Score tables of the AWFQI variants (spec §11): rows in one of three modes, the oracle
-//! values (the sources' noise-free model functions) or the realistic ones (posterior means
-//! of GPs fitted on each source's data), the population variance over the sources per row,
-//! and drawing rows with probability proportional to `V_r`.
+//! Score tables of the AWFQI variants (spec §11), for every domain: rows in one of three
+//! modes, the oracle values (the sources' noise-free mean rewards) or the realistic ones
+//! (posterior means of reward GPs fitted on each source's data), the population variance
+//! `V_r` over the sources per row, and drawing rows with probability proportional to `V_r`.
+//!
+//! Only `V_r` is computed: it alone drives sampling in the thesis's experiments (§11.3),
+//! so the next-state columns `V_x, V_y` (and their GPs) are left out.
 //!
 //! A table is built once per experiment and shared by every run (§11.2 \[CHOICE\]).
 
 use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::score::{RowSet, ScoreTable, Scores};
 use rand_chacha::ChaCha8Rng;
 
-use super::gp::{GpOptions, SourceGps};
-use super::sources::{Record, SourceSet};
+use super::gp::{GpOptions, Output, SourceGps};
+use super::sources::SourceSet;
+use crate::domains::{Domain, GpInput};
 
 /// Which rows a table has (§11.1); the thesis's settings 1–3.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
@@ -19,7 +21,8 @@ use super::sources::{Record, SourceSet};
 pub enum Mode {
     /// The `(s, a)` of every source record (setting 1).
     Source,
-    /// The 101 × 101 grid with spacing 0.1, borders included, × 4 actions (setting 2).
+    /// The domain's grid × every action (setting 2; Puddle World's 101 × 101 grid with
+    /// spacing 0.1, borders included).
     Grid,
     /// Grid rows followed by source rows (setting 3).
     Both,
@@ -39,107 +42,113 @@ impl Mode {
 /// Grid spacing of the thesis (`dx = dy = 0.1`).
 pub const GRID_SPACING: f64 = 0.1;
 
-/// Each source's records, as the core's row sets borrow them.
-fn source_slices(sources: &SourceSet) -> Vec<&[Record]> {
-    sources
-        .sources
-        .iter()
-        .map(|s| s.records.as_slice())
-        .collect()
-}
-
-/// The core's row set of `mode` over the sources' records `slices` (§11.1).
-fn row_set<'a>(
+/// The rows of `mode` as `(state, action)` pairs, in the order of §11.1: the domain's grid
+/// rows (at `spacing`), then the `(s, a)` of every source record in order.
+pub fn rows<const D: usize>(
+    domain: &Domain<D>,
     mode: Mode,
-    slices: &'a [&'a [Record]],
+    sources: &SourceSet<D>,
     spacing: f64,
-) -> anyhow::Result<RowSet<'a, f64, 2>> {
-    let grid = PuddleWorld::score_grid(spacing)?;
-    Ok(match mode {
-        Mode::Source => RowSet::source_data(slices)?,
-        Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
-        Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, slices)?,
-    })
+) -> anyhow::Result<Vec<([f64; D], usize)>> {
+    let mut rows = match mode {
+        Mode::Source => Vec::new(),
+        Mode::Grid | Mode::Both => (domain.grid_rows)(spacing)?,
+    };
+    if mode != Mode::Grid {
+        rows.extend(
+            sources
+                .sources
+                .iter()
+                .flat_map(|s| s.records.iter().map(|r| (r.state, r.action))),
+        );
+    }
+    anyhow::ensure!(!rows.is_empty(), "the score table has no rows");
+    Ok(rows)
 }
 
-/// The rows of `mode` as `(state, action)` pairs, in the order of §11.1.
-pub fn rows(
-    mode: Mode,
-    sources: &SourceSet,
-    spacing: f64,
-) -> anyhow::Result<Vec<([f64; 2], usize)>> {
-    let slices = source_slices(sources);
-    Ok(row_set(mode, &slices, spacing)?.iter().collect())
+/// The population variance of `values` as the core's score table computes it (shifted
+/// two-pass: `d_j = v_j − v_1`, `mean(d²) − mean(d)²`, clipped at 0), so that the tables
+/// of every domain share the core's numbers.
+fn population_variance(values: impl Iterator<Item = f64>) -> f64 {
+    let (mut first, mut s, mut q, mut m) = (None, 0.0, 0.0, 0.0);
+    for v in values {
+        let f = *first.get_or_insert(v);
+        let d = v - f;
+        s += d;
+        q += d * d;
+        m += 1.0;
+    }
+    let mean = s / m;
+    (q / m - mean * mean).max(0.0)
 }
 
-/// A computed table: rows and their scores.
+/// A computed table: rows and their scores `V_r`.
 #[derive(Debug, Clone)]
-pub struct ScoreTableData {
+pub struct ScoreTableData<const D: usize = 2> {
     /// The row mode.
     pub mode: Mode,
     /// `true` for the oracle table.
     pub oracle: bool,
     /// The rows.
-    pub rows: Vec<([f64; 2], usize)>,
-    /// Their scores `(V_r, V_x, V_y)`.
-    pub values: Vec<Scores<f64, 2>>,
+    pub rows: Vec<([f64; D], usize)>,
+    /// Their scores `V_r`.
+    pub reward_variance: Vec<f64>,
 }
 
-impl ScoreTableData {
-    /// The oracle table (§11.2): values from the sources' noise-free model functions, with
-    /// the core's score computation.
-    pub fn oracle(mode: Mode, sources: &SourceSet, spacing: f64) -> anyhow::Result<Self> {
-        let worlds = PuddleWorld::<f64>::sources(sources.dynamics);
-        let slices = source_slices(sources);
-        let set = row_set(mode, &slices, spacing)?;
-        let mut values = vec![Scores::default(); set.len()];
-        ScoreTable::compute(set, &worlds, &mut values)?;
+impl<const D: usize> ScoreTableData<D> {
+    /// The oracle table (§11.2): `V_r` of the sources' noise-free mean rewards.
+    ///
+    /// Errors: a row outside a source's state space; non-finite values.
+    pub fn oracle(
+        domain: &Domain<D>,
+        mode: Mode,
+        sources: &SourceSet<D>,
+        spacing: f64,
+    ) -> anyhow::Result<Self> {
+        let rows = rows(domain, mode, sources, spacing)?;
+        let reward_variance = rows
+            .iter()
+            .map(|&(s, a)| {
+                let values = domain
+                    .sources
+                    .iter()
+                    .map(|m| m.mean_reward(s, a))
+                    .collect::<awfqi::Result<Vec<f64>>>()?;
+                let v = population_variance(values.into_iter());
+                anyhow::ensure!(v.is_finite(), "non-finite oracle score at {s:?}, {a}");
+                Ok(v)
+            })
+            .collect::<anyhow::Result<_>>()?;
         Ok(Self {
             mode,
             oracle: true,
-            rows: set.iter().collect(),
-            values,
+            rows,
+            reward_variance,
         })
     }
 
-    /// The realistic table (§11.2): values from the posterior means of each source's GPs
-    /// (`gps[j]` fitted on source `j` only), population variance over the sources.
+    /// The realistic table (§11.2): `V_r` of the posterior means of each source's reward
+    /// GP (`gps[j]` fitted on source `j` only).
     pub fn realistic(
+        domain: &Domain<D>,
         mode: Mode,
-        sources: &SourceSet,
+        sources: &SourceSet<D>,
         gps: &[SourceGps],
         spacing: f64,
     ) -> anyhow::Result<Self> {
         use rayon::prelude::*;
-        let rows = rows(mode, sources, spacing)?;
-        let zs: Vec<[f64; 3]> = rows.iter().map(|(s, a)| [s[0], s[1], *a as f64]).collect();
-        // predictions[j][output][row]
-        let predictions: Vec<[Vec<f64>; 3]> = gps.par_iter().map(|g| g.means_at(&zs)).collect();
-        let m = predictions.len() as f64;
-        let variance = |output: usize, row: usize| {
-            // Population variance over the sources, on values shifted by the first source's
-            // (exactly 0 where all agree; accurate for large close values).
-            let first = predictions[0][output][row];
-            let (mut s, mut q) = (0.0, 0.0);
-            for p in &predictions {
-                let d = p[output][row] - first;
-                s += d;
-                q += d * d;
-            }
-            let mean = s / m;
-            (q / m - mean * mean).max(0.0)
-        };
-        let values = (0..rows.len())
-            .map(|i| Scores {
-                reward: variance(0, i),
-                next_state: [variance(1, i), variance(2, i)],
-            })
+        let rows = rows(domain, mode, sources, spacing)?;
+        let zs: Vec<GpInput> = rows.iter().map(|(s, a)| domain.gp_input(s, *a)).collect();
+        // predictions[j][row]: the reward GP is the first of each source's.
+        let predictions: Vec<Vec<f64>> = gps.par_iter().map(|g| g.gps[0].means(&zs)).collect();
+        let reward_variance = (0..rows.len())
+            .map(|i| population_variance(predictions.iter().map(|p| p[i])))
             .collect();
         Ok(Self {
             mode,
             oracle: false,
             rows,
-            values,
+            reward_variance,
         })
     }
 
@@ -155,17 +164,15 @@ impl ScoreTableData {
 
     /// The sampling weights of §11.3: `V_r`, or all 1 when it sums to 0 \[CHOICE\].
     pub fn sampling_weights(&self) -> Vec<f64> {
-        let w: Vec<f64> = self.values.iter().map(|v| v.reward).collect();
-        if w.iter().all(|&x| x <= 0.0) {
-            vec![1.0; w.len()]
+        if self.reward_variance.iter().all(|&x| x <= 0.0) {
+            vec![1.0; self.reward_variance.len()]
         } else {
-            w
+            self.reward_variance.clone()
         }
     }
 
     /// Draws `n` rows i.i.d. with replacement with probability ∝ `V_r` (§12 step 1), one
-    /// `u64` per draw.
-    /// Returns the drawn row indices.
+    /// `u64` per draw. Returns the drawn row indices.
     pub fn draw(&self, n: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Vec<usize>> {
         let mut storage = vec![AliasEntry::<f64>::default(); self.len()];
         let alias = AliasTable::build(self.sampling_weights(), &mut storage)?;
@@ -173,10 +180,12 @@ impl ScoreTableData {
     }
 }
 
-/// Fits the realistic tables' source GPs (reward, next x, next y per source, on all its
-/// records whatever `options.max_gp` says), each source from its own stream (seed, SCORE_TABLE, source), in parallel.
-pub fn fit_source_gps(
-    sources: &SourceSet,
+/// Fits the realistic tables' source reward GPs (on all the source's records whatever
+/// `options.max_gp` says), each source from its own stream (seed, SCORE_TABLE, source), in
+/// parallel.
+pub fn fit_source_gps<const D: usize>(
+    domain: &Domain<D>,
+    sources: &SourceSet<D>,
     options: &GpOptions,
     seed: u64,
 ) -> anyhow::Result<Vec<SourceGps>> {
@@ -192,7 +201,7 @@ pub fn fit_source_gps(
                 max_gp: usize::MAX,
                 ..*options
             };
-            SourceGps::fit(&s.records, &all, &mut rng)
+            SourceGps::fit(domain, &s.records, &[Output::Reward], &all, &mut rng)
         })
         .collect()
 }
@@ -200,15 +209,23 @@ pub fn fit_source_gps(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::domains::puddle;
     use awfqi::env::Dynamics;
     use rand_core::SeedableRng;
 
     #[test]
     fn row_counts_follow_the_modes() {
+        let domain = puddle::domain(Dynamics::Shared);
         let sources = SourceSet::published(Dynamics::Shared).unwrap();
-        assert_eq!(rows(Mode::Grid, &sources, 0.1).unwrap().len(), 40_804);
-        assert_eq!(rows(Mode::Source, &sources, 0.1).unwrap().len(), 1033);
-        let both = rows(Mode::Both, &sources, 0.1).unwrap();
+        assert_eq!(
+            rows(&domain, Mode::Grid, &sources, 0.1).unwrap().len(),
+            40_804
+        );
+        assert_eq!(
+            rows(&domain, Mode::Source, &sources, 0.1).unwrap().len(),
+            1033
+        );
+        let both = rows(&domain, Mode::Both, &sources, 0.1).unwrap();
         assert_eq!(both.len(), 40_804 + 1033);
         assert_eq!(both[40_804], (sources.sources[0].records[0].state, 2));
         // Grid coordinates are 0.1 × integer, action fastest.
@@ -217,11 +234,20 @@ mod tests {
     }
 
     #[test]
+    fn population_variance_is_the_shifted_two_pass_one() {
+        assert_eq!(population_variance([3.0, 3.0, 3.0].into_iter()), 0.0);
+        let v = population_variance([1.0, 2.0, 6.0].into_iter());
+        assert!((v - 42.0 / 9.0).abs() < 1e-12, "{v}");
+        // Large close values keep their variance (a naive E[x²] − E[x]² loses it).
+        let v = population_variance([1e9 + 1.0, 1e9 + 2.0].into_iter());
+        assert!((v - 0.25).abs() < 1e-9, "{v}");
+    }
+
+    #[test]
     fn oracle_grid_table_concentrates_where_the_sources_disagree() {
+        let domain = puddle::domain(Dynamics::Shared);
         let sources = SourceSet::published(Dynamics::Shared).unwrap();
-        let table = ScoreTableData::oracle(Mode::Grid, &sources, 0.1).unwrap();
-        // Shared dynamics: the mean next states agree, so V_x = V_y = 0 exactly.
-        assert!(table.values.iter().all(|v| v.next_state == [0.0, 0.0]));
+        let table = ScoreTableData::oracle(&domain, Mode::Grid, &sources, 0.1).unwrap();
         // At (2, 2) source 2 has a puddle (r̄ = −22.53) and sources 1, 3 do not
         // (r̄ = −1.000074): population variance = (2/9)·(21.527397)² ≈ 102.98.
         let i = table
@@ -230,13 +256,23 @@ mod tests {
             .position(|&(s, a)| (s[0] - 2.0).abs() < 1e-9 && (s[1] - 2.0).abs() < 1e-9 && a == 0)
             .unwrap();
         let d: f64 = -22.527471 + 1.000074;
-        assert!((table.values[i].reward - 2.0 / 9.0 * d * d).abs() < 1e-3);
+        assert!((table.reward_variance[i] - 2.0 / 9.0 * d * d).abs() < 1e-3);
+        // The same numbers as the core's score table.
+        let worlds = awfqi::env::PuddleWorld::<f64>::sources(Dynamics::Shared);
+        let grid = awfqi::env::PuddleWorld::score_grid(0.1).unwrap();
+        let set = awfqi::score::RowSet::grid(grid, 4).unwrap();
+        let mut storage = vec![awfqi::score::Scores::default(); set.len()];
+        awfqi::score::ScoreTable::compute(set, &worlds, &mut storage).unwrap();
+        for (ours, core) in table.reward_variance.iter().zip(&storage) {
+            assert_eq!(ours.to_bits(), core.reward.to_bits());
+        }
         // Drawing follows V_r: the draws land where V_r is large.
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let draws = table.draw(2000, &mut rng).unwrap();
-        let mean_score: f64 = draws.iter().map(|&d| table.values[d].reward).sum::<f64>() / 2000.0;
+        let v = &table.reward_variance;
+        let mean_score: f64 = draws.iter().map(|&d| v[d]).sum::<f64>() / 2000.0;
         // Under P ∝ V the expected score of a draw is ΣV²/ΣV, with variance ΣV³/ΣV − (ΣV²/ΣV)².
-        let moment = |p: i32| table.values.iter().map(|v| v.reward.powi(p)).sum::<f64>();
+        let moment = |p: i32| v.iter().map(|x| x.powi(p)).sum::<f64>();
         let expected = moment(2) / moment(1);
         let se = ((moment(3) / moment(1) - expected * expected) / 2000.0).sqrt();
         assert!(

@@ -4,7 +4,7 @@
 //! written to be checked by eye against the formulas, never for speed, and shares no code
 //! with the core.
 //!
-//! Model (the same as the core's, `spec/algorithms.md` §4.2 with one length scale per
+//! Model (the same as the core's, `docs/algorithms.md` §4.2 with one length scale per
 //! dimension):
 //!
 //! * kernel `k(x, x') = c · exp(−½ Σ_d ((x_d − x'_d) / l_d)²)`;

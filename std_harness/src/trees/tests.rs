@@ -386,3 +386,89 @@ fn a_pair_with_a_zero_and_a_subnormal_weight_is_a_leaf_not_a_nan() {
         }
     }
 }
+
+#[test]
+fn growth_limits_bound_node_and_leaf_sizes() {
+    let (xs, ys, _) = random_set(400, 7);
+    let ones = vec![1.0; xs.len()];
+    for params in [
+        TreeParams {
+            min_samples_split: 20,
+            min_samples_leaf: 1,
+        },
+        TreeParams {
+            min_samples_split: 5,
+            min_samples_leaf: 2,
+        },
+        TreeParams {
+            min_samples_split: 2,
+            min_samples_leaf: 7,
+        },
+    ] {
+        let mut forest = Forest::empty();
+        forest
+            .refit_with(&xs, &ys, &ones, 10, &params, &mut rng(8))
+            .unwrap();
+        for tree in 0..10 {
+            let leaves = leaves_of(&forest, tree, &xs);
+            // Every leaf keeps at least min_samples_leaf samples; a leaf of fewer than
+            // min_samples_split samples came from a split of a node of at least that many,
+            // so there are fewer leaves than n / min_samples_leaf and at least one small one
+            // only if splits happened. The leaf value is the mean of its samples.
+            for members in leaves.values() {
+                assert!(members.len() >= params.min_samples_leaf, "{params:?}");
+                let mean = members.iter().map(|&i| ys[i]).sum::<f64>() / members.len() as f64;
+                let x = xs[members[0]];
+                assert!((forest.tree_prediction(tree, &x).unwrap() - mean).abs() < 1e-9);
+            }
+            // Route the samples through the tree: every split node held at least
+            // max(min_samples_split, 2·min_samples_leaf) samples.
+            let min_node = params.min_samples_split.max(2 * params.min_samples_leaf);
+            let mut counts: HashMap<usize, usize> = HashMap::new();
+            for x in &xs {
+                let mut i = forest.roots[tree] as usize;
+                loop {
+                    *counts.entry(i).or_default() += 1;
+                    let next = forest.nodes[i].step(x);
+                    if next == i {
+                        break;
+                    }
+                    i = next;
+                }
+            }
+            for (&i, &n) in &counts {
+                if forest.nodes[i].left as usize != i {
+                    assert!(n >= min_node, "split node of {n} samples, {params:?}");
+                }
+            }
+            assert!(leaves.len() > 1, "the root was split");
+        }
+    }
+    // Fewer samples than min_samples_split: every tree is a single leaf, the mean.
+    let params = TreeParams {
+        min_samples_split: 20,
+        min_samples_leaf: 1,
+    };
+    let mut forest = Forest::empty();
+    forest
+        .refit_with(&xs[..19], &ys[..19], &ones[..19], 3, &params, &mut rng(9))
+        .unwrap();
+    let mean = ys[..19].iter().sum::<f64>() / 19.0;
+    assert!((forest.predict(&[3.0, 3.0]) - mean).abs() < 1e-12);
+    assert_eq!(forest.n_nodes(), 3);
+    // The defaults are the fully grown trees of `refit`, bit for bit.
+    let mut a = Forest::empty();
+    a.refit(&xs, &ys, &ones, 5, &mut rng(3)).unwrap();
+    let mut b = Forest::empty();
+    b.refit_with(&xs, &ys, &ones, 5, &TreeParams::default(), &mut rng(3))
+        .unwrap();
+    for x in &xs {
+        assert_eq!(a.predict(x).to_bits(), b.predict(x).to_bits());
+    }
+    // Invalid limits are errors.
+    let bad = TreeParams {
+        min_samples_split: 1,
+        min_samples_leaf: 1,
+    };
+    assert!(b.refit_with(&xs, &ys, &ones, 5, &bad, &mut rng(3)).is_err());
+}

@@ -75,3 +75,54 @@ pub const STEP_EXPECTED: [([f64; 2], f64, bool); 4] = [
         true,
     ),
 ];
+
+/// Acrobot steps `(instance, state, action)`: instance 0 = target, 1 and 2 the sources of
+/// the IWFQI paper (noise-free dynamics, so no seed).
+pub const ACROBOT_CASES: [(usize, [f64; 4], usize); 3] = [
+    (0, [-1.8, 0.0, 0.0, 0.0], 1),
+    (1, [0.5, -0.3, 1.0, -2.0], 0),
+    (2, [3.0, 2.5, 12.0, -27.0], 1),
+];
+/// `(reward, next state)` of each Acrobot case: the published equations evaluated in f64
+/// (`scripts/golden/iwfqi_domains.py`).
+pub const ACROBOT_EXPECTED: [(f64, [f64; 4]); 3] = [
+    (
+        -1.545595810613826,
+        [
+            -1.705868437048838,
+            -0.02323266077401403,
+            0.9447845150673156,
+            -0.2351089783750868,
+        ],
+    ),
+    (
+        -3.857649139731614,
+        [
+            0.6639837282633843,
+            -0.6941524835873419,
+            0.6060162346362343,
+            -1.8839605261276888,
+        ],
+    ),
+    (
+        -8.858407346410207,
+        [
+            -0.9593164200396043,
+            -2.549731219099285,
+            10.299985021602778,
+            -21.226529066087064,
+        ],
+    ),
+];
+/// Dam means `(instance, state, action)`: instance 0 = target, k = source k.
+pub const DAM_CASES: [(usize, [f64; 2], usize); 3] = [
+    (0, [351.7889265982291, 43.0], 6),
+    (3, [487.5, 309.0], 2),
+    (6, [55.0, 360.0], 7),
+];
+/// `(mean reward, mean next storage)` of each Dam case (the published definitions in f64).
+pub const DAM_EXPECTED: [(f64, f64); 3] = [
+    (-3.884169494867184, 346.9280693209469),
+    (-40.3125, 496.81261989155547),
+    (-13.750000000000002, 59.0),
+];

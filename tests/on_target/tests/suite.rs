@@ -207,6 +207,50 @@ mod tests {
         }
     }
 
+    /// The IWFQI paper's Acrobot steps and Dam means in f32 against the published
+    /// definitions evaluated on the host in f64.
+    #[test]
+    fn iwfqi_domains_match_host_f64() {
+        use awfqi::env::{Acrobot, Dam};
+        for (&(k, s, a), &(reward, next)) in golden::ACROBOT_CASES
+            .iter()
+            .zip(golden::ACROBOT_EXPECTED.iter())
+        {
+            let env = match k {
+                0 => Acrobot::<f32>::target(),
+                k => Acrobot::<f32>::sources()[k - 1],
+            };
+            let t = env.step(s.map(|x| x as f32), a).unwrap();
+            assert!(close(t.reward as f64, reward, 1e-5, 1e-5), "r {}", t.reward);
+            for (got, want) in t.next_state.iter().zip(next.iter()) {
+                assert!(
+                    close(*got as f64, *want, 1e-4, 1e-4),
+                    "s′ {} vs {}",
+                    got,
+                    want
+                );
+            }
+        }
+        for (&(k, s, a), &(reward, mean)) in
+            golden::DAM_CASES.iter().zip(golden::DAM_EXPECTED.iter())
+        {
+            let env = match k {
+                0 => Dam::<f32>::target(),
+                k => Dam::<f32>::sources()[k - 1],
+            };
+            let s = s.map(|x| x as f32);
+            let r = env.mean_reward(s, a).unwrap();
+            assert!(close(r as f64, reward, 1e-4, 1e-6), "r {}", r);
+            let m = env.mean_next_state(s, a).unwrap();
+            assert!(
+                close(m[0] as f64, mean, 1e-3, 1e-6),
+                "s′ {} vs {}",
+                m[0],
+                mean
+            );
+        }
+    }
+
     /// Episodes: records chain (each next state is the following record's state), only the
     /// last can be absorbing, and the rollout's discounted return is the sum over the same
     /// episode (same seed) computed here; bad arguments are typed errors.

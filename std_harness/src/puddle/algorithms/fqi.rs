@@ -1,33 +1,33 @@
-//! Plain FQI on the target's episodes (spec §5, §13.1): 60 iterations of per-action
-//! Extra-Trees on `D₀` only, unweighted, from scratch every step.
+//! Plain FQI on the target's episodes (spec §5, §13.1): per-action Extra-Trees on `D₀`
+//! only, unweighted, from scratch every step.
 
-use awfqi::env::PuddleWorld;
 use rand_chacha::ChaCha8Rng;
 
+use super::Experiment;
+use crate::domains::{Domain, Record};
 use crate::fqi::{Dataset, FqiOptions, fqi};
 use crate::puddle::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
-use crate::puddle::sources::Record;
 use crate::trees::ActionForests;
 
-/// The episodic part every baseline shares: the target, `D₀` and the last Q-function.
+/// The episodic part every baseline shares: the domain, `D₀` and the last Q-function.
 #[derive(Debug, Clone)]
-pub struct Episodic {
+pub struct Episodic<'e, const D: usize = 2> {
+    /// The domain (its target is the task collected on).
+    pub domain: &'e Domain<D>,
     /// The protocol.
     pub protocol: Protocol,
-    /// The target task.
-    pub target: PuddleWorld<f64>,
     /// `D₀`.
-    pub data: Vec<Record>,
+    pub data: Vec<Record<D>>,
     /// The Q-function of the last step (`None` before the first).
-    pub q: Option<ActionForests<2>>,
+    pub q: Option<ActionForests<D>>,
 }
 
-impl Episodic {
-    /// An empty run.
-    pub fn new(protocol: &Protocol) -> Self {
+impl<'e, const D: usize> Episodic<'e, D> {
+    /// An empty run of `experiment`.
+    pub fn new(experiment: &'e Experiment<D>) -> Self {
         Self {
-            protocol: *protocol,
-            target: protocol.target(),
+            domain: &experiment.domain,
+            protocol: experiment.protocol,
             data: Vec::new(),
             q: None,
         }
@@ -38,45 +38,49 @@ impl Episodic {
         let greedy = self
             .q
             .as_ref()
-            .map(|q| move |s: &[f64; 2]| q.greedy_action(s));
-        let greedy: Option<Greedy<'_>> = greedy.as_ref().map(|g| g as Greedy<'_>);
-        collect_episodes(&self.protocol, &self.target, greedy, rng, &mut self.data)
+            .map(|q| move |s: &[f64; D]| q.greedy_action(s));
+        let greedy: Option<Greedy<'_, D>> = greedy.as_ref().map(|g| g as Greedy<'_, D>);
+        collect_episodes(self.domain, &self.protocol, greedy, rng, &mut self.data)
     }
 
-    /// FQI options with the protocol's iterations and trees.
+    /// FQI options with the protocol's iterations, trees and tree limits and the domain's
+    /// discount and actions.
     pub fn options<'a>(&self, base: FqiOptions<'a>) -> FqiOptions<'a> {
         FqiOptions {
             iterations: self.protocol.iterations,
             n_trees: self.protocol.trees,
+            tree: self.protocol.tree,
+            gamma: self.domain.discount,
+            num_actions: self.domain.num_actions(),
             ..base
         }
     }
 
     /// The greedy action of the last Q (action 0 before the first fit).
-    pub fn greedy_action(&self, s: &[f64; 2]) -> usize {
+    pub fn greedy_action(&self, s: &[f64; D]) -> usize {
         self.q.as_ref().map_or(0, |q| q.greedy_action(s))
     }
 }
 
 /// Plain FQI.
 #[derive(Debug, Clone)]
-pub struct Fqi {
-    run: Episodic,
+pub struct Fqi<'e, const D: usize = 2> {
+    run: Episodic<'e, D>,
 }
 
-impl Fqi {
+impl<'e, const D: usize> Fqi<'e, D> {
     /// A fresh run.
-    pub fn new(protocol: &Protocol) -> Self {
+    pub fn new(experiment: &'e Experiment<D>) -> Self {
         Self {
-            run: Episodic::new(protocol),
+            run: Episodic::new(experiment),
         }
     }
 }
 
-impl Learner for Fqi {
+impl<const D: usize> Learner<D> for Fqi<'_, D> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.run.collect(rng)?;
-        let data: Dataset<2> = self.run.data.iter().copied().collect();
+        let data: Dataset<D> = self.run.data.iter().copied().collect();
         let options = self.run.options(FqiOptions::plain());
         self.run.q = Some(fqi(&data, &options, rng)?.q);
         Ok(Diagnostics {
@@ -85,11 +89,11 @@ impl Learner for Fqi {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; 2]) -> usize {
+    fn greedy_action(&self, state: &[f64; D]) -> usize {
         self.run.greedy_action(state)
     }
 
-    fn target_samples(&self) -> &[Record] {
+    fn target_samples(&self) -> &[Record<D>] {
         &self.run.data
     }
 }

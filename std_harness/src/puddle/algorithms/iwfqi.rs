@@ -8,90 +8,99 @@
 //!    predict it at every source's `z`, noise-subtracted per source batch;
 //! 3. reward weights of the source records with the estimator (mean or heuristic, `v_r`,
 //!    `w_max`); target records weigh 1;
-//! 4. transition weights likewise from target next-x / next-y GPs when on (`v_s`), their
-//!    product per record; all 1 when off (the shared-dynamics configuration);
-//! 5. weighted FQI on target then sources 1..3: iteration 1 fits the reward model with the
+//! 4. transition weights likewise from target GPs of the weighted next-state coordinates
+//!    (`v_s`; Puddle World's x and y in the puddle-based variant, the Dam's storage,
+//!    Acrobot's four), their product per record; all 1 when off (the shared-dynamics
+//!    configuration);
+//! 5. weighted FQI on target then sources 1..m: iteration 1 fits the reward model with the
 //!    reward weights, later iterations use its predictions and the transition weights.
 //!
-//! The ideal-weights variant (§7.7) computes the weights once, from the true noise-free
-//! models, with the true variances 0.01 and 0.04 and no cap.
+//! The GPs are the domain's ([`crate::domains::Weighting`]): fitted by marginal likelihood
+//! for Puddle World, the published fixed kernels for the Dam and Acrobot. The
+//! ideal-weights variant (§7.7) computes the weights once per experiment, from the true
+//! models, with the domain's ideal variances (Puddle World's true 0.01 and 0.04) and no
+//! cap.
 //!
 //! Source records keep their own absorbing flags (§14.5).
 
 use std::sync::Arc;
 
-use awfqi::dataset::Output;
-use awfqi::env::{GenerativeModel, PuddleWorld};
 use awfqi::weights::{Estimator, WeightParams, WeightSummary, ideal_weight};
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::fqi::Episodic;
+use crate::domains::{Domain, GpInput, IdealMeans, Record};
 use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::gp::{RecordGp, input};
+use crate::puddle::gp::{Output, RecordGp};
 use crate::puddle::protocol::{Diagnostics, Learner};
 use crate::puddle::score_tables::ScoreTableData;
-use crate::puddle::sources::{Record, SourceSet};
+use crate::puddle::sources::SourceSet;
 
 /// Where the weights come from.
 #[derive(Debug, Clone)]
 enum Weights {
-    /// Estimated every step from target GPs (§7.2–§7.3).
+    /// Estimated every step from target GPs (§7.2–§7.3), transition weights on the listed
+    /// state coordinates.
     Estimated {
         reward: WeightParams<f64>,
         transition: WeightParams<f64>,
-        transition_on: bool,
+        transition_dims: Vec<usize>,
     },
-    /// Fixed ideal weights (§7.7), computed once: reward and transition weight per source
-    /// record.
-    Ideal {
-        reward: Vec<f64>,
-        transition: Vec<f64>,
-    },
+    /// Fixed ideal weights (§7.7), computed once per experiment: reward and transition
+    /// weight per source record.
+    Ideal(Arc<(Vec<f64>, Vec<f64>)>),
 }
 
 /// IWFQI or AWFQI.
 #[derive(Debug, Clone)]
-pub struct Iwfqi<'e> {
-    experiment: &'e Experiment,
-    run: Episodic,
+pub struct Iwfqi<'e, const D: usize = 2> {
+    experiment: &'e Experiment<D>,
+    run: Episodic<'e, D>,
     weights: Weights,
     /// The score table for active collection (AWFQI); `None` for episodes (IWFQI).
-    table: Option<Arc<ScoreTableData>>,
-    sources: Dataset<2>,
+    table: Option<Arc<ScoreTableData<D>>>,
+    sources: Dataset<D>,
 }
 
-impl<'e> Iwfqi<'e> {
+impl<'e, const D: usize> Iwfqi<'e, D> {
     /// IWFQI (or, with a `table`, AWFQI) with estimated weights.
     pub fn estimated(
-        experiment: &'e Experiment,
+        experiment: &'e Experiment<D>,
         estimator: Estimator,
-        table: Option<Arc<ScoreTableData>>,
+        table: Option<Arc<ScoreTableData<D>>>,
     ) -> anyhow::Result<Self> {
-        let (v_r, v_s) = experiment.options.variances.values();
+        let (v_r, v_s) = experiment.variances()?;
         let cap = experiment.options.max_weight;
         // §12: AWFQI uses the shared-dynamics configuration (transition weights off).
-        let transition_on = table.is_none() && experiment.transition_weights();
+        let transition_dims = if table.is_none() {
+            experiment.transition_dims()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             experiment,
-            run: Episodic::new(&experiment.protocol),
+            run: Episodic::new(experiment),
             weights: Weights::Estimated {
                 reward: WeightParams::new(estimator, v_r, cap)?,
                 transition: WeightParams::new(estimator, v_s, cap)?,
-                transition_on,
+                transition_dims,
             },
             table,
             sources: experiment.sources.union(),
         })
     }
 
-    /// IWFQI with the ideal weights of §7.7.
-    pub fn ideal(experiment: &'e Experiment) -> anyhow::Result<Self> {
-        let (reward, transition) = ideal_weights(&experiment.sources)?;
+    /// IWFQI with the ideal weights of §7.7 (computed once per experiment).
+    pub fn ideal(experiment: &'e Experiment<D>) -> anyhow::Result<Self> {
+        let weights = experiment
+            .ideal_weights
+            .clone()
+            .ok_or_else(|| anyhow::anyhow!("no ideal weights in the experiment"))?;
         Ok(Self {
             experiment,
-            run: Episodic::new(&experiment.protocol),
-            weights: Weights::Ideal { reward, transition },
+            run: Episodic::new(experiment),
+            weights: Weights::Ideal(weights),
             table: None,
             sources: experiment.sources.union(),
         })
@@ -102,10 +111,10 @@ impl<'e> Iwfqi<'e> {
         let Some(table) = &self.table else {
             return self.run.collect(rng);
         };
-        let rows = table.draw(self.run.protocol.budget(), rng)?;
+        let rows = table.draw(self.experiment.budget(), rng)?;
         for r in rows {
             let (state, action) = table.rows[r];
-            let record = self.run.target.query(state, action, rng)?;
+            let record = self.run.domain.target.step(state, action, rng)?;
             self.run.data.push(record);
         }
         Ok(())
@@ -117,68 +126,101 @@ impl<'e> Iwfqi<'e> {
         &self,
         rng: &mut ChaCha8Rng,
     ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<crate::puddle::gp::GpSummary>)> {
-        let (reward, transition, transition_on) = match &self.weights {
-            Weights::Ideal { reward, transition } => {
-                return Ok((reward.clone(), transition.clone(), None));
+        let (reward, transition, transition_dims) = match &self.weights {
+            Weights::Ideal(w) => {
+                return Ok((w.0.clone(), w.1.clone(), None));
             }
             Weights::Estimated {
                 reward,
                 transition,
-                transition_on,
-            } => (reward, transition, *transition_on),
+                transition_dims,
+            } => (reward, transition, transition_dims),
         };
         let options = &self.experiment.options;
+        let domain = &*self.experiment.domain;
         let sources = &self.experiment.sources.sources;
         let target = &self.run.data;
-        let gp = RecordGp::fit(target, Output::Reward, &options.gp, rng)?;
+        let zs: Vec<Vec<GpInput>> = sources
+            .iter()
+            .map(|s| s.records.iter().map(|r| domain.input(r)).collect())
+            .collect();
+        let spec = domain.gp_spec(Output::Reward);
+        let gp = RecordGp::fit_records(domain, target, Output::Reward, &spec, &options.gp, rng)?;
         let mut wr = Vec::with_capacity(self.sources.len());
-        for s in sources {
-            let zs: Vec<[f64; 3]> = s.records.iter().map(input).collect();
-            let post = gp.posteriors(&zs, options.noise);
+        for (s, zs) in sources.iter().zip(&zs) {
+            let post = gp.posteriors(zs, spec.noise(options.noise));
             let ys: Vec<f64> = s.records.iter().map(|r| r.reward).collect();
             let mut out = vec![0.0; ys.len()];
             reward.weights_into(&ys, &post, &s.reward, &mut out)?;
             wr.extend(out);
         }
         let mut ws = vec![1.0; self.sources.len()];
-        if transition_on {
-            for d in 0..2 {
-                let output = Output::NextState(d);
-                let gp_d = RecordGp::fit(target, output, &options.gp, rng)?;
-                let mut offset = 0;
-                for s in sources {
-                    let zs: Vec<[f64; 3]> = s.records.iter().map(input).collect();
-                    let post = gp_d.posteriors(&zs, options.noise);
-                    let ys: Vec<f64> = s.records.iter().map(|r| r.next_state[d]).collect();
-                    let mut out = vec![0.0; ys.len()];
-                    transition.weights_into(&ys, &post, &s.next_state[d], &mut out)?;
-                    for (w, o) in ws[offset..offset + out.len()].iter_mut().zip(out) {
-                        *w *= o;
-                    }
-                    offset += s.len();
+        for &d in transition_dims {
+            let output = Output::Next(d);
+            let spec = domain.gp_spec(output);
+            let gp_d = RecordGp::fit_records(domain, target, output, &spec, &options.gp, rng)?;
+            let mut offset = 0;
+            for (k, (s, zs)) in sources.iter().zip(&zs).enumerate() {
+                let stored = s.next_state.get(d).ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "source {} stores no GP posteriors of next-state coordinate {d}",
+                        k + 1
+                    )
+                })?;
+                let post = gp_d.posteriors(zs, spec.noise(options.noise));
+                let ys: Vec<f64> = s.records.iter().map(|r| output.of(r)).collect();
+                let mut out = vec![0.0; ys.len()];
+                transition.weights_into(&ys, &post, stored, &mut out)?;
+                for (w, o) in ws[offset..offset + out.len()].iter_mut().zip(out) {
+                    *w *= o;
                 }
+                offset += s.len();
             }
         }
         Ok((wr, ws, Some(gp.summary())))
     }
 }
 
-/// The ideal weights of §7.7 for every source record, in order: reward weights with the
-/// true variance 0.01 and transition weights (product over x and y) with 0.04, from the
-/// target's and the record's source's noise-free models; uncapped.
-pub fn ideal_weights(sources: &SourceSet) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
-    let target = PuddleWorld::<f64>::target(sources.dynamics);
-    let worlds = PuddleWorld::<f64>::sources(sources.dynamics);
+/// The ideal weights of §7.7 for every source record, in order: reward weights with
+/// variance `v_r` and transition weights (product over the state coordinates) with `v_s`,
+/// from the target's and the record's source's models; uncapped. With
+/// [`IdealMeans::Sampled`] the models' "mean" next states are one sampled step each (the
+/// reference's `get_transition_mean`), target first, drawn from `rng`.
+pub fn ideal_weights<const D: usize>(
+    domain: &Domain<D>,
+    sources: &SourceSet<D>,
+    (v_r, v_s): (f64, f64),
+    means: IdealMeans,
+    rng: &mut ChaCha8Rng,
+) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
+    anyhow::ensure!(
+        sources.sources.len() == domain.sources.len(),
+        "{} source datasets for {} source models",
+        sources.sources.len(),
+        domain.sources.len()
+    );
+    let target = &*domain.target;
     let (mut wr, mut ws) = (Vec::new(), Vec::new());
-    for (s, world) in sources.sources.iter().zip(&worlds) {
+    for (s, model) in sources.sources.iter().zip(&domain.sources) {
         for r in &s.records {
-            let (r0, rk) = (target.mean_reward(r.state)?, world.mean_reward(r.state)?);
-            wr.push(ideal_weight(r.reward, r0, rk, 0.01)?);
-            let m0 = target.mean_next_state(r.state, r.action)?;
-            let mk = world.mean_next_state(r.state, r.action)?;
+            let (r0, rk) = (
+                target.mean_reward(r.state, r.action)?,
+                model.mean_reward(r.state, r.action)?,
+            );
+            wr.push(ideal_weight(r.reward, r0, rk, v_r)?);
+            let (m0, mk) = match means {
+                IdealMeans::Exact => (
+                    target.mean_next_state(r.state, r.action)?,
+                    model.mean_next_state(r.state, r.action)?,
+                ),
+                IdealMeans::Sampled => (
+                    target.step(r.state, r.action, rng)?.next_state,
+                    model.step(r.state, r.action, rng)?.next_state,
+                ),
+            };
             let mut w = 1.0;
-            for d in 0..2 {
-                w *= ideal_weight(r.next_state[d], m0[d], mk[d], 0.04)?;
+            for d in 0..D {
+                w *= ideal_weight(r.next_state[d], m0[d], mk[d], v_s)?;
             }
             ws.push(w);
         }
@@ -186,12 +228,12 @@ pub fn ideal_weights(sources: &SourceSet) -> anyhow::Result<(Vec<f64>, Vec<f64>)
     Ok((wr, ws))
 }
 
-impl Learner for Iwfqi<'_> {
+impl<const D: usize> Learner<D> for Iwfqi<'_, D> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.query(rng)?;
         let (wr_source, ws_source, gp) = self.source_weights(rng)?;
         let n_target = self.run.data.len();
-        let mut union: Dataset<2> = self.run.data.iter().copied().collect();
+        let mut union: Dataset<D> = self.run.data.iter().copied().collect();
         union.extend_from(&self.sources);
         let mut wr = vec![1.0; n_target];
         wr.extend_from_slice(&wr_source);
@@ -217,11 +259,11 @@ impl Learner for Iwfqi<'_> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; 2]) -> usize {
+    fn greedy_action(&self, state: &[f64; D]) -> usize {
         self.run.greedy_action(state)
     }
 
-    fn target_samples(&self) -> &[Record] {
+    fn target_samples(&self) -> &[Record<D>] {
         &self.run.data
     }
 }
@@ -229,12 +271,22 @@ impl Learner for Iwfqi<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use awfqi::env::Dynamics;
+    use crate::domains::puddle;
+    use awfqi::env::{Dynamics, PuddleWorld};
+    use rand_core::SeedableRng;
+
+    fn weights(dynamics: Dynamics) -> (SourceSet<2>, Vec<f64>, Vec<f64>) {
+        let sources = SourceSet::published(dynamics).unwrap();
+        let domain = puddle::domain(dynamics);
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let (wr, ws) =
+            ideal_weights(&domain, &sources, (0.01, 0.04), IdealMeans::Exact, &mut rng).unwrap();
+        (sources, wr, ws)
+    }
 
     #[test]
     fn ideal_weights_follow_the_model_differences() {
-        let sources = SourceSet::published(Dynamics::Shared).unwrap();
-        let (wr, ws) = ideal_weights(&sources).unwrap();
+        let (sources, wr, ws) = weights(Dynamics::Shared);
         assert_eq!(wr.len(), sources.total_records());
         // Shared dynamics: the mean next states agree, so every transition weight is 1.
         assert!(ws.iter().all(|&w| w == 1.0));
@@ -252,8 +304,7 @@ mod tests {
             assert!((w - want).abs() <= 1e-9 * want.max(1.0));
         }
         // Puddle-based dynamics: transition weights differ from 1 near puddles.
-        let puddle = SourceSet::published(Dynamics::PuddleBased).unwrap();
-        let (_, ws) = ideal_weights(&puddle).unwrap();
+        let (_, _, ws) = weights(Dynamics::PuddleBased);
         assert!(ws.iter().any(|&w| (w - 1.0).abs() > 0.1));
     }
 }

@@ -160,7 +160,7 @@ pub fn run(
     let protocol = &experiment.protocol;
     let slices: Vec<&[Record32]> = setup.records.iter().map(Vec::as_slice).collect();
     let rows = row_set(setup.mode, setup.spacing, &slices)?;
-    let budget = protocol.budget();
+    let budget = experiment.budget();
     // The kernel's memory, sized at run time.
     let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
     let mut samples = vec![Transition::EMPTY; protocol.steps * budget];
@@ -174,6 +174,9 @@ pub fn run(
         alias: &mut alias,
         fqi: &mut fqi,
     };
+    let dynamics = protocol
+        .dynamics
+        .ok_or_else(|| anyhow::anyhow!("awfqi-kernel runs on Puddle World only"))?;
     let mut kernel = Awfqi::builder(
         AwfqiConfig::thesis(budget).validate()?,
         CellGrid::cube(0.0, 10.0, CELLS)?,
@@ -182,8 +185,7 @@ pub fn run(
     )
     .stored_posteriors(&setup.posteriors)
     .stored_scores(&setup.values)
-    .build(PuddleWorld::target(protocol.dynamics), buffers, rng)?;
-    let target = protocol.target();
+    .build(PuddleWorld::target(dynamics), buffers, rng)?;
     let mut steps = Vec::new();
     for k in 1..=protocol.steps {
         let start = Instant::now();
@@ -206,8 +208,8 @@ pub fn run(
         let q = kernel.q();
         let greedy = |s: &[f64; 2]| q.greedy_action([s[0] as T, s[1] as T]).unwrap_or(0);
         let record = evaluate_step(
+            &experiment.domain,
             protocol,
-            &target,
             k,
             &greedy,
             report.n_target_samples,

@@ -10,12 +10,14 @@ pub mod sdt;
 use std::sync::Arc;
 
 use awfqi::weights::{Estimator, NoiseSubtraction};
+use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use super::gp::GpOptions;
-use super::protocol::{Learner, Protocol};
+use super::protocol::{Learner, Protocol, StepRecord};
 use super::score_tables::ScoreTableData;
 use super::sources::SourceSet;
+use crate::domains::{Domain, IdealMeans, Record};
 
 /// The algorithms of issue 5, in the order the outputs list them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
@@ -131,14 +133,16 @@ impl Algorithm {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Variances {
-    /// `v_r = 0.1`, `v_s = 0.2`: the published runs (standard deviations used as variances).
+    /// The published runs' values: Puddle World's `v_r = 0.1`, `v_s = 0.2` (standard
+    /// deviations used as variances), the Dam's 0.25 and 4, Acrobot's 0.01 and 1.
     Published,
-    /// `v_r = 0.01`, `v_s = 0.04`: the true noise variances.
+    /// Puddle World's true noise variances `v_r = 0.01`, `v_s = 0.04` (the Dam's and
+    /// Acrobot's rewards have no noise, so there is no such value for them).
     Corrected,
 }
 
 impl Variances {
-    /// `(v_r, v_s)`.
+    /// Puddle World's `(v_r, v_s)`.
     pub fn values(self) -> (f64, f64) {
         match self {
             Variances::Published => (0.1, 0.2),
@@ -159,11 +163,15 @@ pub struct TransferOptions {
     pub noise: NoiseSubtraction,
     /// Target-GP fitting (10 restarts, max_gp 4000).
     pub gp: GpOptions,
-    /// Transition weights on (`None`: the §7.6 default of the dynamics variant: off for
-    /// shared, on for puddle-based).
+    /// Transition weights on (`None`: the published configuration of the domain: off for
+    /// shared-dynamics Puddle World, on for puddle-based (§7.6), on the Dam's storage and
+    /// on Acrobot's four coordinates).
     pub transition_weights: Option<bool>,
     /// RBT's `n_total` (500).
     pub rbt_total: usize,
+    /// How the ideal weights get mean next states (`None`: the domain's published way).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ideal_means: Option<IdealMeans>,
 }
 
 fn serialize_noise<S: serde::Serializer>(n: &NoiseSubtraction, s: S) -> Result<S::Ok, S::Error> {
@@ -183,33 +191,78 @@ impl Default for TransferOptions {
             gp: GpOptions::reference(),
             transition_weights: None,
             rbt_total: 500,
+            ideal_means: None,
         }
     }
 }
 
+/// The core kernel's path on an experiment: steps, records and `D₀` of one run (Puddle
+/// World only until the kernel is generic over the state dimension).
+pub type KernelRunner<const D: usize> = fn(
+    &Experiment<D>,
+    &mut ChaCha8Rng,
+    &mut dyn FnMut(&StepRecord),
+) -> anyhow::Result<(Vec<StepRecord>, Vec<Record<D>>)>;
+
 /// Everything the runs of one experiment share (read-only, across threads).
 #[derive(Debug, Clone)]
-pub struct Experiment {
+pub struct Experiment<const D: usize = 2> {
+    /// The domain.
+    pub domain: Arc<Domain<D>>,
     /// The protocol.
     pub protocol: Protocol,
     /// The source datasets.
-    pub sources: Arc<SourceSet>,
+    pub sources: Arc<SourceSet<D>>,
     /// Options of the transfer algorithms.
     pub options: TransferOptions,
     /// The oracle score table of the setting (AWFQI_oracle).
-    pub oracle_table: Option<Arc<ScoreTableData>>,
+    pub oracle_table: Option<Arc<ScoreTableData<D>>>,
     /// The realistic score table of the setting (AWFQI).
-    pub realistic_table: Option<Arc<ScoreTableData>>,
+    pub realistic_table: Option<Arc<ScoreTableData<D>>>,
+    /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
+    pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
     /// The core kernel's own set-up (awfqi-kernel).
     pub kernel: Option<Arc<kernel::KernelSetup>>,
+    /// How the kernel path runs on this domain (`None`: not available).
+    pub kernel_runner: Option<KernelRunner<D>>,
 }
 
-impl Experiment {
+impl<const D: usize> Experiment<D> {
     /// Whether IWFQI-type algorithms use transition weights here.
     pub fn transition_weights(&self) -> bool {
-        self.options
-            .transition_weights
-            .unwrap_or(self.protocol.dynamics == awfqi::env::Dynamics::PuddleBased)
+        !self.transition_dims().is_empty()
+    }
+
+    /// The state coordinates IWFQI weighs transitions on: the domain's published ones, all
+    /// of them with `--transition-weights true`, none with `false`.
+    pub fn transition_dims(&self) -> Vec<usize> {
+        let published = &self.domain.weighting.transition;
+        match self.options.transition_weights {
+            None => (0..D).filter(|&d| published[d].is_some()).collect(),
+            Some(true) => (0..D).collect(),
+            Some(false) => Vec::new(),
+        }
+    }
+
+    /// IWFQI's `(v_r, v_s)`.
+    ///
+    /// Errors: corrected variances requested for a domain without noise variances.
+    pub fn variances(&self) -> anyhow::Result<(f64, f64)> {
+        match self.options.variances {
+            Variances::Published => Ok(self.domain.published.variances),
+            Variances::Corrected if self.domain.name == "puddle world" => {
+                Ok(Variances::Corrected.values())
+            }
+            Variances::Corrected => anyhow::bail!(
+                "--variances corrected applies to Puddle World only: the {}'s rewards have no noise",
+                self.domain.name
+            ),
+        }
+    }
+
+    /// The active algorithms' per-step budget `n = H·B` (§12).
+    pub fn budget(&self) -> usize {
+        self.domain.horizon * self.protocol.episodes_per_step
     }
 
     /// The per-run parameters recorded in the results (§3.4).
@@ -223,7 +276,7 @@ impl Experiment {
             "trees": p.trees,
             "epsilon": p.epsilon,
         });
-        let (v_r, v_s) = self.options.variances.values();
+        let (v_r, v_s) = self.variances().unwrap_or((f64::NAN, f64::NAN));
         let o = &mut v;
         match algorithm {
             Algorithm::Iwfqi
@@ -241,16 +294,24 @@ impl Experiment {
                 o["max_gp"] = self.options.gp.max_gp.into();
                 o["gp_restarts"] = self.options.gp.restarts.into();
                 o["weight_rw"] = true.into();
-                let st = self.transition_weights() && !algorithm.is_active();
-                o["weight_st"] = serde_json::json!([st, st]);
+                let dims = self.transition_dims();
+                let st: Vec<bool> = (0..D)
+                    .map(|d| dims.contains(&d) && !algorithm.is_active())
+                    .collect();
+                o["weight_st"] = serde_json::json!(st);
                 o["noise_subtraction"] = serde_json::to_value(self.options)
                     .map(|t| t["noise"].clone())
                     .unwrap_or_default();
             }
             Algorithm::IwfqiIdeal => {
-                o["var_rw"] = 0.01.into();
-                o["var_st"] = 0.04.into();
+                let (v_r, v_s) = self.domain.published.ideal_variances;
+                o["var_rw"] = v_r.into();
+                o["var_st"] = v_s.into();
                 o["weights"] = "ideal".into();
+                let means = self.ideal_means();
+                if means != IdealMeans::Exact {
+                    o["ideal_means"] = serde_json::to_value(means).unwrap_or_default();
+                }
             }
             Algorithm::Rbt => {
                 o["delta_sa"] = 0.1.into();
@@ -267,7 +328,7 @@ impl Experiment {
             Algorithm::Fqi | Algorithm::Sdt => {}
         }
         if algorithm.is_active() {
-            o["budget_per_step"] = p.budget().into();
+            o["budget_per_step"] = self.budget().into();
             let table = match algorithm {
                 Algorithm::AwfqiOracle => self.oracle_table.as_ref().map(|t| (t.mode, "oracle")),
                 Algorithm::Awfqi => self.realistic_table.as_ref().map(|t| (t.mode, "realistic")),
@@ -284,12 +345,20 @@ impl Experiment {
         v
     }
 
+    /// How the ideal weights get their mean next states.
+    pub fn ideal_means(&self) -> IdealMeans {
+        self.options
+            .ideal_means
+            .unwrap_or(self.domain.published.ideal_means)
+    }
+
     /// A fresh learner of `algorithm` for one run (the kernel runs through
-    /// [`kernel::run`] instead, since it borrows its storage for the whole run).
-    pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner + '_>> {
+    /// [`Experiment::kernel_runner`] instead, since it borrows its storage for the whole
+    /// run).
+    pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner<D> + '_>> {
         use awfqi::weights::Estimator::{Heuristic, Mean};
         Ok(match algorithm {
-            Algorithm::Fqi => Box::new(fqi::Fqi::new(&self.protocol)),
+            Algorithm::Fqi => Box::new(fqi::Fqi::new(self)),
             Algorithm::Iwfqi => Box::new(iwfqi::Iwfqi::estimated(self, Mean, None)?),
             Algorithm::IwfqiHeuristic => Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None)?),
             Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),
@@ -305,7 +374,7 @@ impl Experiment {
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
                 Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
             }
-            Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through kernel::run"),
+            Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through its kernel runner"),
         })
     }
 }

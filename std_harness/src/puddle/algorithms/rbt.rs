@@ -4,7 +4,8 @@
 //! well the target samples explain it), then `⌊n_total·c_k⌋` records of source `k` drawn with
 //! replacement ∝ relevance, appended to the target records for plain FQI.
 //!
-//! With `φ_δ(x) = exp(−x²/δ)` and `d_ij = ‖z^t_i − z^k_j‖` over `(s_x, s_y, a)`:
+//! With `φ_δ(x) = exp(−x²/δ)` and `d_ij = ‖z^t_i − z^k_j‖` over `z = (s, value(a))` (the
+//! action's value, as the reference's records hold it: the Dam's release, else the index):
 //! - compliance: `W_ij = φ_sa(d_ij)/Σ_j′ φ_sa(d_ij′)`, `P_ij = φ_s′(‖s′^t_i − (s^t_i + s′^k_j −
 //!   s^k_j)‖)`, `Q_ij = φ_r(|r^t_i − r^k_j|)`, `λ_i = (mean_j W_ij P_ij)(mean_j W_ij Q_ij)`,
 //!   `Λ_k = p_k · mean_i λ_i`;
@@ -16,9 +17,9 @@ use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::fqi::Episodic;
+use crate::domains::Record;
 use crate::fqi::{Dataset, FqiOptions, fqi};
 use crate::puddle::protocol::{Diagnostics, Learner};
-use crate::puddle::sources::Record;
 
 /// RBT's parameters (spec §8).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -52,30 +53,42 @@ fn phi(x: f64, delta: f64) -> f64 {
     (-x * x / delta).exp()
 }
 
-fn z(r: &Record) -> [f64; 3] {
-    [r.state[0], r.state[1], r.action as f64]
-}
-
-fn distance(a: &Record, b: &Record) -> f64 {
-    let (p, q) = (z(a), z(b));
-    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+/// `‖z_a − z_b‖` over the states and the actions' `values`.
+fn distance<const D: usize>(a: &Record<D>, b: &Record<D>, values: &[f64]) -> f64 {
+    let state: f64 = a
+        .state
+        .iter()
+        .zip(&b.state)
+        .map(|(p, q)| (p - q).powi(2))
+        .sum();
+    let value = |r: &Record<D>| values.get(r.action).copied().unwrap_or(f64::NAN);
+    (state + (value(a) - value(b)).powi(2)).sqrt()
 }
 
 /// `‖s′_a − (s_a + s′_b − s_b)‖`: how far `a`'s next state is from `a`'s state moved by
 /// `b`'s displacement.
-fn transition_gap(a: &Record, b: &Record) -> f64 {
-    let dx = a.next_state[0] - (a.state[0] + b.next_state[0] - b.state[0]);
-    let dy = a.next_state[1] - (a.state[1] + b.next_state[1] - b.state[1]);
-    (dx * dx + dy * dy).sqrt()
+fn transition_gap<const D: usize>(a: &Record<D>, b: &Record<D>) -> f64 {
+    (0..D)
+        .map(|d| {
+            let v = a.next_state[d] - (a.state[d] + b.next_state[d] - b.state[d]);
+            v * v
+        })
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// The per-sample compliance of `a` (one record) against all of `others`, the roles as in
 /// §8 step 2 (`a` a target record, `others` a source) or step 3 (reversed). Returns the
 /// normalised kernel weights `W_a·` too.
-fn sample_compliance(a: &Record, others: &[Record], p: &RbtParams) -> (f64, Vec<f64>) {
+fn sample_compliance<const D: usize>(
+    a: &Record<D>,
+    others: &[Record<D>],
+    values: &[f64],
+    p: &RbtParams,
+) -> (f64, Vec<f64>) {
     let mut w: Vec<f64> = others
         .iter()
-        .map(|b| phi(distance(a, b), p.delta_sa))
+        .map(|b| phi(distance(a, b, values), p.delta_sa))
         .collect();
     let total: f64 = w.iter().sum();
     if total > 0.0 {
@@ -92,20 +105,33 @@ fn sample_compliance(a: &Record, others: &[Record], p: &RbtParams) -> (f64, Vec<
     ((wp / n) * (wq / n), w)
 }
 
-/// The task compliance `Λ_k = p_k · mean_i λ_i` of a source (§8 step 2).
-pub fn task_compliance(target: &[Record], source: &[Record], prior: f64, p: &RbtParams) -> f64 {
+/// The task compliance `Λ_k = p_k · mean_i λ_i` of a source (§8 step 2), actions valued
+/// by `values`.
+pub fn task_compliance<const D: usize>(
+    target: &[Record<D>],
+    source: &[Record<D>],
+    values: &[f64],
+    prior: f64,
+    p: &RbtParams,
+) -> f64 {
     if target.is_empty() || source.is_empty() {
         return 0.0;
     }
     let sum: f64 = target
         .iter()
-        .map(|t| sample_compliance(t, source, p).0)
+        .map(|t| sample_compliance(t, source, values, p).0)
         .sum();
     prior * sum / target.len() as f64
 }
 
-/// The unnormalised relevances `ρ_j` of a source's records (§8 step 3).
-pub fn relevances(target: &[Record], source: &[Record], p: &RbtParams) -> Vec<f64> {
+/// The unnormalised relevances `ρ_j` of a source's records (§8 step 3), actions valued by
+/// `values`.
+pub fn relevances<const D: usize>(
+    target: &[Record<D>],
+    source: &[Record<D>],
+    values: &[f64],
+    p: &RbtParams,
+) -> Vec<f64> {
     if target.is_empty() {
         return vec![0.0; source.len()];
     }
@@ -113,7 +139,7 @@ pub fn relevances(target: &[Record], source: &[Record], p: &RbtParams) -> Vec<f6
     let mut avg_distance = Vec::with_capacity(source.len());
     let mut order: Vec<usize> = (0..target.len()).collect();
     for s in source {
-        let (lambda, w) = sample_compliance(s, target, p);
+        let (lambda, w) = sample_compliance(s, target, values, p);
         compliance.push(lambda);
         // Average distance: target samples by ascending weight; keep the prefix whose
         // cumulative weight is ≤ μ; divide the kept distances' sum by ι + 1, ι the first
@@ -125,7 +151,7 @@ pub fn relevances(target: &[Record], source: &[Record], p: &RbtParams) -> Vec<f6
             if cumulative > p.mu {
                 break;
             }
-            sum += distance(&target[i], s);
+            sum += distance(&target[i], s, values);
             if cumulative > best {
                 best = cumulative;
                 iota = pos;
@@ -177,18 +203,18 @@ fn draw_with_replacement(weights: &[f64], n: usize, rng: &mut ChaCha8Rng) -> Vec
 
 /// RBT.
 #[derive(Debug, Clone)]
-pub struct Rbt<'e> {
-    experiment: &'e Experiment,
-    run: Episodic,
+pub struct Rbt<'e, const D: usize = 2> {
+    experiment: &'e Experiment<D>,
+    run: Episodic<'e, D>,
     params: RbtParams,
 }
 
-impl<'e> Rbt<'e> {
+impl<'e, const D: usize> Rbt<'e, D> {
     /// A fresh run with the reference parameters and the experiment's `n_total`.
-    pub fn new(experiment: &'e Experiment) -> Self {
+    pub fn new(experiment: &'e Experiment<D>) -> Self {
         Self {
             experiment,
-            run: Episodic::new(&experiment.protocol),
+            run: Episodic::new(experiment),
             params: RbtParams {
                 n_total: experiment.options.rbt_total,
                 ..RbtParams::reference()
@@ -197,7 +223,7 @@ impl<'e> Rbt<'e> {
     }
 }
 
-impl Learner for Rbt<'_> {
+impl<const D: usize> Learner<D> for Rbt<'_, D> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         use rayon::prelude::*;
         self.run.collect(rng)?;
@@ -205,13 +231,14 @@ impl Learner for Rbt<'_> {
         let target = &self.run.data;
         let prior = 1.0 / sources.len() as f64;
         let p = self.params;
+        let values = &self.experiment.domain.action_values;
         // Pure functions of the data: parallel over sources without touching the stream.
         let per_source: Vec<(f64, Vec<f64>)> = sources
             .par_iter()
             .map(|s| {
                 (
-                    task_compliance(target, &s.records, prior, &p),
-                    relevances(target, &s.records, &p),
+                    task_compliance(target, &s.records, values, prior, &p),
+                    relevances(target, &s.records, values, &p),
                 )
             })
             .collect();
@@ -220,7 +247,7 @@ impl Learner for Rbt<'_> {
             .iter()
             .map(|(l, _)| if total > 0.0 { l / total } else { prior })
             .collect();
-        let mut union: Dataset<2> = target.iter().copied().collect();
+        let mut union: Dataset<D> = target.iter().copied().collect();
         let mut transferred = 0;
         for ((s, (_, rho)), &c) in sources.iter().zip(&per_source).zip(&compliances) {
             let n_k = (p.n_total as f64 * c).floor() as usize;
@@ -239,11 +266,11 @@ impl Learner for Rbt<'_> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; 2]) -> usize {
+    fn greedy_action(&self, state: &[f64; D]) -> usize {
         self.run.greedy_action(state)
     }
 
-    fn target_samples(&self) -> &[Record] {
+    fn target_samples(&self) -> &[Record<D>] {
         &self.run.data
     }
 }
@@ -254,7 +281,7 @@ mod tests {
     use awfqi::env::Transition;
     use rand_core::SeedableRng;
 
-    fn row(v: [f64; 6]) -> Record {
+    fn row(v: [f64; 6]) -> Record<2> {
         Transition {
             state: [v[0], v[1]],
             action: v[2] as usize,
@@ -267,7 +294,7 @@ mod tests {
     /// The golden example of spec §8.
     #[test]
     fn golden_example() {
-        let target: Vec<Record> = [
+        let target: Vec<Record<2>> = [
             [1.65, 2.15, 0.0, -0.99, 2.65, 2.15],
             [1.81, 1.63, 0.0, -0.85, 2.81, 1.63],
             [1.27, 1.94, 0.0, -0.92, 2.27, 1.94],
@@ -275,7 +302,7 @@ mod tests {
         ]
         .map(row)
         .to_vec();
-        let source: Vec<Record> = [
+        let source: Vec<Record<2>> = [
             [0.21, 0.26, 0.0, -0.84, 1.51, 0.56],
             [0.06, 2.5, 1.0, -1.28, 0.36, 3.8],
             [2.33, 2.61, 0.0, -1.01, 3.63, 2.91],
@@ -291,9 +318,10 @@ mod tests {
             mu: 0.8,
             n_total: 500,
         };
-        let lambda = task_compliance(&target, &source, 1.0 / 3.0, &p);
+        let values = [0.0, 1.0];
+        let lambda = task_compliance(&target, &source, &values, 1.0 / 3.0, &p);
         assert!((lambda - 0.005649023346879907).abs() < 1e-14, "{lambda}");
-        let rho = relevances(&target, &source, &p);
+        let rho = relevances(&target, &source, &values, &p);
         let want = [
             0.9154365889774161,
             0.8447503965500835,

@@ -2,37 +2,37 @@
 //! (spec §9): the reward model is fitted on the target records only, then every record of
 //! the union of target and all source records gets the model's reward (the sources' own
 //! rewards are discarded; their states, next states and absorbing flags are kept), and
-//! iterations 2..60 run on the union, unweighted.
+//! iterations 2..N run on the union, unweighted.
 
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::fqi::Episodic;
+use crate::domains::Record;
 use crate::fqi::{Dataset, FqiOptions, fqi};
 use crate::puddle::protocol::{Diagnostics, Learner};
-use crate::puddle::sources::Record;
 
 /// SDT.
 #[derive(Debug, Clone)]
-pub struct Sdt {
-    run: Episodic,
-    sources: Dataset<2>,
+pub struct Sdt<'e, const D: usize = 2> {
+    run: Episodic<'e, D>,
+    sources: Dataset<D>,
 }
 
-impl Sdt {
+impl<'e, const D: usize> Sdt<'e, D> {
     /// A fresh run on the experiment's sources.
-    pub fn new(experiment: &Experiment) -> Self {
+    pub fn new(experiment: &'e Experiment<D>) -> Self {
         Self {
-            run: Episodic::new(&experiment.protocol),
+            run: Episodic::new(experiment),
             sources: experiment.sources.union(),
         }
     }
 }
 
-impl Learner for Sdt {
+impl<const D: usize> Learner<D> for Sdt<'_, D> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.run.collect(rng)?;
-        let mut union: Dataset<2> = self.run.data.iter().copied().collect();
+        let mut union: Dataset<D> = self.run.data.iter().copied().collect();
         let n_target = union.len();
         union.extend_from(&self.sources);
         let options = self.run.options(FqiOptions::sdt(n_target));
@@ -44,11 +44,11 @@ impl Learner for Sdt {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; 2]) -> usize {
+    fn greedy_action(&self, state: &[f64; D]) -> usize {
         self.run.greedy_action(state)
     }
 
-    fn target_samples(&self) -> &[Record] {
+    fn target_samples(&self) -> &[Record<D>] {
         &self.run.data
     }
 }

@@ -13,7 +13,10 @@ use core::hint::black_box as opaque;
 
 use awfqi::alias::AliasTable;
 use awfqi::dataset::{batch_transform, fit_gp, input, predict_posteriors};
-use awfqi::env::{Dynamics, EpisodeRecord, FiniteMdp, GridWorld, Puddle, PuddleWorld};
+use awfqi::env::{
+    Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
+    Puddle, PuddleWorld,
+};
 use awfqi::identify::score::{mutual_information_score, uniform_score, variance_score};
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, StateAction, belief_weighted_policy,
@@ -96,6 +99,7 @@ fn rng_and_policy<T: Real>(rng: &mut ChaCha8Rng) {
     keep(awfqi::rng::uniform::<T, _>(rng));
     keep(awfqi::rng::uniform_in::<T, _>(rng, num(-1.0), num(2.0)));
     keep(awfqi::rng::standard_normal::<T, _>(rng));
+    keep(awfqi::rng::uniform_index(rng, index(8)));
     keep(awfqi::rng::normal::<T, _>(rng, num(1.0), num(0.5)));
     let weights: [T; 4] = [num(0.0), num(1.0), num(2.0), num(0.5)];
     keep(awfqi::rng::categorical(rng, opaque(&weights[..])));
@@ -220,6 +224,62 @@ fn puddle<T: Real>(rng: &mut ChaCha8Rng) {
     keep(world.run_episode(&mut uniform, index(50), &mut records, rng));
     keep(&records);
     keep(world.rollout(&mut uniform, index(50), num(0.99), rng));
+}
+
+fn dam<T: Real>(rng: &mut ChaCha8Rng) {
+    let profile = InflowProfile::new(opaque(3)).unwrap_or_else(|_| loop {});
+    keep((profile.index(), profile.mean(index(200))));
+    let custom = Dam::new(profile, num::<T>(0.4), num(0.6));
+    let sources = Dam::<T>::sources();
+    let env = match custom {
+        Ok(d) => d,
+        Err(_) => sources[index(2) % 6],
+    };
+    keep((
+        Dam::<T>::target(),
+        env.profile(),
+        env.flooding_weight(),
+        env.demand_weight(),
+    ));
+    let s = [num::<T>(320.0), num(17.0)];
+    keep(env.check_state(s));
+    keep(env.inflow_mean(s));
+    keep(env.release(s, index(5)));
+    keep(env.mean_reward(s, index(1)));
+    keep(env.mean_next_state(s, index(7)));
+    keep(env.step(s, index(3), rng));
+    keep(env.initial_state(rng));
+    keep(GenerativeModel::num_actions(&env));
+    keep(env.query(s, index(6), rng));
+}
+
+fn acrobot<T: Real>(rng: &mut ChaCha8Rng) {
+    let task = if opaque(true) {
+        AcrobotTask::SwingUp
+    } else {
+        AcrobotTask::Rotate
+    };
+    let custom = Acrobot::new([num::<T>(0.9), num(0.6)], [num(1.1), num(0.7)], task);
+    let sources = Acrobot::<T>::sources();
+    let env = match custom {
+        Ok(a) => a,
+        Err(_) => sources[index(1) % 2],
+    };
+    keep((
+        Acrobot::<T>::target(),
+        env.masses(),
+        env.lengths(),
+        env.task(),
+    ));
+    let s = [num::<T>(0.4), num(-1.2), num(3.0), num(-7.5)];
+    keep(env.check_state(s));
+    keep(env.mean_reward(s));
+    keep(env.in_goal(s));
+    keep(env.mean_next_state(s, index(1)));
+    keep(env.step(s, index(0)));
+    keep(env.initial_state(rng));
+    keep(GenerativeModel::num_actions(&env));
+    keep(env.query(s, index(1), rng));
 }
 
 fn gp<T: Real>(rng: &mut ChaCha8Rng) {
@@ -882,6 +942,8 @@ fn exercise<T: Real>(seed: u64) {
     rng_and_policy::<T>(&mut rng);
     grid::<T>(&mut rng);
     puddle::<T>(&mut rng);
+    dam::<T>(&mut rng);
+    acrobot::<T>(&mut rng);
     gp::<T>(&mut rng);
     transfer::<T>(&mut rng);
     identification::<T>(&mut rng);

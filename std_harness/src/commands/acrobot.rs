@@ -1,0 +1,28 @@
+//! `awfqi-harness acrobot`: the IWFQI paper's multitask Acrobot experiment (Tirinzoni et
+//! al., ICML 2018) — FQI, IWFQI, IWFQI-ideal, RBT (the published curves), SDT and the
+//! active algorithms on the common protocol ([`super::transfer`]). Defaults: the published
+//! configuration (10 episodes per step, 20 steps, 20 runs, 50 trees with
+//! `min_samples_split = 5`, `min_samples_leaf = 2`, 50 iterations, ε = 0.1, evaluation from
+//! nine start angles).
+
+use crate::domains::acrobot;
+
+use super::transfer::{Args, Config, Defaults};
+
+/// The command's defaults (the published configuration).
+pub const DEFAULTS: Defaults = Defaults {
+    episodes_per_step: 10,
+    steps: 20,
+    runs: 20,
+    threshold: -50.0,
+};
+
+/// Runs the experiment and writes every output.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.dynamics.is_some() {
+        anyhow::bail!("--dynamics applies to Puddle World only");
+    }
+    let domain = acrobot::domain();
+    let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
+    super::transfer::run(&config, domain, None, None)
+}

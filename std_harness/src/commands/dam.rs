@@ -1,0 +1,27 @@
+//! `awfqi-harness dam`: the IWFQI paper's water-reservoir experiment (Tirinzoni et al.,
+//! ICML 2018) — FQI, IWFQI, IWFQI-ideal, RBT (the published curves), SDT and the active
+//! algorithms on the common protocol ([`super::transfer`]). Defaults: the published
+//! configuration (1 episode of 360 days per step, 10 steps, 20 runs, 100 trees with
+//! `min_samples_split = 20`, 60 iterations, ε = 0.3, evaluation from (200, 1) ten times).
+
+use crate::domains::dam;
+
+use super::transfer::{Args, Config, Defaults};
+
+/// The command's defaults (the published configuration).
+pub const DEFAULTS: Defaults = Defaults {
+    episodes_per_step: 1,
+    steps: 10,
+    runs: 20,
+    threshold: -1000.0,
+};
+
+/// Runs the experiment and writes every output.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.dynamics.is_some() {
+        anyhow::bail!("--dynamics applies to Puddle World only");
+    }
+    let domain = dam::domain();
+    let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
+    super::transfer::run(&config, domain, None, None)
+}

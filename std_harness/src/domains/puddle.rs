@@ -1,0 +1,105 @@
+//! The continuous Puddle World of spec §2 as a [`Domain`]: target and sources of §2.6 in
+//! either dynamics variant, 4 actions, horizon 50, γ = 0.99, 5 evaluation rollouts from
+//! (0, 0), and the reference configuration of §13.1.
+
+use std::sync::Arc;
+
+use awfqi::env::{
+    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON,
+    PUDDLE_INITIAL_STATE, PuddleWorld,
+};
+use rand_chacha::ChaCha8Rng;
+
+use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
+use crate::puddle::gp::GpSpec;
+use crate::puddle::sources::{Generation, SourceLayout, SourceSet};
+use crate::trees::TreeParams;
+
+impl Task<2> for PuddleWorld<f64> {
+    fn step(
+        &self,
+        state: [f64; 2],
+        action: usize,
+        rng: &mut ChaCha8Rng,
+    ) -> awfqi::Result<Record<2>> {
+        PuddleWorld::step(self, state, action, rng)
+    }
+
+    fn mean_reward(&self, state: [f64; 2], action: usize) -> awfqi::Result<f64> {
+        if action >= PUDDLE_ACTIONS {
+            return Err(awfqi::Error::OutOfRange {
+                parameter: "action",
+            });
+        }
+        PuddleWorld::mean_reward(self, state)
+    }
+
+    fn mean_next_state(&self, state: [f64; 2], action: usize) -> awfqi::Result<[f64; 2]> {
+        PuddleWorld::mean_next_state(self, state, action)
+    }
+
+    /// s₀ = (0, 0); draws nothing.
+    fn initial_state(&self, _rng: &mut ChaCha8Rng) -> [f64; 2] {
+        PUDDLE_INITIAL_STATE
+    }
+}
+
+/// Puddle World with `dynamics`: the target and sources 1–3 of spec §2.6; IWFQI's GPs are
+/// fitted by marginal likelihood (§4.2), transition weights on both coordinates in the
+/// puddle-based variant (§7.6).
+pub fn domain(dynamics: Dynamics) -> Domain<2> {
+    let sources: Vec<Arc<dyn Task<2>>> = PuddleWorld::<f64>::sources(dynamics)
+        .into_iter()
+        .map(|w| Arc::new(w) as Arc<dyn Task<2>>)
+        .collect();
+    let weighted = (dynamics == Dynamics::PuddleBased).then_some(GpSpec::fitted());
+    Domain {
+        name: "puddle world",
+        command: "puddle",
+        state_names: ["x", "y"],
+        state_bounds: [(0.0, 10.0), (0.0, 10.0)],
+        target: Arc::new(PuddleWorld::<f64>::target(dynamics)),
+        sources,
+        action_values: (0..PUDDLE_ACTIONS).map(|a| a as f64).collect(),
+        horizon: PUDDLE_HORIZON,
+        discount: PUDDLE_DISCOUNT,
+        evaluation_starts: vec![PUDDLE_INITIAL_STATE; PUDDLE_EVALUATION_ROLLOUTS],
+        average_reward: false,
+        weighting: Weighting {
+            reward: GpSpec::fitted(),
+            transition: [weighted.clone(), weighted],
+            transition_fallback: GpSpec::fitted(),
+        },
+        published: Published {
+            steps: 6,
+            episodes_per_step: 10,
+            runs: 20,
+            epsilon: 0.3,
+            iterations: 60,
+            trees: 50,
+            tree: TreeParams::FULLY_GROWN,
+            variances: (0.1, 0.2),
+            ideal_variances: (0.01, 0.04),
+            ideal_means: IdealMeans::Exact,
+            max_gp: crate::gp_large::MAX_GP,
+            rbt_total: 500,
+        },
+        source_layout: SourceLayout::puddle(dynamics),
+        load_published: match dynamics {
+            Dynamics::Shared => || SourceSet::published(Dynamics::Shared),
+            Dynamics::PuddleBased => || SourceSet::published(Dynamics::PuddleBased),
+        },
+        generation: Generation::puddle(),
+        grid_rows,
+        grid_spacing: crate::puddle::score_tables::GRID_SPACING,
+    }
+}
+
+/// Spec §11.1's grid rows: `(0.1 i, 0.1 j)` for `i, j ∈ 0..=10/spacing`, borders included,
+/// × 4 actions, in the core's order.
+fn grid_rows(spacing: f64) -> anyhow::Result<Vec<([f64; 2], usize)>> {
+    let grid = PuddleWorld::score_grid(spacing)?;
+    Ok(awfqi::score::RowSet::grid(grid, PUDDLE_ACTIONS)?
+        .iter()
+        .collect())
+}
