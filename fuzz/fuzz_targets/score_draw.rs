@@ -124,7 +124,8 @@ fn scores<T: Real, const D: usize>(b: &mut Bytes) {
         .flat_map(|s| s.iter().map(|t| (t.state, t.action)))
         .collect();
     let actions = b.index(6);
-    let (rows, documented): (_, &[Kind]) = match (b.u8() % 4, grid) {
+    let mode = b.u8() % 4;
+    let (rows, documented): (_, &[Kind]) = match (mode, grid) {
         (0, Some(g)) => (RowSet::grid(g, actions), &[Kind::Invalid, Kind::Capacity]),
         (1, Some(g)) => (
             RowSet::both(g, actions, &slices),
@@ -136,12 +137,10 @@ fn scores<T: Real, const D: usize>(b: &mut Bytes) {
             &[Kind::Empty, Kind::NonFinite],
         ),
     };
-    if let Ok(r) = &rows {
-        // The pairs give the source rows, in the same order.
-        if let Ok(p) = RowSet::pairs(&pairs) {
-            if r.len() == pairs.len() {
-                assert!(r.iter().eq(p.iter()), "pairs and source rows differ");
-            }
+    if let (Ok(r), 3) = (&rows, mode) {
+        // The records' pairs give the same rows as the records themselves.
+        if let Ok(s) = RowSet::source_data(&slices) {
+            assert!(r.iter().eq(s.iter()), "pairs and source rows differ");
         }
     }
     let rows = match rows {
