@@ -452,7 +452,7 @@ fn identify(c: &mut Criterion) {
 }
 
 fn awfqi_one<T: Real>(g: &mut BenchmarkGroup<'_, WallTime>, name: &str) {
-    let mut kernel = AwfqiCase::<T>::new().into_kernel();
+    let mut kernel = awfqi_kernel::<T>();
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     g.bench_function(BenchmarkId::new(name, "puddle"), |b| {
         b.iter(|| {

@@ -320,7 +320,7 @@ fn variance_score_reference() -> Op {
 }
 
 fn awfqi_step<T: Real>() -> Op {
-    let mut kernel = AwfqiCase::<T>::new().into_kernel();
+    let mut kernel = awfqi_kernel::<T>();
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     Box::new(move || {
         kernel.reset();

@@ -48,6 +48,12 @@ impl<T: Real> AliasEntry<T> {
     pub fn alias(&self) -> usize {
         self.alias as usize
     }
+
+    /// The entry as one `T` of working memory, before a table is built in it (the realistic
+    /// score table accumulates there, see [`crate::score::ScoreTable::realistic`]).
+    pub(crate) fn scratch(&mut self) -> &mut T {
+        &mut self.threshold
+    }
 }
 
 /// A built alias table borrowing its caller-provided entries: draws row `i` with

@@ -1,4 +1,5 @@
-//! AWFQI, the active loop (spec §12, thesis §4.3 Algorithm 2), one step at a time.
+//! AWFQI, the active loop (spec §12, thesis §4.3 Algorithm 2), one step at a time, for any
+//! plant with a `D`-dimensional state.
 //!
 //! A step spends a budget of `n` generative-model queries on the target where the sources
 //! disagree, then solves the target by importance-weighted FQI on the target's and the
@@ -21,23 +22,32 @@
 //! The caller evaluates the greedy policy between steps ([`Awfqi::q`],
 //! [`crate::evaluation::evaluate_greedy`]) — nothing here depends on the evaluation.
 //!
-//! **Memory.** The kernel borrows everything large from the caller, so it can live in
-//! statics on a microcontroller: the target-sample buffer (`K·n` records of
-//! `Transition<[T; 2], T>`), the reward-weight buffer (one `T` per source record), the
-//! target [`Gp`], the FQI table, the score sampler and the source data. Measured on
-//! `thumbv7em-none-eabihf` in `f32` for the configuration of the end-to-end test
-//! (`tests/awfqi_puddle.rs`: 11 × 11 cells, `N = 64`, 484 score rows, 3 steps of 50
-//! queries, 910 source records), in bytes:
+//! **Set-up.** [`AwfqiBuilder`] performs the whole set-up once — source reward GPs, their
+//! stored posteriors, the score table over the caller's candidate set, the sampler, the
+//! source data, the FQI table — in one [`AwfqiStorage`] (or any [`AwfqiBuffers`]); the
+//! module [`builder`] shows it on a plant of its own.
+//!
+//! **Dimensions.** `D` is the state dimension, `I = D + 1` the GP input dimension (the state
+//! followed by the action; stable Rust cannot write `D + 1` in a type, so both are
+//! parameters and `I == D + 1` is checked at compile time), `N` the target GP's capacity.
+//!
+//! **Memory.** The kernel borrows everything large, so it can live in statics on a
+//! microcontroller: the target-sample buffer (`K·n` records of `Transition<[T; D], T>`),
+//! the reward-weight buffer (one `T` per source record), the target [`Gp`], the FQI table
+//! and the score sampler's alias table (all in [`AwfqiStorage`]), and the source records
+//! and their stored posteriors (e.g. in flash). Measured on `thumbv7em-none-eabihf` in
+//! `f32` for the configuration of the end-to-end test (`tests/awfqi_puddle.rs`: 11 × 11
+//! cells, `N = 64`, 484 score rows, 3 steps of 50 queries, 910 source records), in bytes:
 //!
 //! | part | bytes |
 //! |---|---:|
-//! | `Awfqi` itself (configuration, target model, slices) | 444 |
+//! | `Awfqi` itself (configuration, target model, slices) | 468 |
 //! | target GP `Gp<f32, 64, 3>` | 17 692 |
 //! | FQI table, 484 × `FqiEntry<f32>` (20) | 9 680 |
-//! | target samples, 150 × `Transition` (28) | 4 200 |
+//! | target samples, 150 × `Transition<[f32; 2], f32>` (28) | 4 200 |
 //! | alias table, 484 × `AliasEntry<f32>` (8) | 3 872 |
 //! | reward weights, 910 × `f32` | 3 640 |
-//! | **RAM written by the loop** | **39 528** |
+//! | **RAM written by the loop** (the kernel and its `AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484>` of 39 084) | **39 552** |
 //! | source records, 910 × 28 (read-only: flash) | 25 480 |
 //! | source reward posteriors, 910 × 8 (read-only: flash) | 7 280 |
 //! | score values, 484 × 12 (set-up only, then reusable) | 5 808 |
@@ -48,38 +58,48 @@
 //! the GP or the weights fail later, the records already queried stay in `D₀` and the
 //! Q-function keeps its previous fit; the step counter does not advance.
 
-use crate::dataset::{GpTraining, INPUT_DIM, Output, SubsetRule, batch_transform, fit_gp, input};
+pub mod builder;
+
+pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
+
+use crate::dataset::{GpTraining, InputDim, Output, SubsetRule, batch_transform, fit_gp, input};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{FqiConfig, SampleSet, TabularFqi};
 use crate::gp::{Gp, Hyperparameters};
-use crate::score::RowSampler;
+use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
-/// Settings of AWFQI.
+/// Settings of AWFQI for a GP input dimension `I` (`D + 1`): the parameters before
+/// validation (linfa style: [`AwfqiConfig::validate`] turns them into a
+/// [`ValidAwfqiConfig`], which is what the builder takes).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct AwfqiConfig<T> {
+pub struct AwfqiConfig<T, const I: usize> {
     /// Queries per step, `n = H·B` (§12: 500 for B = 10, 50 for B = 1).
     pub budget: usize,
     /// Reward-weight estimator, `v_r` and `w_max` (§7.6: mean, 0.1, 1000).
     pub weights: WeightParams<T>,
-    /// Noise subtraction of the target GP's predictive stds (§7.1: the reference rule).
+    /// Noise subtraction of the GPs' predictive stds (§7.1: the reference rule); also used
+    /// for the source posteriors the builder fits.
     pub noise_subtraction: NoiseSubtraction,
-    /// Which target records the target GP is fitted on when `D₀` exceeds its capacity.
+    /// Which records a GP is fitted on when a dataset exceeds its capacity (the target GP,
+    /// and the source GPs the builder fits).
     pub subset: SubsetRule,
-    /// Initial hyperparameters, bounds and search budget of the target GP (§4.2).
-    pub gp_training: GpTraining<T>,
+    /// Initial hyperparameters, bounds and search budget of every GP (§4.2).
+    pub gp_training: GpTraining<T, I>,
     /// Discount, iterations and empty-cell rule of FQI (§5: 0.99, 60).
     pub fqi: FqiConfig<T>,
+    /// The score column the queries are drawn on (§11.3: `V_r`).
+    pub sampling: ScoreColumn,
 }
 
-impl<T: Real> AwfqiConfig<T> {
+impl<T: Real, const I: usize> AwfqiConfig<T, I> {
     /// The thesis configuration (§12) for a per-step budget: mean estimator with
     /// `v_r = 0.1`, `w_max = 1000`, reference noise subtraction, the reference GP training
-    /// (10 restarts), γ = 0.99 with 60 iterations, nearest-cell filling — and
-    /// [`SubsetRule::Spread`] **\[CHOICE\]**: with a target GP far smaller than the
+    /// (10 restarts), γ = 0.99 with 60 iterations, nearest-cell filling, sampling on `V_r`
+    /// — and [`SubsetRule::Spread`] **\[CHOICE\]**: with a target GP far smaller than the
     /// reference's 4000, "the last N" would forget every earlier step's queries, while an
     /// even spread keeps them all represented.
     pub fn thesis(budget: usize) -> Self {
@@ -90,44 +110,73 @@ impl<T: Real> AwfqiConfig<T> {
             subset: SubsetRule::Spread,
             gp_training: GpTraining::reference(),
             fqi: FqiConfig::reference(),
+            sampling: ScoreColumn::Reward,
         }
     }
 
-    /// Checks the parts that can be invalid when built field by field.
+    /// Checks the parameters that can be invalid when built field by field.
     ///
-    /// Errors: `budget == 0` ([`Error::InvalidParameter`] `budget`); invalid GP bounds or
-    /// search options.
-    pub fn validate(&self) -> Result<()> {
+    /// Errors: `budget == 0` ([`Error::InvalidParameter`] `budget`); invalid GP
+    /// hyperparameters, bounds or search options; a sampling column
+    /// [`ScoreColumn::NextState`] beyond the state dimension `I − 1`
+    /// ([`Error::OutOfRange`] `sampling`).
+    pub fn validate(self) -> Result<ValidAwfqiConfig<T, I>> {
         if self.budget == 0 {
             return Err(Error::InvalidParameter {
                 parameter: "budget",
             });
         }
-        self.gp_training.initial.validate()?;
-        self.gp_training.bounds.validate()?;
-        self.gp_training.search.validate()
+        self.gp_training.validate()?;
+        if let ScoreColumn::NextState(k) = self.sampling {
+            if k.saturating_add(1) >= I {
+                return Err(Error::OutOfRange {
+                    parameter: "sampling",
+                });
+            }
+        }
+        Ok(ValidAwfqiConfig(self))
     }
 }
 
-/// One source dataset with what §6 stores with it: the records and, per record, the
-/// posterior `(μ^s_r, σ^s_r)` of the source's reward GP at the record's own `z`
-/// (noise-subtracted; see [`crate::dataset::predict_posteriors`]).
+/// An [`AwfqiConfig`] that passed [`AwfqiConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SourceData<'a, T> {
-    records: &'a [Transition<[T; 2], T>],
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ValidAwfqiConfig<T, const I: usize>(AwfqiConfig<T, I>);
+
+impl<T, const I: usize> core::ops::Deref for ValidAwfqiConfig<T, I> {
+    type Target = AwfqiConfig<T, I>;
+
+    fn deref(&self) -> &AwfqiConfig<T, I> {
+        &self.0
+    }
+}
+
+/// One source's records.
+type Records<'a, T, const D: usize> = &'a [Transition<[T; D], T>];
+
+/// The source datasets with what §6 stores with them: the records, one slice per source,
+/// and per record the posterior `(μ^s_r, σ^s_r)` of its source's reward GP at the record's
+/// own `z` (noise-subtracted; see [`crate::dataset::predict_posteriors`]), all sources'
+/// posteriors in one slice, source after source.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SourceData<'a, T, const D: usize> {
+    records: &'a [&'a [Transition<[T; D], T>]],
     reward_posteriors: &'a [Posterior<T>],
 }
 
-impl<'a, T: Real> SourceData<'a, T> {
+impl<'a, T: Real, const D: usize> SourceData<'a, T, D> {
     /// Pairs the records with their stored reward posteriors.
     ///
-    /// Errors: slices of different lengths ([`Error::InvalidParameter`]
+    /// Errors: a posterior count other than the record count ([`Error::InvalidParameter`]
     /// `reward_posteriors`), a non-finite posterior or a negative std.
     pub fn new(
-        records: &'a [Transition<[T; 2], T>],
+        records: &'a [&'a [Transition<[T; D], T>]],
         reward_posteriors: &'a [Posterior<T>],
     ) -> Result<Self> {
-        if records.len() != reward_posteriors.len() {
+        let total = records
+            .iter()
+            .try_fold(0usize, |n, r| n.checked_add(r.len()));
+        if total != Some(reward_posteriors.len()) {
             return Err(Error::InvalidParameter {
                 parameter: "reward_posteriors",
             });
@@ -147,21 +196,41 @@ impl<'a, T: Real> SourceData<'a, T> {
         })
     }
 
-    /// The records.
-    pub fn records(&self) -> &'a [Transition<[T; 2], T>] {
+    /// The records, source by source.
+    pub fn records(&self) -> &'a [&'a [Transition<[T; D], T>]] {
         self.records
     }
 
-    /// The stored reward posteriors, one per record.
+    /// The stored reward posteriors, one per record, source after source.
     pub fn reward_posteriors(&self) -> &'a [Posterior<T>] {
         self.reward_posteriors
+    }
+
+    /// Number of records of all sources.
+    pub fn len(&self) -> usize {
+        self.reward_posteriors.len()
+    }
+
+    /// `true` without any source record.
+    pub fn is_empty(&self) -> bool {
+        self.reward_posteriors.is_empty()
+    }
+
+    /// Each source's records with its posteriors.
+    fn iter(&self) -> impl Iterator<Item = (Records<'a, T, D>, &'a [Posterior<T>])> {
+        let mut rest = self.reward_posteriors;
+        self.records.iter().map(move |&records| {
+            let (mine, tail) = rest.split_at_checked(records.len()).unwrap_or((rest, &[]));
+            rest = tail;
+            (records, mine)
+        })
     }
 }
 
 /// What one step did: the diagnostics of §7.2 step 6 and §12 step 6.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct StepReport<T> {
+pub struct StepReport<T, const I: usize> {
     /// Steps completed, this one included (`k`).
     pub step: usize,
     /// `|D₀|` after the step (`k·n`).
@@ -173,7 +242,7 @@ pub struct StepReport<T> {
     /// The target GP's log marginal likelihood after the search.
     pub gp_log_likelihood: T,
     /// The target GP's hyperparameters after the search.
-    pub gp_hyperparameters: Hyperparameters<T, INPUT_DIM>,
+    pub gp_hyperparameters: Hyperparameters<T, I>,
     /// Mean reward weight over all records, target ones (weight 1) included (`wr_mean`).
     pub wr_mean: T,
     /// Effective sample size of the reward weights over all records (`wr_eff`).
@@ -186,74 +255,64 @@ pub struct StepReport<T> {
 
 /// The AWFQI kernel: configuration, borrowed storage and the state of a run.
 ///
-/// Generic over the scalar `T`, the target model `G` (any [`GenerativeModel`] with 2-D
-/// states, e.g. `PuddleWorld<T>`) and the target GP's capacity `N`. The struct holds the
-/// configuration, the target model by value, and slices/references to the caller's
-/// storage: `size_of::<Awfqi<f32, PuddleWorld<f32>, 64>>()` is 444 bytes on
-/// `thumbv7em-none-eabihf` (212 of them the Puddle World model); see the module docs for
-/// the storage it borrows.
+/// Generic over the scalar `T`, the target model `G` (any [`GenerativeModel`] with states
+/// `[T; D]`), the state dimension `D`, the GP input dimension `I = D + 1` and the target
+/// GP's capacity `N`; the capacities of the buffers are the lengths of the slices it
+/// borrows, so its code is the same for every capacity. Built by [`AwfqiBuilder`].
+/// `size_of::<Awfqi<f32, PuddleWorld<f32>, 2, 3, 64>>()` is 468 bytes on
+/// `thumbv7em-none-eabihf` (216 of them the Puddle World model).
 #[derive(Debug)]
-pub struct Awfqi<'a, T, G, const N: usize> {
-    config: AwfqiConfig<T>,
+pub struct Awfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
+    config: ValidAwfqiConfig<T, I>,
     target: G,
-    sampler: RowSampler<'a, T>,
-    sources: &'a [SourceData<'a, T>],
-    samples: &'a mut [Transition<[T; 2], T>],
+    sampler: RowSampler<'a, T, D>,
+    sources: SourceData<'a, T, D>,
+    samples: &'a mut [Transition<[T; D], T>],
     len: usize,
     weights: &'a mut [T],
-    gp: &'a mut Gp<T, N, INPUT_DIM>,
-    fqi: TabularFqi<'a, T>,
+    gp: &'a mut Gp<T, N, I>,
+    fqi: TabularFqi<'a, T, D>,
     steps: usize,
 }
 
-impl<'a, T, G, const N: usize> Awfqi<'a, T, G, N>
+/// The entry point of the set-up. (The model type and the GP capacity are fixed later, by
+/// [`AwfqiBuilder::build`]; this `impl` names them `()` and 0 only so that
+/// `Awfqi::builder(…)` needs no type annotations, as `HashMap::new` does for its hasher.)
+impl<'a, T: Real, const D: usize, const I: usize> Awfqi<'a, T, (), D, I, 0> {
+    /// Starts the set-up of a kernel with its required parts: see [`AwfqiBuilder`].
+    pub fn builder(
+        config: ValidAwfqiConfig<T, I>,
+        grid: crate::fqi::CellGrid<T, D>,
+        sources: &'a [&'a [Transition<[T; D], T>]],
+        candidates: crate::score::RowSet<'a, T, D>,
+    ) -> AwfqiBuilder<'a, T, D, I> {
+        AwfqiBuilder::new(config, grid, sources, candidates)
+    }
+}
+
+impl<'a, T, G, const D: usize, const I: usize, const N: usize> Awfqi<'a, T, G, D, I, N>
 where
     T: Real,
-    G: GenerativeModel<T, State = [T; 2]>,
+    G: GenerativeModel<T, State = [T; D]>,
 {
-    /// Assembles a kernel for a fresh run (`D₀` empty, Q = 0).
-    ///
-    /// - `sampler`: the score table's row sampler ([`crate::score::ScoreTable::sampler`]);
-    /// - `sources`: the source datasets with their stored reward posteriors;
-    /// - `samples`: room for the target records of all steps (`K·n`);
-    /// - `weights`: room for one reward weight per source record;
-    /// - `gp`: the target GP (its contents are replaced every step);
-    /// - `fqi`: the Q-function, whose grid and action count define the discretisation.
-    ///
-    /// Errors: an invalid configuration; `fqi.actions()` different from the model's
-    /// ([`Error::InvalidParameter`] `actions`); `weights` shorter than the number of source
-    /// records ([`Error::CapacityExceeded`] with its length); `samples` unable to hold one
-    /// step ([`Error::CapacityExceeded`] with its length).
+    /// Assembles a kernel for a fresh run (`D₀` empty, Q = 0) from parts the builder has
+    /// checked: `samples` holds at least one step, `weights` one weight per source record,
+    /// `fqi` has the model's action count.
     #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        config: AwfqiConfig<T>,
+    fn assemble(
+        config: ValidAwfqiConfig<T, I>,
         target: G,
-        sampler: RowSampler<'a, T>,
-        sources: &'a [SourceData<'a, T>],
-        samples: &'a mut [Transition<[T; 2], T>],
+        sampler: RowSampler<'a, T, D>,
+        sources: SourceData<'a, T, D>,
+        samples: &'a mut [Transition<[T; D], T>],
         weights: &'a mut [T],
-        gp: &'a mut Gp<T, N, INPUT_DIM>,
-        mut fqi: TabularFqi<'a, T>,
+        gp: &'a mut Gp<T, N, I>,
+        mut fqi: TabularFqi<'a, T, D>,
     ) -> Result<Self> {
-        config.validate()?;
-        if fqi.actions() != target.num_actions() {
-            return Err(Error::InvalidParameter {
-                parameter: "actions",
-            });
-        }
-        let source_records: usize = sources.iter().map(|s| s.records.len()).sum();
-        if weights.len() < source_records {
-            return Err(Error::CapacityExceeded {
-                capacity: weights.len(),
-            });
-        }
-        if samples.len() < config.budget {
-            return Err(Error::CapacityExceeded {
-                capacity: samples.len(),
-            });
-        }
-        fqi.clear();
+        let () = InputDim::<D, I>::CHECK;
         gp.clear();
+        gp.set_hyperparameters(config.gp_training.initial)?;
+        fqi.clear();
         Ok(Self {
             config,
             target,
@@ -268,7 +327,7 @@ where
         })
     }
 
-    /// Starts a new run on the same storage: empties `D₀`, resets Q to 0 and the step count.
+    /// Starts a new run on the same set-up: empties `D₀`, resets Q to 0 and the step count.
     pub fn reset(&mut self) {
         self.len = 0;
         self.steps = 0;
@@ -277,7 +336,7 @@ where
     }
 
     /// The configuration.
-    pub fn config(&self) -> &AwfqiConfig<T> {
+    pub fn config(&self) -> &ValidAwfqiConfig<T, I> {
         &self.config
     }
 
@@ -287,23 +346,32 @@ where
     }
 
     /// The target dataset `D₀` (generative-model records, in query order).
-    pub fn target_samples(&self) -> &[Transition<[T; 2], T>] {
+    pub fn target_samples(&self) -> &[Transition<[T; D], T>] {
         self.samples.get(..self.len).unwrap_or(&[])
     }
 
     /// The reward weights of the last step, source by source, record by record.
     pub fn reward_weights(&self) -> &[T] {
-        let n: usize = self.sources.iter().map(|s| s.records.len()).sum();
-        self.weights.get(..n).unwrap_or(&[])
+        self.weights.get(..self.sources.len()).unwrap_or(&[])
+    }
+
+    /// The source data with their stored posteriors.
+    pub fn sources(&self) -> &SourceData<'a, T, D> {
+        &self.sources
+    }
+
+    /// The score table's row sampler.
+    pub fn sampler(&self) -> &RowSampler<'a, T, D> {
+        &self.sampler
     }
 
     /// The Q-function of the last step (0 before the first).
-    pub fn q(&self) -> &TabularFqi<'a, T> {
+    pub fn q(&self) -> &TabularFqi<'a, T, D> {
         &self.fqi
     }
 
     /// The target GP of the last step.
-    pub fn gp(&self) -> &Gp<T, N, INPUT_DIM> {
+    pub fn gp(&self) -> &Gp<T, N, I> {
         self.gp
     }
 
@@ -318,7 +386,7 @@ where
     /// buffer's length; checked before anything is drawn); then the first error of a query,
     /// the GP fit or search, a prediction or a weight, after which the state is as the
     /// module docs describe.
-    pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T>> {
+    pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let budget = self.config.budget;
         self.len
             .checked_add(budget)
@@ -350,14 +418,15 @@ where
         wr.add_ones(target.len());
         let capacity = self.weights.len();
         let mut rest: &mut [T] = self.weights;
-        for source in self.sources {
+        for (records, posteriors) in self.sources.iter() {
             let (mine, tail) = core::mem::take(&mut rest)
-                .split_at_mut_checked(source.records.len())
+                .split_at_mut_checked(records.len())
                 .ok_or(Error::CapacityExceeded { capacity })?;
             rest = tail;
             source_weights(
                 self.gp,
-                source,
+                records,
+                posteriors,
                 &self.config.weights,
                 self.config.noise_subtraction,
                 mine,
@@ -366,22 +435,21 @@ where
         }
         // 5: weighted FQI on D₀ then the sources.
         let weights: &[T] = self.weights;
-        let sets = core::iter::once(SampleSet::unweighted(target)).chain(self.sources.iter().scan(
-            0usize,
-            move |offset, s| {
+        let sets = core::iter::once(SampleSet::unweighted(target)).chain(
+            self.sources.records.iter().scan(0usize, move |offset, &s| {
                 let start = *offset;
-                *offset += s.records.len();
+                *offset += s.len();
                 let w = weights.get(start..*offset);
-                Some(SampleSet::weighted(s.records, w, None))
-            },
-        ));
+                Some(SampleSet::weighted(s, w, None))
+            }),
+        );
         self.fqi.fit_sets(sets, &self.config.fqi)?;
         self.steps += 1;
         let total = wr.count();
         Ok(StepReport {
             step: self.steps,
             n_target_samples: self.len,
-            n_source_samples: self.sources.iter().map(|s| s.records.len()).sum(),
+            n_source_samples: self.sources.len(),
             gp_points: self.gp.len(),
             gp_log_likelihood: lml,
             gp_hyperparameters: *self.gp.hyperparameters(),
@@ -394,22 +462,19 @@ where
 }
 
 /// The reward weights of one source's records under the target GP (§7.2 steps 2–3).
-fn source_weights<T: Real, const N: usize>(
-    gp: &Gp<T, N, INPUT_DIM>,
-    source: &SourceData<'_, T>,
+fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
+    posteriors: &[Posterior<T>],
     params: &WeightParams<T>,
     noise: NoiseSubtraction,
     out: &mut [T],
 ) -> Result<()> {
-    if source.records.is_empty() {
+    if records.is_empty() {
         return Ok(());
     }
-    let transform = batch_transform(gp, source.records, noise)?;
-    for ((w, r), &s) in out
-        .iter_mut()
-        .zip(source.records)
-        .zip(source.reward_posteriors)
-    {
+    let transform = batch_transform(gp, records, noise)?;
+    for ((w, r), &s) in out.iter_mut().zip(records).zip(posteriors) {
         let p = gp.predict(&input(r.state, r.action))?;
         let t = Posterior::new(p.mean, transform.apply(p.noisy_variance));
         *w = params.weight(r.reward, t, s)?;

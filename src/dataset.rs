@@ -1,8 +1,11 @@
 //! Transition records as Gaussian-process regression data (spec §4.2, §6, §7.2).
 //!
 //! Every GP of the method regresses one output of a record — the reward, or one next-state
-//! coordinate — on the state-action vector `z = (s_x, s_y, a)`, the action index being a
-//! plain real coordinate (§1). A GP of fixed capacity `N` holds at most `N` records, so a
+//! coordinate — on the state-action vector `z = (s, a)`: the `D` state coordinates followed
+//! by the action index as a plain real coordinate (§1; Puddle World's `z = (s_x, s_y, a)`).
+//! So a GP over records with `D`-dimensional states has input dimension `I = D + 1`; stable
+//! Rust cannot write `D + 1` in a type, so the functions here take both and check
+//! `I == D + 1` at compile time. A GP of fixed capacity `N` holds at most `N` records, so a
 //! [`SubsetRule`] picks which ones when a dataset is larger: the reference keeps the **last**
 //! `max_gp` records; with the small capacities of a microcontroller, **spread** (every
 //! `len/N`-th record) keeps every part of the dataset represented instead.
@@ -13,12 +16,27 @@ use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
-/// Dimension of the GP input `z = (s_x, s_y, a)`.
-pub const INPUT_DIM: usize = 3;
+/// Fails to compile unless `I == D + 1` (the GP input is the state followed by the action).
+/// Referenced from every function that pairs `D`-dimensional records with `I`-dimensional
+/// GP inputs, so a wrong pair of parameters is a compile error, never a runtime one.
+pub(crate) struct InputDim<const D: usize, const I: usize>;
 
-/// The GP input `z = (s_x, s_y, a)` of a state-action pair.
-pub fn input<T: Real>(state: [T; 2], action: usize) -> [T; INPUT_DIM] {
-    [state[0], state[1], T::from_usize(action)]
+impl<const D: usize, const I: usize> InputDim<D, I> {
+    pub(crate) const CHECK: () = assert!(
+        D > 0 && I == D + 1,
+        "the GP input dimension I must be the state dimension D plus one (the action)"
+    );
+}
+
+/// The GP input `z = (s₀, …, s_{D−1}, a)` of a state-action pair (`I = D + 1`, checked at
+/// compile time).
+pub fn input<T: Real, const D: usize, const I: usize>(state: [T; D], action: usize) -> [T; I] {
+    let () = InputDim::<D, I>::CHECK;
+    let mut z = [T::from_usize(action); I];
+    for (zi, &si) in z.iter_mut().zip(&state) {
+        *zi = si;
+    }
+    z
 }
 
 /// Which output of a record a GP regresses.
@@ -27,19 +45,20 @@ pub fn input<T: Real>(state: [T; 2], action: usize) -> [T; INPUT_DIM] {
 pub enum Output {
     /// The observed reward `r`.
     Reward,
-    /// The observed next `x`, `s′_x`.
-    NextX,
-    /// The observed next `y`, `s′_y`.
-    NextY,
+    /// Coordinate `k` of the observed next state, `s′_k` (Puddle World: 0 is `x`, 1 is `y`).
+    NextState(usize),
 }
 
 impl Output {
     /// This output of `record`.
-    pub fn of<T: Real>(self, record: &Transition<[T; 2], T>) -> T {
+    ///
+    /// Errors: [`Output::NextState`] with `k ≥ D` ([`Error::OutOfRange`] `output`).
+    pub fn of<T: Real, const D: usize>(self, record: &Transition<[T; D], T>) -> Result<T> {
         match self {
-            Output::Reward => record.reward,
-            Output::NextX => record.next_state[0],
-            Output::NextY => record.next_state[1],
+            Output::Reward => Ok(record.reward),
+            Output::NextState(k) => record.next_state.get(k).copied().ok_or(Error::OutOfRange {
+                parameter: "output",
+            }),
         }
     }
 }
@@ -71,20 +90,20 @@ impl SubsetRule {
     }
 }
 
-/// How a GP is trained (§4.2): the starting hyperparameters, the search box and the search
-/// budget. Size: about 12 `T` and 3 `usize`.
+/// How a GP with `I`-dimensional inputs is trained (§4.2): the starting hyperparameters, the
+/// search box and the search budget. Size: about `2I + 6` `T` and 3 `usize`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct GpTraining<T> {
+pub struct GpTraining<T, const I: usize> {
     /// Hyperparameters the GP is reset to before the data are loaded and the search starts.
-    pub initial: Hyperparameters<T, INPUT_DIM>,
+    pub initial: Hyperparameters<T, I>,
     /// Box of the hyperparameter search.
-    pub bounds: HyperparameterBounds<T, INPUT_DIM>,
+    pub bounds: HyperparameterBounds<T, I>,
     /// Budget and restarts of the search.
     pub search: SearchOptions,
 }
 
-impl<T: Real> GpTraining<T> {
+impl<T: Real, const I: usize> GpTraining<T, I> {
     /// Spec §4.2: start from `c = ℓ = σ²_n = 1`, its bounds, an isotropic search with 10
     /// restarts (the reference's protocol).
     pub fn reference() -> Self {
@@ -94,33 +113,47 @@ impl<T: Real> GpTraining<T> {
             search: SearchOptions::default(),
         }
     }
+
+    /// Checks the initial hyperparameters, the bounds and the search options.
+    ///
+    /// Errors: those of [`Hyperparameters::validate`], [`HyperparameterBounds::validate`]
+    /// and [`SearchOptions::validate`].
+    pub fn validate(&self) -> Result<()> {
+        self.initial.validate()?;
+        self.bounds.validate()?;
+        self.search.validate()
+    }
 }
 
 /// Fits `gp` from scratch on `output` of the records of `records` chosen by `subset`: resets
 /// it to `training.initial`, loads the records (O(n²) each) and searches the
 /// hyperparameters. Returns the log marginal likelihood reached.
 ///
-/// Errors: no records ([`Error::EmptyData`]); those of [`Gp::set_hyperparameters`],
-/// [`Gp::add_point`] (a non-finite record) and [`Gp::optimize_hyperparameters`]. On error
-/// the GP may hold part of the subset; refit it before use.
-pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize>(
-    gp: &mut Gp<T, N, INPUT_DIM>,
-    records: &[Transition<[T; 2], T>],
+/// Errors: no records ([`Error::EmptyData`]); an `output` the records do not have
+/// ([`Error::OutOfRange`] `output`), checked before the GP changes; those of
+/// [`Gp::set_hyperparameters`], [`Gp::add_point`] (a non-finite record) and
+/// [`Gp::optimize_hyperparameters`]. On error the GP may hold part of the subset; refit it
+/// before use.
+pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I: usize>(
+    gp: &mut Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
     output: Output,
     subset: SubsetRule,
-    training: &GpTraining<T>,
+    training: &GpTraining<T, I>,
     rng: &mut R,
 ) -> Result<T> {
-    if records.is_empty() {
+    let () = InputDim::<D, I>::CHECK;
+    let Some(first) = records.first() else {
         return Err(Error::EmptyData);
-    }
+    };
+    output.of(first)?;
     training.search.validate()?;
     training.bounds.validate()?;
     gp.clear();
     gp.set_hyperparameters(training.initial)?;
     for i in subset.indices(records.len(), N) {
         if let Some(r) = records.get(i) {
-            gp.add_point(input(r.state, r.action), output.of(r), WhenFull::Refuse)?;
+            gp.add_point(input(r.state, r.action), output.of(r)?, WhenFull::Refuse)?;
         }
     }
     gp.optimize_hyperparameters(&training.bounds, &training.search, rng)
@@ -134,9 +167,9 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize>(
 /// smallest variance first), one otherwise; O(n·N²) in all. Errors: `out` of another length
 /// than `records` ([`Error::InvalidParameter`] naming `out`), no records
 /// ([`Error::EmptyData`]), those of [`Gp::predict`].
-pub fn predict_posteriors<T: Real, const N: usize>(
-    gp: &Gp<T, N, INPUT_DIM>,
-    records: &[Transition<[T; 2], T>],
+pub fn predict_posteriors<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
     out: &mut [Posterior<T>],
 ) -> Result<()> {
@@ -155,9 +188,9 @@ pub fn predict_posteriors<T: Real, const N: usize>(
 /// predictions for [`NoiseSubtraction::Reference`], none otherwise).
 ///
 /// Errors: no records ([`Error::EmptyData`]), those of [`Gp::predict`].
-pub fn batch_transform<T: Real, const N: usize>(
-    gp: &Gp<T, N, INPUT_DIM>,
-    records: &[Transition<[T; 2], T>],
+pub fn batch_transform<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
 ) -> Result<StdTransform<T>> {
     if records.is_empty() {
@@ -184,6 +217,49 @@ mod tests {
     use rand_core::SeedableRng;
     use std::vec;
     use std::vec::Vec;
+
+    #[test]
+    fn inputs_are_the_state_then_the_action_and_outputs_name_a_coordinate() {
+        assert_eq!(input::<f64, 2, 3>([1.5, -2.0], 3), [1.5, -2.0, 3.0]);
+        assert_eq!(
+            input::<f32, 4, 5>([1.0, 2.0, 3.0, 4.0], 1),
+            [1.0, 2.0, 3.0, 4.0, 1.0]
+        );
+        let r = Transition {
+            state: [0.0f64; 4],
+            action: 0,
+            reward: -1.0,
+            next_state: [1.0, 2.0, 3.0, 4.0],
+            absorbing: false,
+        };
+        assert_eq!(Output::Reward.of(&r), Ok(-1.0));
+        assert_eq!(Output::NextState(3).of(&r), Ok(4.0));
+        assert_eq!(
+            Output::NextState(4).of(&r),
+            Err(Error::OutOfRange {
+                parameter: "output"
+            })
+        );
+        // fit_gp refuses such an output before it touches the GP.
+        let mut gp = Gp::<f64, 4, 5>::new(Hyperparameters::isotropic(2.0, 1.0, 0.1)).unwrap();
+        gp.fit(&[[0.0; 5]], &[1.0]).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let e = fit_gp(
+            &mut gp,
+            &[r],
+            Output::NextState(4),
+            SubsetRule::Last,
+            &GpTraining::reference(),
+            &mut rng,
+        );
+        assert_eq!(
+            e,
+            Err(Error::OutOfRange {
+                parameter: "output"
+            })
+        );
+        assert_eq!(gp.len(), 1);
+    }
 
     #[test]
     fn subset_rules_pick_the_documented_records() {
@@ -251,7 +327,7 @@ mod tests {
         fit_gp(
             &mut gp,
             &data,
-            Output::NextX,
+            Output::NextState(0),
             SubsetRule::Last,
             &training,
             &mut rng,
@@ -261,8 +337,8 @@ mod tests {
         assert_eq!(
             fit_gp(
                 &mut gp,
-                &[],
-                Output::NextX,
+                &[] as &[Transition<[f64; 2], f64>],
+                Output::NextState(0),
                 SubsetRule::Last,
                 &training,
                 &mut rng

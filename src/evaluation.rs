@@ -1,17 +1,44 @@
 //! Policy evaluation as the reference reports it (spec §3.3, `perf_disc_greedy`): a few
-//! rollouts from (0, 0) on the noisy target, each scored by its discounted return.
+//! rollouts from a start state on the noisy target, each scored by its discounted return.
 //!
-//! The rollouts themselves are Puddle World's [`PuddleWorld::rollout`]; this module only
-//! fixes the protocol (5 rollouts, horizon 50, γ = 0.99) and the statistics.
+//! A rollout runs any [`GenerativeModel`] from a start state under a [`Policy`] until an
+//! absorbing transition or the horizon; an [`EvaluationProtocol`] fixes the start, the
+//! number of rollouts, the horizon and the discount (Puddle World's reference protocol is
+//! [`crate::env::PuddleWorld::evaluation_protocol`]: 5 rollouts from (0, 0), horizon 50,
+//! γ = 0.99).
 
-use crate::env::{PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
+use crate::env::GenerativeModel;
 use crate::fqi::TabularFqi;
 use crate::policy::Policy;
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
-/// Number of rollouts of the reference evaluation.
-pub const EVALUATION_ROLLOUTS: usize = 5;
+/// What one evaluation rollout produced (spec §3.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Rollout<T> {
+    /// The discounted return Σₜ γᵗ rₜ over the rollout's steps.
+    pub discounted_return: T,
+    /// Number of steps taken (1 to the horizon).
+    pub steps: usize,
+    /// `true` when the last step was absorbing (Puddle World: it entered the goal).
+    pub absorbed: bool,
+}
+
+/// How a policy is evaluated: `rollouts` rollouts from `start`, each at most `horizon`
+/// steps, scored by the return discounted with `discount`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EvaluationProtocol<T, const D: usize> {
+    /// The state every rollout starts in.
+    pub start: [T; D],
+    /// Number of rollouts (≥ 1).
+    pub rollouts: usize,
+    /// Most steps of a rollout (≥ 1).
+    pub horizon: usize,
+    /// The discount γ in `[0, 1]`.
+    pub discount: T,
+}
 
 /// The evaluation fields of §3.3.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,42 +51,107 @@ pub struct Evaluation<T> {
     pub standard_error: T,
     /// Mean rollout length (`perf_disc_greedy_steps`).
     pub mean_steps: T,
-    /// How many rollouts reached the goal.
-    pub reached_goal: usize,
+    /// How many rollouts ended in an absorbing state (Puddle World: reached the goal).
+    pub absorbed: usize,
 }
 
-/// Runs `rollouts` rollouts of `policy` on `env` (each from (0, 0), at most 50 steps,
-/// γ = 0.99, stopping after the absorbing step) and returns their statistics.
+/// One rollout of `policy` on `model` from `start`: per step the policy chooses (drawing
+/// from `rng` first), then the model samples the transition; it stops after the first
+/// absorbing transition or `horizon` steps. Returns the discounted return Σₜ γᵗ rₜ
+/// (γ = `discount`, accumulated in `T`) and the length.
 ///
-/// Errors: `rollouts == 0` ([`Error::InvalidParameter`]); the first error of the policy or
-/// of a step.
-pub fn evaluate<T, P, R>(
-    env: &PuddleWorld<T>,
+/// Errors: a non-finite `discount` ([`Error::NonFinite`]) or one outside [0, 1]
+/// ([`Error::OutOfRange`] `discount`), `horizon == 0` ([`Error::InvalidParameter`]
+/// `horizon`), all before anything is drawn; then the first error of the policy or of a
+/// query (e.g. an action out of range).
+pub fn rollout<T, G, P, R, const D: usize>(
+    model: &G,
     policy: &mut P,
-    rollouts: usize,
+    start: [T; D],
+    horizon: usize,
+    discount: T,
+    rng: &mut R,
+) -> Result<Rollout<T>>
+where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + ?Sized,
+    P: Policy<[T; D]> + ?Sized,
+    R: Rng + ?Sized,
+{
+    crate::error::ensure_finite(discount, "discount")?;
+    if discount < T::ZERO || discount > T::ONE {
+        return Err(Error::OutOfRange {
+            parameter: "discount",
+        });
+    }
+    if horizon == 0 {
+        return Err(Error::InvalidParameter {
+            parameter: "horizon",
+        });
+    }
+    let mut discounted_return = T::ZERO;
+    let mut weight = T::ONE;
+    let mut state = start;
+    for t in 0..horizon {
+        let action = policy.action(&state, rng)?;
+        let transition = model.query(state, action, rng)?;
+        discounted_return += weight * transition.reward;
+        weight *= discount;
+        if transition.absorbing {
+            return Ok(Rollout {
+                discounted_return,
+                steps: t + 1,
+                absorbed: true,
+            });
+        }
+        state = transition.next_state;
+    }
+    Ok(Rollout {
+        discounted_return,
+        steps: horizon,
+        absorbed: false,
+    })
+}
+
+/// Runs the rollouts of `protocol` with `policy` on `model` and returns their statistics.
+///
+/// Errors: `protocol.rollouts == 0` ([`Error::InvalidParameter`] `rollouts`); those of
+/// [`rollout`].
+pub fn evaluate<T, G, P, R, const D: usize>(
+    model: &G,
+    policy: &mut P,
+    protocol: &EvaluationProtocol<T, D>,
     rng: &mut R,
 ) -> Result<Evaluation<T>>
 where
     T: Real,
-    P: Policy<[T; 2]> + ?Sized,
+    G: GenerativeModel<T, State = [T; D]> + ?Sized,
+    P: Policy<[T; D]> + ?Sized,
     R: Rng + ?Sized,
 {
+    let rollouts = protocol.rollouts;
     if rollouts == 0 {
         return Err(Error::InvalidParameter {
             parameter: "rollouts",
         });
     }
-    let discount = T::from_f64(PUDDLE_DISCOUNT);
     let mut sum = T::ZERO;
     let mut sum_sq = T::ZERO;
     let mut steps = T::ZERO;
-    let mut reached_goal = 0;
+    let mut absorbed = 0;
     for _ in 0..rollouts {
-        let r = env.rollout(policy, PUDDLE_HORIZON, discount, rng)?;
+        let r = rollout(
+            model,
+            policy,
+            protocol.start,
+            protocol.horizon,
+            protocol.discount,
+            rng,
+        )?;
         sum += r.discounted_return;
         sum_sq += r.discounted_return * r.discounted_return;
         steps += T::from_usize(r.steps);
-        reached_goal += usize::from(r.reached_goal);
+        absorbed += usize::from(r.absorbed);
     }
     let n = T::from_usize(rollouts);
     let mean = sum / n;
@@ -68,27 +160,33 @@ where
         mean_return: mean,
         standard_error: (variance / n).sqrt(),
         mean_steps: steps / n,
-        reached_goal,
+        absorbed,
     })
 }
 
-/// The reference evaluation of the greedy policy of a tabular Q-function (§3.3): 5
-/// rollouts; ties between actions go to the smallest index.
+/// [`evaluate`] for the greedy policy of a tabular Q-function (ties between actions as
+/// [`TabularFqi::greedy_action`] breaks them).
 ///
 /// Errors: those of [`evaluate`].
-pub fn evaluate_greedy<T: Real, R: Rng + ?Sized>(
-    env: &PuddleWorld<T>,
-    q: &TabularFqi<'_, T>,
+pub fn evaluate_greedy<T, G, R, const D: usize>(
+    model: &G,
+    q: &TabularFqi<'_, T, D>,
+    protocol: &EvaluationProtocol<T, D>,
     rng: &mut R,
-) -> Result<Evaluation<T>> {
-    let mut greedy = |s: &[T; 2]| q.greedy_action(*s);
-    evaluate(env, &mut greedy, EVALUATION_ROLLOUTS, rng)
+) -> Result<Evaluation<T>>
+where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + ?Sized,
+    R: Rng + ?Sized,
+{
+    let mut greedy = |s: &[T; D]| q.greedy_action(*s);
+    evaluate(model, &mut greedy, protocol, rng)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::{ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics};
+    use crate::env::{ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics, PuddleWorld};
     use crate::policy::UniformPolicy;
     use rand_chacha::ChaCha8Rng;
     use rand_core::SeedableRng;
@@ -98,7 +196,8 @@ mod tests {
         let env = PuddleWorld::<f64>::target(Dynamics::Shared);
         let mut policy = UniformPolicy::new(4).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let eval = evaluate(&env, &mut policy, 5, &mut rng).unwrap();
+        let protocol = env.evaluation_protocol();
+        let eval = evaluate(&env, &mut policy, &protocol, &mut rng).unwrap();
         // Replay the same stream rollout by rollout and recompute the statistics.
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let returns: [f64; 5] = core::array::from_fn(|_| {
@@ -111,7 +210,11 @@ mod tests {
         assert!((eval.mean_return - mean).abs() < 1e-9);
         assert!((eval.standard_error - (var / 5.0).sqrt()).abs() < 1e-9);
         assert!(eval.mean_steps >= 1.0 && eval.mean_steps <= 50.0);
-        assert!(evaluate(&env, &mut policy, 0, &mut rng).is_err());
+        let none = EvaluationProtocol {
+            rollouts: 0,
+            ..protocol
+        };
+        assert!(evaluate(&env, &mut policy, &none, &mut rng).is_err());
     }
 
     #[test]
@@ -130,8 +233,8 @@ mod tests {
             })
         };
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let eval = evaluate(&env, &mut to_x5, 5, &mut rng).unwrap();
-        assert_eq!(eval.reached_goal, 5);
+        let eval = evaluate(&env, &mut to_x5, &env.evaluation_protocol(), &mut rng).unwrap();
+        assert_eq!(eval.absorbed, 5);
         // At least 4 + 8 = 12 steps of −1 or less: return below −(1 − 0.99¹²)/0.01 = −11.4.
         assert!(eval.mean_return < -11.4, "{}", eval.mean_return);
         assert!(eval.mean_steps >= 12.0 && eval.mean_steps <= 25.0);

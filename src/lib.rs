@@ -29,3 +29,21 @@ pub mod weights;
 
 pub use error::{Error, Result};
 pub use float::Real;
+
+// The types a user of the transfer path meets, at the crate root (as heapless does).
+pub use alias::AliasEntry;
+pub use awfqi::{
+    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
+    ValidAwfqiConfig,
+};
+pub use dataset::{GpTraining, Output, SubsetRule};
+pub use env::{GenerativeModel, Transition};
+pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
+pub use fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+pub use gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+pub use score::{
+    GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
+    SourceModel,
+};
+pub use weights::{Estimator, NoiseSubtraction, Posterior, WeightParams};

@@ -30,16 +30,13 @@
 //! cargo test --release --test awfqi_puddle -- --ignored --nocapture
 //! ```
 
-use awfqi::alias::AliasEntry;
-use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
-use awfqi::dataset::{GpTraining, Output, SubsetRule, fit_gp, predict_posteriors};
-use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld, Transition};
-use awfqi::evaluation::{Evaluation, evaluate, evaluate_greedy};
-use awfqi::fqi::{CellGrid, FqiConfig, FqiEntry, SampleSet, TabularFqi};
-use awfqi::gp::Gp;
+use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi::score::{GpSourceModel, PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
-use awfqi::weights::{NoiseSubtraction, Posterior};
+use awfqi::{
+    AliasEntry, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Evaluation, FqiConfig, FqiEntry, Gp,
+    GpTraining, Posterior, RowSet, SampleSet, Scores, TabularFqi, Transition, evaluate,
+    evaluate_greedy,
+};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -58,8 +55,8 @@ const TEST_STEPS: usize = 3;
 const BUDGET: usize = 50;
 const HORIZON: usize = 50;
 
-fn grid() -> CellGrid<T> {
-    CellGrid::square(0.0, 10.0, CELLS).unwrap()
+fn grid() -> CellGrid<T, 2> {
+    CellGrid::cube(0.0, 10.0, CELLS).unwrap()
 }
 
 fn entries() -> Vec<FqiEntry<T>> {
@@ -85,7 +82,7 @@ fn plain_fqi_on_episodes(
     steps: usize,
     batch: usize,
     rng: &mut ChaCha8Rng,
-    mut after_step: impl FnMut(usize, &TabularFqi<'_, T>, &[Record]),
+    mut after_step: impl FnMut(usize, &TabularFqi<'_, T, 2>, &[Record]),
 ) -> Vec<Record> {
     let mut storage = entries();
     let mut fqi = TabularFqi::new(grid(), PUDDLE_ACTIONS, &mut storage).unwrap();
@@ -138,7 +135,7 @@ fn source_dataset(env: &PuddleWorld<T>, seed: u64) -> Vec<Record> {
 /// GP training: the spec's box and initial values; the end-to-end test uses a smaller
 /// search budget (2 restarts, 120 likelihood evaluations) to keep the debug build fast, the
 /// measurement the reference's (10 restarts, 550 evaluations).
-fn training(reference: bool) -> GpTraining<T> {
+fn training(reference: bool) -> GpTraining<T, 3> {
     let mut t = GpTraining::reference();
     if !reference {
         t.search.restarts = 2;
@@ -147,111 +144,76 @@ fn training(reference: bool) -> GpTraining<T> {
     t
 }
 
-/// Everything built once per experiment: source data, source reward GPs and posteriors,
-/// and the oracle and realistic score tables (grid mode).
+/// Score rows of the grid: 11 × 11 points × 4 actions.
+const ROWS: usize = 484;
+/// Source records the storage has room for (3 sources of 20 greedy episodes).
+const SOURCE_CAPACITY: usize = 3 * 20 * HORIZON;
+/// The kernel's memory for `STEPS` steps of 50 queries.
+type Storage<const Q: usize> =
+    AwfqiStorage<T, 2, 3, GP_POINTS, Q, SOURCE_CAPACITY, ROWS, { CELLS * CELLS * PUDDLE_ACTIONS }>;
+
+/// The source data of an experiment (spec §6), generated once from fixed seeds.
 struct Setup {
-    training: GpTraining<T>,
+    training: GpTraining<T, 3>,
     records: Vec<Vec<Record>>,
-    posteriors: Vec<Vec<Posterior<T>>>,
-    oracle_scores: Vec<Scores<T>>,
-    realistic_scores: Vec<Scores<T>>,
-    rows: RowSet<'static, T>,
 }
 
 impl Setup {
-    fn new(training: GpTraining<T>) -> Self {
+    fn new(training: GpTraining<T, 3>) -> Self {
         let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
-        let records: Vec<Vec<Record>> = worlds
+        let records = worlds
             .iter()
             .enumerate()
             .map(|(k, w)| source_dataset(w, 10 + k as u64))
             .collect();
-        let mut rng = ChaCha8Rng::seed_from_u64(77);
-        let mut gps: Vec<Box<Gp<T, GP_POINTS, 3>>> = Vec::new();
-        let mut posteriors = Vec::new();
-        for r in &records {
-            let mut gp = Box::new(Gp::empty());
-            fit_gp(
-                &mut *gp,
-                r,
-                Output::Reward,
-                SubsetRule::Spread,
-                &training,
-                &mut rng,
-            )
-            .unwrap();
-            let mut post = vec![Posterior::default(); r.len()];
-            predict_posteriors(&*gp, r, NoiseSubtraction::Reference, &mut post).unwrap();
-            posteriors.push(post);
-            gps.push(gp);
-        }
-        let rows = RowSet::grid(PointGrid::puddle(SCORE_SPACING as T).unwrap(), 4).unwrap();
-        let mut oracle_scores = vec![Scores::default(); rows.len()];
-        ScoreTable::compute(rows, &worlds, &mut oracle_scores).unwrap();
-        let models: Vec<_> = gps.iter().map(|g| GpSourceModel::new(&**g, None)).collect();
-        let mut realistic_scores = vec![Scores::default(); rows.len()];
-        ScoreTable::compute(rows, &models, &mut realistic_scores).unwrap();
-        Self {
-            training,
-            records,
-            posteriors,
-            oracle_scores,
-            realistic_scores,
-            rows,
-        }
+        Self { training, records }
     }
 
     fn source_records(&self) -> usize {
         self.records.iter().map(Vec::len).sum()
     }
 
-    /// Runs AWFQI for `steps` steps with the table `scores`; `after_step` sees each report's
-    /// step, the kernel's Q-function and the target samples.
-    fn run_awfqi(
+    /// Sets AWFQI up once with the builder — one reward GP per source (an even spread of
+    /// its records) for the stored posteriors, and the oracle or the realistic score table
+    /// on the grid — then runs `steps` steps from each seed (`reset` between runs);
+    /// `after_step` sees the seed, each report's step, the kernel's Q-function and the
+    /// target samples.
+    fn run_awfqi<const Q: usize>(
         &self,
-        scores: &[Scores<T>],
-        steps: usize,
-        seed: u64,
-        mut after_step: impl FnMut(usize, &TabularFqi<'_, T>, &[Record]),
+        oracle: bool,
+        seeds: &[u64],
+        mut after_step: impl FnMut(u64, usize, &TabularFqi<'_, T, 2>, &[Record]),
     ) {
-        let table = ScoreTable::from_parts(self.rows, scores).unwrap();
-        let mut alias = vec![AliasEntry::default(); table.len()];
-        let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
-        let data: Vec<SourceData<'_, T>> = self
-            .records
-            .iter()
-            .zip(&self.posteriors)
-            .map(|(r, p)| SourceData::new(r, p).unwrap())
-            .collect();
-        let blank = Transition {
-            state: [0.0; 2],
-            action: 0,
-            reward: 0.0,
-            next_state: [0.0; 2],
-            absorbing: false,
-        };
-        let mut samples = vec![blank; steps * BUDGET];
-        let mut weights = vec![0.0; self.source_records()];
-        let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
-        let mut storage = entries();
-        let fqi = TabularFqi::new(grid(), PUDDLE_ACTIONS, &mut storage).unwrap();
+        let slices: Vec<&[Record]> = self.records.iter().map(Vec::as_slice).collect();
+        let rows = RowSet::grid(PuddleWorld::score_grid(SCORE_SPACING as T).unwrap(), 4).unwrap();
+        let mut storage = Box::new(Storage::<Q>::new());
+        let mut posteriors = vec![Posterior::default(); self.source_records()];
+        let mut scores = vec![Scores::ZERO; rows.len()];
         let mut config = AwfqiConfig::thesis(BUDGET);
         config.gp_training = self.training;
-        let mut kernel = Awfqi::new(
-            config,
-            PuddleWorld::target(Dynamics::Shared),
-            sampler,
-            &data,
-            &mut samples,
-            &mut weights,
-            &mut *gp,
-            fqi,
-        )
-        .unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        for _ in 0..steps {
-            let report = kernel.step(&mut rng).unwrap();
-            after_step(report.step, kernel.q(), kernel.target_samples());
+        let builder = Awfqi::builder(config.validate().unwrap(), grid(), &slices, rows)
+            .fit_posteriors(&mut posteriors);
+        let builder = if oracle {
+            let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
+            builder.scores_from(&worlds, &mut scores).unwrap()
+        } else {
+            builder.realistic_scores(&mut scores)
+        };
+        let mut set_up = ChaCha8Rng::seed_from_u64(77);
+        let mut kernel = builder
+            .build(
+                PuddleWorld::target(Dynamics::Shared),
+                &mut *storage,
+                &mut set_up,
+            )
+            .unwrap();
+        for &seed in seeds {
+            kernel.reset();
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            for _ in 0..Q / BUDGET {
+                let report = kernel.step(&mut rng).unwrap();
+                after_step(seed, report.step, kernel.q(), kernel.target_samples());
+            }
         }
     }
 }
@@ -260,14 +222,24 @@ impl Setup {
 fn uniform_return(n: usize, seed: u64) -> T {
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    evaluate(&target, &mut UniformPolicy::new(4).unwrap(), n, &mut rng)
-        .unwrap()
-        .mean_return
+    let protocol = awfqi::EvaluationProtocol {
+        rollouts: n,
+        ..target.evaluation_protocol()
+    };
+    evaluate(
+        &target,
+        &mut UniformPolicy::new(4).unwrap(),
+        &protocol,
+        &mut rng,
+    )
+    .unwrap()
+    .mean_return
 }
 
-fn evaluate_q(q: &TabularFqi<'_, T>, seed: u64) -> Evaluation<T> {
+fn evaluate_q(q: &TabularFqi<'_, T, 2>, seed: u64) -> Evaluation<T> {
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
-    evaluate_greedy(&target, q, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap()
+    let protocol = target.evaluation_protocol();
+    evaluate_greedy(&target, q, &protocol, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap()
 }
 
 #[test]
@@ -283,12 +255,9 @@ fn awfqi_improves_on_the_uniform_policy() {
         );
     }
     let uniform = uniform_return(200, 5);
-    for (name, scores) in [
-        ("oracle", &setup.oracle_scores),
-        ("realistic", &setup.realistic_scores),
-    ] {
+    for (name, oracle) in [("oracle", true), ("realistic", false)] {
         let mut last = None;
-        setup.run_awfqi(scores, TEST_STEPS, 1, |step, q, samples| {
+        setup.run_awfqi::<{ TEST_STEPS * BUDGET }>(oracle, &[1], |_, step, q, samples| {
             assert_eq!(samples.len(), step * BUDGET);
             last = Some(evaluate_q(q, 500 + step as u64));
         });
@@ -300,7 +269,7 @@ fn awfqi_improves_on_the_uniform_policy() {
             "{name}: greedy return {} after 3 steps vs uniform {uniform}",
             eval.mean_return
         );
-        assert!(eval.reached_goal >= 3, "{name}: {eval:?}");
+        assert!(eval.absorbed >= 3, "{name}: {eval:?}");
     }
 }
 
@@ -315,17 +284,14 @@ fn measure_returns_per_step() {
         setup.records.iter().map(Vec::len).collect::<Vec<_>>(),
         setup.source_records()
     );
+    let seeds: Vec<u64> = (0..RUNS).map(|run| 1000 + run).collect();
     let mut table = vec![vec![Vec::new(); STEPS]; 3];
-    for run in 0..RUNS {
-        let seed = 1000 + run;
-        for (k, scores) in [&setup.oracle_scores, &setup.realistic_scores]
-            .into_iter()
-            .enumerate()
-        {
-            setup.run_awfqi(scores, STEPS, seed, |step, q, _| {
-                table[k][step - 1].push(evaluate_q(q, seed * 100 + step as u64).mean_return);
-            });
-        }
+    for (k, oracle) in [true, false].into_iter().enumerate() {
+        setup.run_awfqi::<{ STEPS * BUDGET }>(oracle, &seeds, |seed, step, q, _| {
+            table[k][step - 1].push(evaluate_q(q, seed * 100 + step as u64).mean_return);
+        });
+    }
+    for &seed in &seeds {
         let target = PuddleWorld::<T>::target(Dynamics::Shared);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         plain_fqi_on_episodes(&target, STEPS, 1, &mut rng, |step, q, _| {
@@ -361,34 +327,33 @@ fn measure_returns_per_step() {
         "uniform-random policy: {:.2} (1000 rollouts)",
         uniform_return(1000, 5)
     );
-    memory_report(setup.source_records(), setup.rows.len());
+    memory_report(setup.source_records());
 }
 
 /// Prints the memory of the kernel state for this configuration with 3 steps of 50 queries
-/// (host sizes; on Cortex-M `usize` is 4 bytes, see the report for the target sizes).
-fn memory_report(source_records: usize, score_rows: usize) {
+/// (host sizes; on Cortex-M `usize` is 4 bytes, see `awfqi::awfqi` for the target sizes).
+fn memory_report(source_records: usize) {
     use std::mem::size_of;
     let parts = [
         (
             "Awfqi struct (config, target model, slices)",
-            size_of::<Awfqi<'static, T, PuddleWorld<T>, GP_POINTS>>(),
+            size_of::<Awfqi<'static, T, PuddleWorld<T>, 2, 3, GP_POINTS>>(),
         ),
-        ("target GP Gp<f32, 64, 3>", size_of::<Gp<T, GP_POINTS, 3>>()),
         (
-            "FQI table (484 FqiEntry)",
+            "AwfqiStorage (GP, 150 target samples, weights, alias, FQI table)",
+            size_of::<Storage<{ TEST_STEPS * BUDGET }>>(),
+        ),
+        (
+            "  of which the target GP Gp<f32, 64, 3>",
+            size_of::<Gp<T, GP_POINTS, 3>>(),
+        ),
+        (
+            "  of which the FQI table (484 FqiEntry)",
             CELLS * CELLS * PUDDLE_ACTIONS * size_of::<FqiEntry<T>>(),
         ),
         (
-            "target samples (150 Transition)",
-            TEST_STEPS * BUDGET * size_of::<Record>(),
-        ),
-        (
-            "reward weights (one f32 per source record)",
-            source_records * size_of::<T>(),
-        ),
-        (
-            "alias table (484 AliasEntry)",
-            score_rows * size_of::<AliasEntry<T>>(),
+            "  of which the alias table (484 AliasEntry)",
+            ROWS * size_of::<AliasEntry<T>>(),
         ),
         (
             "source records (Transition), may live in flash",
@@ -398,17 +363,13 @@ fn memory_report(source_records: usize, score_rows: usize) {
             "source reward posteriors, may live in flash",
             source_records * size_of::<Posterior<T>>(),
         ),
-        ("SourceData ×3", 3 * size_of::<SourceData<'static, T>>()),
         (
             "score values (set-up only, 484 Scores)",
-            score_rows * size_of::<Scores<T>>(),
+            ROWS * size_of::<Scores<T, 2>>(),
         ),
     ];
-    let mut total = 0;
     println!("memory of the kernel state (host sizes, bytes):");
     for (name, bytes) in parts {
-        total += bytes;
         println!("  {bytes:7}  {name}");
     }
-    println!("  {total:7}  total");
 }

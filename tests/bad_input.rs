@@ -5,20 +5,20 @@
 //! were. Run in `f32` (the microcontroller's precision) and `f64` where the code is generic.
 
 use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
 use awfqi::dataset::{GpTraining, Output, SubsetRule, batch_transform, fit_gp, predict_posteriors};
 use awfqi::env::{
     Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld, Transition,
 };
-use awfqi::evaluation::evaluate;
+use awfqi::evaluation::{EvaluationProtocol, evaluate};
 use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores, SourceModel};
+use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans, SourceModel};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
     effective_sample_size, ideal_weight, predictive_stds,
 };
+use awfqi::{Awfqi, AwfqiBuffers, AwfqiConfig, SourceData};
 use awfqi::{Error, Real, Result};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -241,7 +241,15 @@ fn puddle_episodes<T: Real>() {
         oor("action")
     );
     assert_eq!(
-        err(evaluate(&world, &mut policy, 0, &mut r)),
+        err(evaluate(
+            &world,
+            &mut policy,
+            &EvaluationProtocol {
+                rollouts: 0,
+                ..world.evaluation_protocol()
+            },
+            &mut r
+        )),
         inv("rollouts")
     );
 }
@@ -724,12 +732,12 @@ fn record<T: Real>(i: usize) -> Transition<[T; 2], T> {
 
 fn dataset_calls<T: Real>() {
     let mut gp3 = Gp::<T, 8, 3>::empty();
-    let training = GpTraining::<T>::reference();
+    let training = GpTraining::<T, 3>::reference();
     let mut r = rng();
     assert_eq!(
         err(fit_gp(
             &mut gp3,
-            &[],
+            &[] as &[Transition<[T; 2], T>],
             Output::Reward,
             SubsetRule::Last,
             &training,
@@ -757,7 +765,7 @@ fn dataset_calls<T: Real>() {
         fit_gp(
             &mut gp3,
             &records[..2],
-            Output::NextX,
+            Output::NextState(0),
             SubsetRule::Last,
             &bad_training,
             &mut r
@@ -774,11 +782,15 @@ fn dataset_calls<T: Real>() {
     );
     assert!(out.iter().all(|p| *p == sentinel));
     assert_eq!(
-        predict_posteriors(&gp3, &[], NoiseSubtraction::Reference, &mut []),
+        predict_posteriors::<T, 8, 2, 3>(&gp3, &[], NoiseSubtraction::Reference, &mut []),
         Err(Error::EmptyData)
     );
     assert_eq!(
-        err(batch_transform(&gp3, &[], NoiseSubtraction::Off)),
+        err(batch_transform::<T, 8, 2, 3>(
+            &gp3,
+            &[],
+            NoiseSubtraction::Off
+        )),
         Error::EmptyData
     );
     let mut nan_state = records.clone();
@@ -837,7 +849,7 @@ fn fqi_calls<T: Real>() {
         inv("cells")
     );
     assert!(matches!(
-        err(CellGrid::square(t::<T>(0.0), t(1.0), usize::MAX)),
+        err(CellGrid::<T, 2>::cube(t::<T>(0.0), t(1.0), usize::MAX)),
         Error::CapacityExceeded { .. }
     ));
     for d in [-0.01, 1.01] {
@@ -855,7 +867,7 @@ fn fqi_calls<T: Real>() {
         inv("min_weight")
     );
 
-    let grid = CellGrid::square(t::<T>(0.0), t(10.0), 3).unwrap();
+    let grid = CellGrid::cube(t::<T>(0.0), t(10.0), 3).unwrap();
     let mut storage = vec![FqiEntry::<T>::EMPTY; 36];
     assert_eq!(err(TabularFqi::new(grid, 0, &mut storage)), inv("actions"));
     assert_eq!(
@@ -956,12 +968,16 @@ struct Faulty<T> {
     value: T,
 }
 
-impl<T: Real> SourceModel<T> for Faulty<T> {
-    fn predict(&self, state: [T; 2], _action: usize) -> Result<[T; 3]> {
-        Ok(if state[0] > t(5.0) {
-            [self.value, t(0.0), t(0.0)]
+impl<T: Real> SourceModel<T, 2> for Faulty<T> {
+    fn predict(&self, state: [T; 2], _action: usize) -> Result<SourceMeans<T, 2>> {
+        let reward = if state[0] > t(5.0) {
+            self.value
         } else {
-            [t(1.0), t(0.0), t(0.0)]
+            t(1.0)
+        };
+        Ok(SourceMeans {
+            reward,
+            next_state: [t(0.0); 2],
         })
     }
 }
@@ -977,7 +993,7 @@ fn score_calls<T: Real>() {
             nf("spacing")
         );
         assert!(matches!(
-            err(PointGrid::puddle(x)),
+            err(PuddleWorld::score_grid(x)),
             Error::NonFinite { .. }
                 | Error::InvalidParameter {
                     parameter: "spacing"
@@ -993,9 +1009,9 @@ fn score_calls<T: Real>() {
             )),
             inv("spacing")
         );
-        assert_eq!(err(PointGrid::puddle(t::<T>(d))), inv("spacing"));
+        assert_eq!(err(PuddleWorld::score_grid(t::<T>(d))), inv("spacing"));
     }
-    assert_eq!(err(PointGrid::puddle(t::<T>(0.3))), inv("spacing"));
+    assert_eq!(err(PuddleWorld::score_grid(t::<T>(0.3))), inv("spacing"));
     assert_eq!(
         err(PointGrid::new(
             [t::<T>(0.0), t(0.0)],
@@ -1004,16 +1020,16 @@ fn score_calls<T: Real>() {
         )),
         inv("points")
     );
-    let grid = PointGrid::puddle(t::<T>(5.0)).unwrap();
+    let grid = PuddleWorld::score_grid(t::<T>(5.0)).unwrap();
     assert_eq!(err(RowSet::grid(grid, 0)), inv("actions"));
     assert_eq!(err(RowSet::both(grid, 0, &[])), inv("actions"));
     let empty: [&[Transition<[T; 2], T>]; 2] = [&[], &[]];
     assert_eq!(err(RowSet::source_data(&empty)), Error::EmptyData);
-    assert_eq!(err(RowSet::<T>::source_data(&[])), Error::EmptyData);
+    assert_eq!(err(RowSet::<T, 2>::source_data(&[])), Error::EmptyData);
 
     let rows = RowSet::grid(grid, 4).unwrap();
     let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
-    let mut storage = vec![Scores::<T>::ZERO; 36];
+    let mut storage = vec![Scores::<T, 2>::ZERO; 36];
     assert_eq!(
         err(ScoreTable::compute(rows, &worlds[..0], &mut storage)),
         Error::EmptyData
@@ -1028,7 +1044,7 @@ fn score_calls<T: Real>() {
             err(ScoreTable::compute(rows, &models, &mut storage)),
             nf("source value")
         );
-        let mut values = vec![Scores::<T>::ZERO; 36];
+        let mut values = vec![Scores::<T, 2>::ZERO; 36];
         values[7].reward = x;
         assert_eq!(err(ScoreTable::from_parts(rows, &values)), nf("scores"));
     }
@@ -1042,8 +1058,8 @@ fn score_calls<T: Real>() {
         err(ScoreTable::compute(outside, &worlds, &mut storage)),
         oor("state")
     );
-    let mut values = vec![Scores::<T>::ZERO; 36];
-    values[3].next_x = t(-1e-30);
+    let mut values = vec![Scores::<T, 2>::ZERO; 36];
+    values[3].next_state[0] = t(-1e-30);
     assert_eq!(err(ScoreTable::from_parts(rows, &values)), inv("scores"));
     assert_eq!(
         err(ScoreTable::from_parts(rows, &values[..35])),
@@ -1068,121 +1084,95 @@ fn score_tables_reject_bad_grids_models_and_storage() {
 #[test]
 fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
     type T = f32;
-    let mut config = AwfqiConfig::<T>::thesis(4);
+    let mut config = AwfqiConfig::<T, 3>::thesis(4);
     config.gp_training.search.max_evaluations = 10;
     config.gp_training.search.restarts = 1;
     let mut zero = config;
     zero.budget = 0;
-    assert_eq!(zero.validate(), Err(inv("budget")));
+    assert_eq!(zero.validate().err(), Some(inv("budget")));
     let mut bad_bounds = config;
     bad_bounds.gp_training.bounds.noise_variance = (0.0, 1.0);
-    assert_eq!(bad_bounds.validate(), Err(inv("noise_variance")));
+    assert_eq!(bad_bounds.validate().err(), Some(inv("noise_variance")));
+    let config = config.validate().unwrap();
 
     let records: Vec<_> = (0..6).map(record::<T>).collect();
+    let sources: [&[Transition<[T; 2], T>]; 1] = [&records];
     let posteriors = vec![Posterior::new(-1.0, 0.1); 6];
     assert_eq!(
-        err(SourceData::new(&records, &posteriors[..5])),
+        err(SourceData::new(&sources, &posteriors[..5])),
         inv("reward_posteriors")
     );
     for x in non_finite::<T>() {
         let mut p = posteriors.clone();
         p[4].std = x;
-        assert_eq!(err(SourceData::new(&records, &p)), nf("reward_posteriors"));
+        assert_eq!(err(SourceData::new(&sources, &p)), nf("reward_posteriors"));
     }
     let mut p = posteriors.clone();
     p[1].std = -0.1;
-    assert_eq!(err(SourceData::new(&records, &p)), inv("reward_posteriors"));
+    assert_eq!(err(SourceData::new(&sources, &p)), inv("reward_posteriors"));
 
-    let sources = [SourceData::new(&records, &posteriors).unwrap()];
-    let rows = RowSet::grid(PointGrid::puddle(5.0).unwrap(), 4).unwrap();
-    let mut scores = vec![Scores::<T>::ZERO; rows.len()];
-    let table = ScoreTable::compute(
+    let rows = RowSet::grid(PuddleWorld::score_grid(5.0).unwrap(), 4).unwrap();
+    let mut scores = vec![Scores::<T, 2>::ZERO; rows.len()];
+    ScoreTable::compute(
         rows,
         &PuddleWorld::<T>::sources(Dynamics::Shared),
         &mut scores,
     )
     .unwrap();
-    let grid = CellGrid::square(0.0, 10.0, 3).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 3).unwrap();
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
-    let blank = record::<T>(0);
     let mut gp = Gp::<T, 8, 3>::empty();
-
     let mut alias = vec![AliasEntry::<T>::EMPTY; rows.len()];
     let mut entries = vec![FqiEntry::<T>::EMPTY; 36];
-    let (mut samples, mut weights) = (vec![blank; 8], vec![0.0; 6]);
-    let three_actions = TabularFqi::new(grid, 3, &mut entries).unwrap();
-    let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
+    let (mut samples, mut weights) = (vec![Transition::EMPTY; 8], vec![0.0; 6]);
+    let builder = || {
+        Awfqi::builder(config, grid, &sources, rows)
+            .stored_posteriors(&posteriors)
+            .stored_scores(&scores)
+    };
+    // Every size is checked before the set-up starts; the caller's buffers are lent back.
+    let mut r = rng();
+    let mut build = |samples: &mut [Transition<[T; 2], T>],
+                     weights: &mut [T],
+                     alias: &mut [AliasEntry<T>],
+                     fqi: &mut [FqiEntry<T>]| {
+        let buffers = AwfqiBuffers {
+            gp: &mut gp,
+            samples,
+            weights,
+            alias,
+            fqi,
+        };
+        builder().build(target, buffers, &mut r).map(|_| ())
+    };
     assert_eq!(
-        err(Awfqi::new(
-            config,
-            target,
-            sampler,
-            &sources,
-            &mut samples,
-            &mut weights,
-            &mut gp,
-            three_actions
-        )),
-        inv("actions")
+        build(&mut samples, &mut weights[..5], &mut alias, &mut entries).err(),
+        Some(Error::CapacityExceeded { capacity: 5 })
     );
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
     assert_eq!(
-        err(Awfqi::new(
-            config,
-            target,
-            sampler,
-            &sources,
-            &mut samples,
-            &mut weights[..5],
-            &mut gp,
-            fqi
-        )),
-        Error::CapacityExceeded { capacity: 5 }
+        build(&mut samples[..3], &mut weights, &mut alias, &mut entries).err(),
+        Some(Error::CapacityExceeded { capacity: 3 })
     );
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
     assert_eq!(
-        err(Awfqi::new(
-            config,
-            target,
-            sampler,
-            &sources,
-            &mut samples[..3],
-            &mut weights,
-            &mut gp,
-            fqi
-        )),
-        Error::CapacityExceeded { capacity: 3 }
+        build(&mut samples, &mut weights, &mut alias[..2], &mut entries).err(),
+        Some(Error::CapacityExceeded { capacity: 2 })
     );
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
     assert_eq!(
-        err(Awfqi::new(
-            zero,
-            target,
-            sampler,
-            &sources,
-            &mut samples,
-            &mut weights,
-            &mut gp,
-            fqi
-        )),
-        inv("budget")
+        build(&mut samples, &mut weights, &mut alias, &mut entries[..35]).err(),
+        Some(Error::CapacityExceeded { capacity: 35 })
     );
+    untouched(&mut r);
 
     // Two steps of 4 fill the 8-sample buffer; a third is refused before anything is drawn
     // or changed.
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
-    let mut kernel = Awfqi::new(
-        config,
-        target,
-        sampler,
-        &sources,
-        &mut samples,
-        &mut weights,
-        &mut gp,
-        fqi,
-    )
-    .unwrap();
-    let mut r = rng();
+    let buffers = AwfqiBuffers {
+        gp: &mut gp,
+        samples: &mut samples,
+        weights: &mut weights,
+        alias: &mut alias,
+        fqi: &mut entries,
+    };
+    let mut kernel = builder().build(target, buffers, &mut r).unwrap();
     kernel.step(&mut r).unwrap();
     kernel.step(&mut r).unwrap();
     let (d0, q, w) = (

@@ -67,7 +67,7 @@ fn fqi_refuses_rewards_whose_values_would_overflow() {
     };
     let samples: Vec<_> = (0..12).map(step).collect();
     let weights = [1e30; 12];
-    let grid = CellGrid::square(0.0, 10.0, 5).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 5).unwrap();
     let mut storage = vec![FqiEntry::<f64>::EMPTY; 100];
     let mut fqi = TabularFqi::new(grid, 4, &mut storage).unwrap();
     let config = FqiConfig::new(1.0, 11, EmptyCells::Nearest).unwrap();
@@ -112,7 +112,7 @@ fn score_rows_are_always_finite_query_points() {
         RowSet::source_data(&sources).err(),
         Some(Error::NonFinite { parameter: "state" })
     );
-    let grid = PointGrid::puddle(5.0).unwrap();
+    let grid = awfqi::env::PuddleWorld::score_grid(5.0).unwrap();
     assert_eq!(
         RowSet::both(grid, 4, &sources).err(),
         Some(Error::NonFinite { parameter: "state" })
@@ -127,12 +127,12 @@ fn score_rows_are_always_finite_query_points() {
         })
     );
     assert_eq!(
-        PointGrid::<f32>::new([3e38, 0.0], [1e38, 1.0], [2, 2]).err(),
+        PointGrid::<f32, 2>::new([3e38, 0.0], [1e38, 1.0], [2, 2]).err(),
         Some(Error::InvalidParameter {
             parameter: "spacing"
         })
     );
-    let ok = PointGrid::<f64>::new([0.0, 0.0], [1e307, 1.0], [3, 2]).unwrap();
+    let ok = PointGrid::<f64, 2>::new([0.0, 0.0], [1e307, 1.0], [3, 2]).unwrap();
     assert!((0..ok.len()).all(|p| ok.point(p).unwrap().iter().all(|c| c.is_finite())));
 }
 
@@ -142,11 +142,15 @@ fn score_rows_are_always_finite_query_points() {
 /// (`InvalidParameter { source value }`).
 #[test]
 fn score_variance_overflow_is_an_error() {
-    use awfqi::score::{PointGrid, RowSet, ScoreTable, Scores, SourceModel};
+    use awfqi::score::{PointGrid, RowSet, ScoreTable, Scores, SourceMeans, SourceModel};
     struct Constant([f64; 3]);
-    impl SourceModel<f64> for Constant {
-        fn predict(&self, _: [f64; 2], _: usize) -> awfqi::Result<[f64; 3]> {
-            Ok(self.0)
+    impl SourceModel<f64, 2> for Constant {
+        fn predict(&self, _: [f64; 2], _: usize) -> awfqi::Result<SourceMeans<f64, 2>> {
+            let [reward, x, y] = self.0;
+            Ok(SourceMeans {
+                reward,
+                next_state: [x, y],
+            })
         }
     }
     let rows = RowSet::grid(PointGrid::new([0.0, 0.0], [2.0, 2.0], [3, 3]).unwrap(), 4).unwrap();

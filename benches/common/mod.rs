@@ -6,16 +6,15 @@
 
 #![allow(dead_code)]
 
-use awfqi::alias::AliasEntry;
-use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
-use awfqi::dataset::{GpTraining, INPUT_DIM, Output, SubsetRule, fit_gp, predict_posteriors};
-use awfqi::env::{Dynamics, GenerativeModel, PUDDLE_ACTIONS, PuddleWorld, Transition};
-use awfqi::fqi::{CellGrid, FqiConfig, FqiEntry, SampleSet, TabularFqi};
-use awfqi::gp::{Gp, Hyperparameters};
+use awfqi::dataset::{Output, fit_gp, predict_posteriors};
+use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::identify::MiConfig;
 use awfqi::rng::uniform_f64;
-use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
-use awfqi::{Real, Result};
+use awfqi::{
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiConfig, FqiEntry, GenerativeModel, Gp,
+    GpTraining, Hyperparameters, Real, Result, RowSet, SampleSet, Scores, SubsetRule, TabularFqi,
+    Transition,
+};
 use awfqi_harness::fqi as forest_fqi;
 use awfqi_harness::gp_large::{FitOptions, GpHyperparameters, LargeGp, Parallelism};
 use awfqi_harness::reference::gp as reference;
@@ -23,7 +22,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
 /// Input dimension of every GP benchmark (spec §4.2's `z = (s_x, s_y, a)`).
-pub const D: usize = INPUT_DIM;
+pub const D: usize = 3;
 /// Number of test inputs of a "predict" measurement.
 pub const PREDICTIONS: usize = 100;
 /// Fixed hyperparameters of the GP benchmarks: `c = 1`, `ℓ = 2`, `σ²ₙ = 0.01` — about what
@@ -221,7 +220,7 @@ impl<T: Real> FqiCase<T> {
     /// A weighted FQI fit with `iterations` iterations (1 = the reward model only; each
     /// further iteration is one sweep over the samples and the table).
     pub fn fit(&mut self, iterations: usize) -> Result<T> {
-        let grid = CellGrid::square(T::ZERO, T::from_f64(10.0), FQI_CELLS)?;
+        let grid = CellGrid::cube(T::ZERO, T::from_f64(10.0), FQI_CELLS)?;
         let mut fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut self.storage)?;
         let config = FqiConfig::new(
             T::from_f64(0.99),
@@ -355,10 +354,13 @@ impl<T: Real> Sources<T> {
     }
 }
 
+/// Rows of the score and AWFQI benchmarks: 11 × 11 grid points × 4 actions.
+pub const SCORE_ROWS: usize = 484;
+
 /// The score benchmark's rows: 11 × 11 grid points × 4 actions = 484.
-pub fn score_rows<T: Real>() -> RowSet<'static, T> {
+pub fn score_rows<T: Real>() -> RowSet<'static, T, 2> {
     RowSet::grid(
-        PointGrid::puddle(T::from_f64(SCORE_SPACING)).expect("grid"),
+        PuddleWorld::score_grid(T::from_f64(SCORE_SPACING)).expect("grid"),
         PUDDLE_ACTIONS,
     )
     .expect("rows")
@@ -389,79 +391,45 @@ pub fn alias_weights<T: Real>() -> Vec<T> {
         .collect()
 }
 
-/// Everything an AWFQI kernel borrows, for the step benchmark: the three sources, the
-/// oracle score table on 484 rows, and storage for one step.
-pub struct AwfqiCase<T: Real> {
-    pub sources: Sources<T>,
-    pub scores: Vec<Scores<T>>,
-    pub alias: Vec<AliasEntry<T>>,
-    pub samples: Vec<Transition<[T; 2], T>>,
-    pub weights: Vec<T>,
-    pub gp: Box<Gp<T, SOURCE_GP, D>>,
-    pub fqi: Vec<FqiEntry<T>>,
-}
-
-impl<T: Real> AwfqiCase<T> {
-    pub fn new() -> Self {
-        let sources = Sources::new();
-        let rows = score_rows::<T>();
-        let mut scores = vec![Scores::default(); rows.len()];
-        ScoreTable::compute(
-            rows,
-            &PuddleWorld::<T>::sources(Dynamics::Shared),
-            &mut scores,
-        )
-        .expect("oracle table");
-        let n: usize = sources.records.iter().map(Vec::len).sum();
-        let blank = Transition {
-            state: [T::ZERO; 2],
-            action: 0,
-            reward: T::ZERO,
-            next_state: [T::ZERO; 2],
-            absorbing: false,
-        };
-        Self {
-            sources,
-            alias: vec![AliasEntry::default(); scores.len()],
-            scores,
-            samples: vec![blank; AWFQI_BUDGET],
-            weights: vec![T::ZERO; n],
-            gp: Box::new(Gp::empty()),
-            fqi: vec![FqiEntry::EMPTY; AWFQI_CELLS * AWFQI_CELLS * PUDDLE_ACTIONS],
-        }
-    }
-
-    /// Assembles the kernel (thesis configuration, budget 50, 11 × 11 cells, `N = 64`) on
-    /// this case's storage, which is leaked so the kernel can live as long as the process
-    /// (a benchmark builds one per scalar type).
-    pub fn into_kernel(self) -> Awfqi<'static, T, PuddleWorld<T>, SOURCE_GP> {
-        let case: &'static mut Self = Box::leak(Box::new(self));
-        let table = ScoreTable::from_parts(score_rows::<T>(), &case.scores).expect("table");
-        let sampler = table
-            .sampler(ScoreColumn::Reward, &mut case.alias)
-            .expect("sampler");
-        let data: Vec<SourceData<'static, T>> = case
-            .sources
-            .records
-            .iter()
-            .zip(&case.sources.posteriors)
-            .map(|(r, p)| SourceData::new(r, p).expect("source data"))
-            .collect();
-        let data: &'static [SourceData<'static, T>] = data.leak();
-        let grid = CellGrid::square(T::ZERO, T::from_f64(10.0), AWFQI_CELLS).expect("grid");
-        let fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut case.fqi).expect("fqi");
-        Awfqi::new(
-            AwfqiConfig::thesis(AWFQI_BUDGET),
+/// The AWFQI step benchmark's kernel (thesis configuration, budget 50, 11 × 11 cells,
+/// `N = 64`): the three sources with their stored posteriors, the oracle score table on 484
+/// rows and storage for one step, set up by the core's builder. Everything is leaked so the
+/// kernel can live as long as the process (a benchmark builds one per scalar type).
+pub fn awfqi_kernel<T: Real>() -> Awfqi<'static, T, PuddleWorld<T>, 2, D, SOURCE_GP> {
+    let sources: &'static Sources<T> = Box::leak(Box::new(Sources::new()));
+    let slices: &'static [&'static [Transition<[T; 2], T>]] = sources
+        .records
+        .iter()
+        .map(Vec::as_slice)
+        .collect::<Vec<_>>()
+        .leak();
+    let posteriors = sources.posteriors.concat().leak();
+    let rows = score_rows::<T>();
+    let scores = vec![Scores::ZERO; rows.len()].leak();
+    let storage = Box::leak(Box::new(AwfqiStorage::<
+        T,
+        2,
+        D,
+        SOURCE_GP,
+        AWFQI_BUDGET,
+        { 3 * SOURCE_RECORDS },
+        SCORE_ROWS,
+        { AWFQI_CELLS * AWFQI_CELLS * PUDDLE_ACTIONS },
+    >::new()));
+    let config = AwfqiConfig::thesis(AWFQI_BUDGET)
+        .validate()
+        .expect("thesis configuration");
+    let grid = CellGrid::cube(T::ZERO, T::from_f64(10.0), AWFQI_CELLS).expect("grid");
+    Awfqi::builder(config, grid, slices, rows)
+        .stored_posteriors(posteriors)
+        .scores_from(&PuddleWorld::<T>::sources(Dynamics::Shared), scores)
+        .expect("oracle table")
+        .build(
             PuddleWorld::target(Dynamics::Shared),
-            sampler,
-            data,
-            &mut case.samples,
-            &mut case.weights,
-            &mut case.gp,
-            fqi,
+            storage,
+            &mut ChaCha8Rng::seed_from_u64(0),
         )
         .expect("kernel")
-    }
 }
 
 /// The Grid World identification inputs: the thesis's four candidates (non-absorbing

@@ -483,18 +483,16 @@ fn score_seeds() {
             s.u8(2).nums(&[1.0, 4.0]).u8(1).nums(&[6.0, 6.0]).u8(4);
         };
         // Oracle tables on the puddle grid (d = 2.5 and 5), every row-set mode and column.
-        for (rowset, column) in [(0u8, 0u8), (1, 3), (2, 1)] {
+        // Columns: 0 is V_r, 1 the total, 2 then k the next-state coordinate k.
+        for (rowset, column) in [(0u8, &[0u8][..]), (1, &[1]), (2, &[2, 1])] {
             let mut s = Seed::new();
             s.u8(mode).bool(false).num(2.5);
             records(&mut s);
-            s.u8(4)
-                .u8(rowset)
-                .u8(0)
-                .u8(0)
-                .bool(true)
-                .u8(3)
-                .u8(column)
-                .u8(1);
+            s.u8(4).u8(rowset).u8(0).u8(0).bool(true).u8(3);
+            for &c in column {
+                s.u8(c);
+            }
+            s.u8(1);
             write("score_draw", &format!("oracle_rowset{rowset}_{p}"), &s);
         }
         // Fuzzed sources: agreeing (all scores 0: uniform sampling), overflowing, NaN, a
@@ -746,8 +744,104 @@ fn belief_seeds() {
     }
 }
 
+/// The AWFQI loop (`fuzz_targets/awfqi_loop.rs`): a well-formed set-up at `dims` state
+/// dimensions (`mode`: 0/1 Puddle World f32/f64, 2/3 the 4-D toy plant f32/f64), with the
+/// given candidate rows (0 grid, 1 pairs, 2 source rows), posterior stage (0 stored,
+/// 1 fitted) and score stage (0 stored, 1 oracle models, 2 realistic).
+fn loop_seed(mode: u8, dims: usize, rows: u8, posteriors: u8, scores: u8) -> Seed {
+    let mut s = Seed::new();
+    s.u8(mode);
+    if mode < 2 {
+        s.bool(false); // shared dynamics
+    }
+    // budget 5, 15 evaluations, 1 restart, initial noise kept, spread, reference noise,
+    // capped nearest filling, γ = 0.9, 5 iterations, sampling on V_r.
+    s.u8(5)
+        .u8(15)
+        .u8(1)
+        .bool(false)
+        .bool(true)
+        .u8(0)
+        .u8(1)
+        .num(0.9)
+        .u8(4)
+        .u8(0);
+    // Two sources of 6 records on a pseudo-random walk through the box.
+    s.u8(2);
+    let mut k = 0u32;
+    let mut coordinate = || {
+        k += 1;
+        ((k * 97) % 251) as u8
+    };
+    for j in 0..2 {
+        s.u8(6);
+        for i in 0..6u8 {
+            for _ in 0..dims {
+                s.u8(coordinate());
+            }
+            s.u8(i % 2).num(-1.0 - f64::from(i) * 0.3 - f64::from(j));
+            for _ in 0..dims {
+                s.u8(coordinate());
+            }
+            s.bool(false);
+        }
+    }
+    // Two candidate pairs, grid spacing (high − low)/2, 3 FQI cells per axis.
+    s.u8(1);
+    for a in 0..2u8 {
+        for _ in 0..dims {
+            s.u8(coordinate());
+        }
+        s.u8(a);
+    }
+    s.u8(1).u8(rows).u8(2);
+    let rows_len = match rows {
+        0 => 3usize.pow(dims as u32) * if mode < 2 { 4 } else { 2 },
+        1 => 2,
+        _ => 12,
+    };
+    // Stored posteriors and scores of the right sizes, then the stages.
+    s.u8(2);
+    for i in 0..12 {
+        s.num(-1.0 - f64::from(i) * 0.1).num(0.05);
+    }
+    s.u8(2).u8(2);
+    for i in 0..rows_len {
+        s.num(f64::from(i as u32 % 5));
+    }
+    s.u8(2).u8(posteriors).u8(scores);
+    if scores == 1 {
+        s.u8(3);
+    }
+    // Two steps, buffers of the right sizes, generator seed.
+    s.u8(1).u8(2).u8(2).u8(2).u8(2).u8(7);
+    s
+}
+
+fn loop_seeds() {
+    for (mode, dims, p) in [
+        (0u8, 2, "puddle_f32"),
+        (1, 2, "puddle_f64"),
+        (2, 4, "toy_f32"),
+        (3, 4, "toy_f64"),
+    ] {
+        for (rows, posteriors, scores, name) in [
+            (0u8, 1u8, 2u8, "grid_fit_realistic"),
+            (1, 0, 1, "pairs_stored_oracle"),
+            (2, 0, 0, "sources_stored_stored"),
+        ] {
+            write(
+                "awfqi_loop",
+                &format!("{name}_{p}"),
+                &loop_seed(mode, dims, rows, posteriors, scores),
+            );
+        }
+    }
+}
+
 fn main() {
     gp_seeds();
+    loop_seeds();
     env_seeds();
     fqi_seeds();
     score_seeds();

@@ -1,6 +1,7 @@
-//! Weighted tabular FQI on arbitrary grids, samples, weights and settings (f32 and f64):
-//! `CellGrid::new`, `FqiConfig::new`/`with_min_weight`, `TabularFqi::new`/`fit`/`value`/
-//! `max_value`/`greedy_action`.
+//! Weighted tabular FQI on arbitrary grids, samples, weights and settings (f32 and f64; state
+//! dimension 2, 1 or 3 from bits 1–2 of the first byte, so the seeds written for 2-D stay
+//! 2-D): `CellGrid::new`/`cube`, `FqiConfig::new`/`with_min_weight`,
+//! `TabularFqi::new`/`fit`/`value`/`max_value`/`greedy_action`.
 //!
 //! Invariants: no panic; a successful fit leaves every Q-value, reward model and weight
 //! finite; a failed fit leaves the table exactly as it was (documented: everything is
@@ -17,11 +18,11 @@ fn real<T: Real>(b: &mut Bytes) -> T {
     T::from_f64(b.num())
 }
 
-fn run<T: Real>(b: &mut Bytes) {
+fn run<T: Real, const D: usize>(b: &mut Bytes) {
     let grid = if b.bool() {
-        let lower = [real::<T>(b), real(b)];
-        let upper = [real::<T>(b), real(b)];
-        let cells = [b.index(7), b.index(7)];
+        let lower: [T; D] = core::array::from_fn(|_| real(b));
+        let upper: [T; D] = core::array::from_fn(|_| real(b));
+        let cells: [usize; D] = core::array::from_fn(|_| b.index(7));
         trace!("CellGrid::new({lower:?}, {upper:?}, {cells:?})");
         match CellGrid::new(lower, upper, cells) {
             Ok(g) => g,
@@ -35,10 +36,10 @@ fn run<T: Real>(b: &mut Bytes) {
             }
         }
     } else {
-        CellGrid::square(T::ZERO, T::from_f64(10.0), 1 + b.index(6)).expect("a valid grid")
+        CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(6)).expect("a valid grid")
     };
     let actions = b.index(5);
-    let mut storage = [FqiEntry::<T>::EMPTY; 6 * 6 * 4];
+    let mut storage = vec![FqiEntry::<T>::EMPTY; 6usize.pow(D as u32) * 4];
     let mut fqi = match TabularFqi::new(grid, actions, &mut storage) {
         Ok(f) => f,
         Err(e) => {
@@ -77,17 +78,17 @@ fn run<T: Real>(b: &mut Bytes) {
     };
 
     let n_sets = 1 + b.index(3);
-    let mut samples: Vec<Vec<Transition<[T; 2], T>>> = Vec::new();
+    let mut samples: Vec<Vec<Transition<[T; D], T>>> = Vec::new();
     let mut rewards: Vec<Option<Vec<T>>> = Vec::new();
     let mut transitions: Vec<Option<Vec<T>>> = Vec::new();
     for _ in 0..n_sets {
         let n = b.index(20);
         let set: Vec<_> = (0..n)
             .map(|_| Transition {
-                state: [real(b), real(b)],
+                state: core::array::from_fn(|_| real(b)),
                 action: b.index(6),
                 reward: real(b),
-                next_state: [real(b), real(b)],
+                next_state: core::array::from_fn(|_| real(b)),
                 absorbing: b.bool(),
             })
             .collect();
@@ -103,7 +104,7 @@ fn run<T: Real>(b: &mut Bytes) {
         transitions.push(weights(b));
         samples.push(set);
     }
-    let sets: Vec<SampleSet<'_, T>> = samples
+    let sets: Vec<SampleSet<'_, T, D>> = samples
         .iter()
         .zip(&rewards)
         .zip(&transitions)
@@ -137,7 +138,7 @@ fn run<T: Real>(b: &mut Bytes) {
         }
     }
     for _ in 0..4 {
-        let s = [real::<T>(b), real(b)];
+        let s: [T; D] = core::array::from_fn(|_| real(b));
         let a = b.index(6);
         match fqi.value(s, a) {
             Ok(v) => finite("value", "q", v.to_f64()),
@@ -156,9 +157,13 @@ fn run<T: Real>(b: &mut Bytes) {
 
 fuzz_target!(|data: &[u8]| {
     let mut b = Bytes::new(data);
-    if b.bool() {
-        run::<f32>(&mut b)
-    } else {
-        run::<f64>(&mut b)
+    let first = b.u8();
+    match (first & 1 == 1, (first >> 1) % 3) {
+        (true, 0) => run::<f32, 2>(&mut b),
+        (false, 0) => run::<f64, 2>(&mut b),
+        (true, 1) => run::<f32, 1>(&mut b),
+        (false, 1) => run::<f64, 1>(&mut b),
+        (true, _) => run::<f32, 3>(&mut b),
+        (false, _) => run::<f64, 3>(&mut b),
     }
 });

@@ -5,7 +5,7 @@ use crate::dataset::{SubsetRule, predict_posteriors};
 use crate::env::{Dynamics, PuddleWorld};
 use crate::fqi::{CellGrid, FqiEntry};
 use crate::gp::SearchOptions;
-use crate::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+use crate::score::{GpSourceModel, RowSet, ScoreTable, Scores};
 use crate::weights::effective_sample_size;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -13,16 +13,6 @@ use std::vec;
 use std::vec::Vec;
 
 type Record = Transition<[f64; 2], f64>;
-
-fn blank() -> Record {
-    Transition {
-        state: [0.0; 2],
-        action: 0,
-        reward: 0.0,
-        next_state: [0.0; 2],
-        absorbing: false,
-    }
-}
 
 /// Generative-model records of `world` at pseudo-random states.
 fn query_records(world: &PuddleWorld<f64>, n: usize, seed: u64) -> Vec<Record> {
@@ -46,7 +36,7 @@ fn oracle_posteriors(world: &PuddleWorld<f64>, records: &[Record]) -> Vec<Poster
         .collect()
 }
 
-fn small_config(budget: usize) -> AwfqiConfig<f64> {
+fn small_config(budget: usize) -> AwfqiConfig<f64, 3> {
     let mut config = AwfqiConfig::thesis(budget);
     config.gp_training.search = SearchOptions {
         max_evaluations: 60,
@@ -59,7 +49,7 @@ fn small_config(budget: usize) -> AwfqiConfig<f64> {
 
 struct Fixture {
     sources: Vec<Vec<Record>>,
-    posteriors: Vec<Vec<Posterior<f64>>>,
+    posteriors: Vec<Posterior<f64>>,
 }
 
 impl Fixture {
@@ -73,7 +63,7 @@ impl Fixture {
         let posteriors = worlds
             .iter()
             .zip(&sources)
-            .map(|(w, r)| oracle_posteriors(w, r))
+            .flat_map(|(w, r)| oracle_posteriors(w, r))
             .collect();
         Self {
             sources,
@@ -81,12 +71,8 @@ impl Fixture {
         }
     }
 
-    fn data(&self) -> Vec<SourceData<'_, f64>> {
-        self.sources
-            .iter()
-            .zip(&self.posteriors)
-            .map(|(r, p)| SourceData::new(r, p).unwrap())
-            .collect()
+    fn slices(&self) -> Vec<&[Record]> {
+        self.sources.iter().map(Vec::as_slice).collect()
     }
 
     fn source_records(&self) -> usize {
@@ -94,40 +80,65 @@ impl Fixture {
     }
 }
 
+/// Heap buffers for a kernel with `samples` target records, `weights` weights, `rows`
+/// candidate rows and `entries` FQI entries.
+struct Heap<const N: usize> {
+    gp: std::boxed::Box<Gp<f64, N, 3>>,
+    samples: Vec<Record>,
+    weights: Vec<f64>,
+    alias: Vec<AliasEntry<f64>>,
+    fqi: Vec<FqiEntry<f64>>,
+}
+
+impl<const N: usize> Heap<N> {
+    fn new(samples: usize, weights: usize, rows: usize, entries: usize) -> Self {
+        Self {
+            gp: std::boxed::Box::new(Gp::empty()),
+            samples: vec![Transition::EMPTY; samples],
+            weights: vec![0.0; weights],
+            alias: vec![AliasEntry::EMPTY; rows],
+            fqi: vec![FqiEntry::EMPTY; entries],
+        }
+    }
+
+    fn buffers(&mut self) -> AwfqiBuffers<'_, f64, 2, 3, N> {
+        AwfqiBuffers {
+            gp: &mut self.gp,
+            samples: &mut self.samples,
+            weights: &mut self.weights,
+            alias: &mut self.alias,
+            fqi: &mut self.fqi,
+        }
+    }
+}
+
 #[test]
 fn a_step_queries_weighs_and_fits_as_specified() {
     let fx = Fixture::new();
-    let data = fx.data();
+    let slices = fx.slices();
     let worlds = PuddleWorld::sources(Dynamics::Shared);
-    let rows = RowSet::grid(PointGrid::puddle(1.0).unwrap(), 4).unwrap();
+    let rows = RowSet::grid(PuddleWorld::score_grid(1.0).unwrap(), 4).unwrap();
     let mut scores = vec![Scores::default(); rows.len()];
-    let table = ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
-    let mut alias = vec![AliasEntry::default(); table.len()];
-    let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
+    let mut oracle = scores.clone();
+    let table = ScoreTable::compute(rows, &worlds, &mut oracle).unwrap();
 
     let budget = 20;
-    let mut samples = vec![blank(); 2 * budget];
     let n_source = fx.source_records();
-    let mut weights = vec![0.0; n_source];
-    let mut gp = Gp::<f64, 16, 3>::empty();
-    let grid = CellGrid::square(0.0, 10.0, 11).unwrap();
-    let mut entries = vec![FqiEntry::default(); 11 * 11 * 4];
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
+    let mut heap = Heap::<16>::new(2 * budget, n_source, rows.len(), 11 * 11 * 4);
+    let grid = CellGrid::cube(0.0, 10.0, 11).unwrap();
     let target = PuddleWorld::target(Dynamics::Shared);
-    let config = small_config(budget);
-    let mut kernel = Awfqi::new(
-        config,
-        target,
-        sampler,
-        &data,
-        &mut samples,
-        &mut weights,
-        &mut gp,
-        fqi,
-    )
-    .unwrap();
-
+    let config = small_config(budget).validate().unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut kernel = Awfqi::builder(config, grid, &slices, rows)
+        .stored_posteriors(&fx.posteriors)
+        .scores_from(&worlds, &mut scores)
+        .unwrap()
+        .build(target, heap.buffers(), &mut rng)
+        .unwrap();
+    assert_eq!(kernel.steps(), 0);
+    assert_eq!(kernel.sources().len(), n_source);
+    assert_eq!(kernel.sampler().rows().len(), rows.len());
+
     let report = kernel.step(&mut rng).unwrap();
     assert_eq!(report.step, 1);
     assert_eq!(report.n_target_samples, budget);
@@ -150,7 +161,10 @@ fn a_step_queries_weighs_and_fits_as_specified() {
     // Independent route to the weights: posteriors of the fitted GP per source batch, then
     // the slice estimator.
     let mut expected = Vec::new();
-    for (records, source_post) in fx.sources.iter().zip(&fx.posteriors) {
+    let mut offset = 0;
+    for records in &fx.sources {
+        let source_post = &fx.posteriors[offset..offset + records.len()];
+        offset += records.len();
         let mut target_post = vec![Posterior::default(); records.len()];
         predict_posteriors(
             kernel.gp(),
@@ -194,7 +208,7 @@ fn a_step_queries_weighs_and_fits_as_specified() {
         ));
         offset += r.len();
     }
-    fqi2.fit(&sets, &config.fqi).unwrap();
+    fqi2.fit(&sets, &small_config(budget).fqi).unwrap();
     for (a, b) in kernel.q().entries().iter().zip(fqi2.entries()) {
         assert!((a.q() - b.q()).abs() < 1e-9 * (1.0 + b.q().abs()));
     }
@@ -222,32 +236,29 @@ fn a_step_queries_weighs_and_fits_as_specified() {
 #[test]
 fn same_seed_same_run() {
     let fx = Fixture::new();
-    let data = fx.data();
+    let slices = fx.slices();
     let worlds = PuddleWorld::sources(Dynamics::Shared);
-    let rows = RowSet::grid(PointGrid::puddle(2.0).unwrap(), 4).unwrap();
+    let rows = RowSet::grid(PuddleWorld::score_grid(2.0).unwrap(), 4).unwrap();
     let mut scores = vec![Scores::default(); rows.len()];
-    let table = ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
+    ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
     let run = |seed: u64| {
-        let mut alias = vec![AliasEntry::default(); table.len()];
-        let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
-        let mut samples = vec![blank(); 10];
-        let mut weights = vec![0.0; fx.source_records()];
-        let mut gp = Gp::<f64, 8, 3>::empty();
-        let grid = CellGrid::square(0.0, 10.0, 5).unwrap();
-        let mut entries = vec![FqiEntry::default(); 100];
-        let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
-        let mut kernel = Awfqi::new(
-            small_config(10),
+        let mut heap = Heap::<8>::new(10, fx.source_records(), rows.len(), 100);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut kernel = Awfqi::builder(
+            small_config(10).validate().unwrap(),
+            CellGrid::cube(0.0, 10.0, 5).unwrap(),
+            &slices,
+            rows,
+        )
+        .stored_posteriors(&fx.posteriors)
+        .stored_scores(&scores)
+        .build(
             PuddleWorld::target(Dynamics::Shared),
-            sampler,
-            &data,
-            &mut samples,
-            &mut weights,
-            &mut gp,
-            fqi,
+            heap.buffers(),
+            &mut rng,
         )
         .unwrap();
-        let report = kernel.step(&mut ChaCha8Rng::seed_from_u64(seed)).unwrap();
+        let report = kernel.step(&mut rng).unwrap();
         let q: Vec<f64> = kernel.q().entries().iter().map(|e| e.q()).collect();
         (report, kernel.target_samples().to_vec(), q)
     };
@@ -256,79 +267,229 @@ fn same_seed_same_run() {
 }
 
 #[test]
-fn construction_checks_storage_and_configuration() {
+fn the_builder_fits_each_source_gp_once_for_posteriors_and_realistic_scores() {
     let fx = Fixture::new();
-    let data = fx.data();
-    assert!(SourceData::new(&fx.sources[0], &fx.posteriors[1]).is_err());
-    let bad = [Posterior::new(0.0, -1.0)];
-    assert!(SourceData::new(&fx.sources[0][..1], &bad).is_err());
+    let slices = fx.slices();
+    let rows = RowSet::grid(PuddleWorld::score_grid(2.5).unwrap(), 4).unwrap();
+    let mut config = small_config(10);
+    config.gp_training.search.max_evaluations = 30;
+    let config = config.validate().unwrap();
+    let n_source = fx.source_records();
+
+    // Independent route: fit the source GPs one after the other from the same stream,
+    // predict their posteriors, and score with all of them at once.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut gps = Vec::new();
+    let mut want_posteriors = Vec::new();
+    for records in &slices {
+        let mut gp = Gp::<f64, 8, 3>::empty();
+        crate::dataset::fit_gp(
+            &mut gp,
+            records,
+            crate::dataset::Output::Reward,
+            config.subset,
+            &config.gp_training,
+            &mut rng,
+        )
+        .unwrap();
+        let mut p = vec![Posterior::default(); records.len()];
+        predict_posteriors(&gp, records, config.noise_subtraction, &mut p).unwrap();
+        want_posteriors.extend(p);
+        gps.push(gp);
+    }
+    let models: Vec<_> = gps.iter().map(|g| GpSourceModel::new(g, None)).collect();
+    let mut want_scores = vec![Scores::ZERO; rows.len()];
+    ScoreTable::compute(rows, &models, &mut want_scores).unwrap();
+    let after_set_up = rng.clone();
+
+    for realistic in [true, false] {
+        let mut heap = Heap::<8>::new(10, n_source, rows.len(), 64);
+        let mut posteriors = vec![Posterior::default(); n_source + 3];
+        let mut scores = vec![Scores::ZERO; rows.len()];
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let builder = Awfqi::builder(config, CellGrid::cube(0.0, 10.0, 4).unwrap(), &slices, rows)
+            .fit_posteriors(&mut posteriors);
+        let builder = if realistic {
+            builder.realistic_scores(&mut scores)
+        } else {
+            builder.stored_scores(&want_scores)
+        };
+        let kernel = builder
+            .build(
+                PuddleWorld::target(Dynamics::Shared),
+                heap.buffers(),
+                &mut rng,
+            )
+            .unwrap();
+        assert_eq!(kernel.sources().reward_posteriors(), &want_posteriors[..]);
+        // Each source GP was fitted once: the stream is where the independent route left it.
+        assert_eq!(rng, after_set_up);
+        if realistic {
+            assert_eq!(scores, want_scores);
+        }
+    }
+}
+
+#[test]
+fn the_builder_checks_sizes_and_stages_before_fitting() {
+    let fx = Fixture::new();
+    let slices = fx.slices();
     let worlds = PuddleWorld::sources(Dynamics::Shared);
-    let rows = RowSet::grid(PointGrid::puddle(5.0).unwrap(), 4).unwrap();
+    let rows = RowSet::grid(PuddleWorld::score_grid(5.0).unwrap(), 4).unwrap();
     let mut scores = vec![Scores::default(); rows.len()];
-    let table = ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
-    let mut alias = vec![AliasEntry::default(); table.len()];
-    let sampler = table.sampler(ScoreColumn::Reward, &mut alias).unwrap();
-    let grid = CellGrid::square(0.0, 10.0, 3).unwrap();
+    ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 3).unwrap();
     let target = PuddleWorld::target(Dynamics::Shared);
     let n_source = fx.source_records();
-    let mut samples = vec![blank(); 10];
-    let mut gp = Gp::<f64, 8, 3>::empty();
+    let config = small_config(10).validate().unwrap();
+    let builder = || Awfqi::builder(config, grid, &slices, rows);
+    let build = |b: AwfqiBuilder<'_, f64, 2, 3>, heap: &mut Heap<8>| {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let result = b.build(target, heap.buffers(), &mut rng).map(|_| ());
+        (result, rng == ChaCha8Rng::seed_from_u64(1))
+    };
+    let complete = || {
+        builder()
+            .stored_posteriors(&fx.posteriors)
+            .stored_scores(&scores)
+    };
+    let ok = || Heap::<8>::new(10, n_source, rows.len(), 36);
 
-    let mut weights = vec![0.0; n_source - 1];
-    let mut entries = vec![FqiEntry::default(); 36];
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
-    let err = Awfqi::new(
-        small_config(10),
-        target,
-        sampler,
-        &data,
-        &mut samples,
-        &mut weights,
-        &mut gp,
-        fqi,
-    )
-    .err();
+    assert_eq!(build(complete(), &mut ok()), (Ok(()), true));
+    let cases: [(Heap<8>, Error); 4] = [
+        (
+            Heap::new(10, n_source - 1, rows.len(), 36),
+            Error::CapacityExceeded {
+                capacity: n_source - 1,
+            },
+        ),
+        (
+            Heap::new(9, n_source, rows.len(), 36),
+            Error::CapacityExceeded { capacity: 9 },
+        ),
+        (
+            Heap::new(10, n_source, rows.len() - 1, 36),
+            Error::CapacityExceeded {
+                capacity: rows.len() - 1,
+            },
+        ),
+        (
+            Heap::new(10, n_source, rows.len(), 35),
+            Error::CapacityExceeded { capacity: 35 },
+        ),
+    ];
+    for (mut heap, error) in cases {
+        assert_eq!(build(complete(), &mut heap).0, Err(error));
+    }
+    // Missing stages, and posteriors or scores of the wrong length.
+    let missing = Error::InvalidParameter {
+        parameter: "posteriors",
+    };
     assert_eq!(
-        err,
-        Some(Error::CapacityExceeded {
-            capacity: n_source - 1
+        build(builder().stored_scores(&scores), &mut ok()).0,
+        Err(missing)
+    );
+    assert_eq!(
+        build(builder().stored_posteriors(&fx.posteriors), &mut ok()).0,
+        Err(Error::InvalidParameter {
+            parameter: "scores"
         })
     );
-
-    let mut weights = vec![0.0; n_source];
-    let mut entries = vec![FqiEntry::default(); 36];
-    let fqi = TabularFqi::new(grid, 4, &mut entries).unwrap();
-    let err = Awfqi::new(
-        small_config(11),
-        target,
-        sampler,
-        &data,
-        &mut samples,
-        &mut weights,
-        &mut gp,
-        fqi,
-    )
-    .err();
-    assert_eq!(err, Some(Error::CapacityExceeded { capacity: 10 }));
-
-    let mut entries = vec![FqiEntry::default(); 27];
-    let fqi = TabularFqi::new(grid, 3, &mut entries).unwrap();
-    let err = Awfqi::new(
-        small_config(10),
-        target,
-        sampler,
-        &data,
-        &mut samples,
-        &mut weights,
-        &mut gp,
-        fqi,
-    )
-    .err();
     assert_eq!(
-        err,
-        Some(Error::InvalidParameter {
+        build(
+            builder()
+                .stored_posteriors(&fx.posteriors[1..])
+                .stored_scores(&scores),
+            &mut ok()
+        )
+        .0,
+        Err(Error::InvalidParameter {
+            parameter: "reward_posteriors"
+        })
+    );
+    let mut few = vec![Posterior::default(); n_source - 1];
+    assert_eq!(
+        build(
+            builder().fit_posteriors(&mut few).stored_scores(&scores),
+            &mut ok()
+        ),
+        (
+            Err(Error::CapacityExceeded {
+                capacity: n_source - 1
+            }),
+            true
+        )
+    );
+    let mut few_scores = vec![Scores::ZERO; rows.len() - 1];
+    assert_eq!(
+        build(
+            builder()
+                .stored_posteriors(&fx.posteriors)
+                .realistic_scores(&mut few_scores),
+            &mut ok()
+        ),
+        (
+            Err(Error::CapacityExceeded {
+                capacity: rows.len() - 1
+            }),
+            true
+        )
+    );
+    // Candidate rows with an action the model does not have.
+    let five = RowSet::grid(PuddleWorld::score_grid(5.0).unwrap(), 5).unwrap();
+    let mut five_scores = vec![Scores::ZERO; five.len()];
+    let b = Awfqi::builder(config, grid, &slices, five)
+        .stored_posteriors(&fx.posteriors)
+        .scores_from(
+            &[PuddleWorld::<f64>::target(Dynamics::Shared)],
+            &mut five_scores,
+        );
+    assert_eq!(
+        b.err(),
+        Some(Error::OutOfRange {
+            parameter: "action"
+        })
+    );
+    let b = Awfqi::builder(config, grid, &slices, five)
+        .stored_posteriors(&fx.posteriors)
+        .stored_scores(&five_scores);
+    let mut heap = Heap::<8>::new(10, n_source, five.len(), 36);
+    assert_eq!(
+        build(b, &mut heap).0,
+        Err(Error::OutOfRange {
             parameter: "actions"
         })
     );
+    // Configuration.
     assert!(small_config(0).validate().is_err());
+    let mut c = small_config(10);
+    c.sampling = crate::score::ScoreColumn::NextState(2);
+    assert_eq!(
+        c.validate().err(),
+        Some(Error::OutOfRange {
+            parameter: "sampling"
+        })
+    );
+    c.sampling = crate::score::ScoreColumn::NextState(1);
+    assert!(c.validate().is_ok());
+}
+
+/// The storage block is `const`-constructible, so it can be a `static`.
+static STORAGE_IN_A_STATIC: AwfqiStorage<f32, 2, 3, 8, 10, 20, 30, 36> = AwfqiStorage::new();
+
+#[test]
+fn storage_is_all_zero_and_lends_its_parts() {
+    let mut storage = STORAGE_IN_A_STATIC.clone();
+    let buffers = storage.buffers();
+    assert_eq!(
+        (
+            buffers.samples.len(),
+            buffers.weights.len(),
+            buffers.alias.len(),
+            buffers.fqi.len()
+        ),
+        (10, 20, 30, 36)
+    );
+    assert!(buffers.gp.is_empty());
+    assert!(buffers.samples.iter().all(|t| *t == Transition::EMPTY));
 }

@@ -2,6 +2,10 @@
 //! touch a target task, the [`GenerativeModel`] trait.
 //!
 //! - [`PuddleWorld`]: the continuous 10×10 Puddle World of spec §2 (both dynamics variants).
+//!
+//! A plant of your own joins the transfer path by implementing [`GenerativeModel`] with a
+//! state `[T; D]` (and, optionally, [`crate::score::SourceModel`] with its noise-free mean
+//! functions, for oracle scores and ideal weights).
 //! - [`GridWorld`]: the finite 10×10 Grid World of spec §10.4, exposed as a [`FiniteMdp`]
 //!   whose exact transition probabilities and Gaussian reward models feed the
 //!   identification scores and beliefs.
@@ -24,7 +28,12 @@ use crate::{Real, Result};
 use rand_core::Rng;
 
 /// One sampled transition `(s, a, r, s′, ω)`: spec §1's record without its time index.
-#[derive(Debug, Clone, Copy, PartialEq)]
+///
+/// `Default` is the all-zero record (action 0, not absorbing) when `S` has a default;
+/// for a state `[T; D]` of any `D`, [`Transition::EMPTY`] is the same record as a `const`,
+/// for storage in a `static`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Transition<S, T> {
     /// The state the action was taken in.
     pub state: S,
@@ -36,6 +45,18 @@ pub struct Transition<S, T> {
     pub next_state: S,
     /// `true` when the next state is absorbing (the episode ends there).
     pub absorbing: bool,
+}
+
+impl<T: Real, const D: usize> Transition<[T; D], T> {
+    /// The all-zero record (state and next state 0, action 0, reward 0, not absorbing):
+    /// `static mut SAMPLES: [Transition<[f32; 4], f32>; 64] = [Transition::EMPTY; 64];`.
+    pub const EMPTY: Self = Self {
+        state: [T::ZERO; D],
+        action: 0,
+        reward: T::ZERO,
+        next_state: [T::ZERO; D],
+        absorbing: false,
+    };
 }
 
 /// A simulator that returns one sampled transition from *any* state-action pair.

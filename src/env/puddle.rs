@@ -17,10 +17,12 @@
 
 mod episode;
 
+pub use crate::evaluation::Rollout;
 pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-pub use episode::{EpisodeRecord, Rollout};
+pub use episode::EpisodeRecord;
 
 use super::{GenerativeModel, Transition};
+use crate::score::{PointGrid, SourceMeans, SourceModel};
 use crate::{Error, Real, Result, rng};
 use rand_core::Rng;
 
@@ -62,6 +64,8 @@ pub const PUDDLE_COVARIANCE_OFF_DIAGONAL: f64 = 1e-5;
 pub const PUDDLE_HORIZON: usize = 50;
 /// Discount factor γ of Puddle World.
 pub const PUDDLE_DISCOUNT: f64 = 0.99;
+/// Number of rollouts of the reference evaluation (spec §3.3).
+pub const PUDDLE_EVALUATION_ROLLOUTS: usize = 5;
 /// Most puddles a [`PuddleWorld`] can hold (the spec's instances have at most 6).
 pub const MAX_PUDDLES: usize = 8;
 
@@ -326,6 +330,21 @@ impl<T: Real> PuddleWorld<T> {
         PUDDLE_INITIAL_STATE.map(T::from_f64)
     }
 
+    /// The score-table grid of the thesis (§11.1) for spacing `d` on both axes: points
+    /// `0, d, 2d, …` up to 10 inclusive (`round(10/d) + 1` per axis; `d = 0.1` gives
+    /// 101 × 101), i.e. [`PointGrid::spanning`] over the state box.
+    ///
+    /// Errors: a non-finite or non-positive `d`, or a `d` that does not divide 10 (to
+    /// within 10⁻⁶ relative), so the last point would not be 10
+    /// ([`Error::InvalidParameter`] `spacing`).
+    pub fn score_grid(d: T) -> Result<PointGrid<T, 2>> {
+        let (low, high) = (
+            T::from_f64(PUDDLE_STATE_LOW),
+            T::from_f64(PUDDLE_STATE_HIGH),
+        );
+        PointGrid::spanning([low; 2], [high; 2], d)
+    }
+
     /// Checks that `state` lies in the closed box [0, 10]².
     ///
     /// Errors: a NaN or infinite coordinate ([`Error::NonFinite`] `state`), a finite one
@@ -484,6 +503,18 @@ fn clip<T: Real>(state: [T; 2]) -> [T; 2] {
         T::from_f64(PUDDLE_STATE_HIGH),
     );
     state.map(|c| c.clamp_to(low, high))
+}
+
+/// The oracle of the score tables: spec §2.4's noise-free mean functions r̄(s) (which does
+/// not depend on the action) and s̄′(s, a).
+impl<T: Real> SourceModel<T, 2> for PuddleWorld<T> {
+    fn predict(&self, state: [T; 2], action: usize) -> Result<SourceMeans<T, 2>> {
+        let next_state = self.mean_next_state(state, action)?;
+        Ok(SourceMeans {
+            reward: self.mean_reward(state)?,
+            next_state,
+        })
+    }
 }
 
 impl<T: Real> GenerativeModel<T> for PuddleWorld<T> {

@@ -1,29 +1,33 @@
-//! The uniform grid of cells that discretises a continuous 2-D state space for tabular FQI.
+//! The uniform grid of cells that discretises a continuous `D`-dimensional state space for
+//! tabular FQI.
 
 use crate::error::ensure_finite;
 use crate::{Error, Real, Result};
 
-/// A box `[lower, upper]` in 2-D cut into `cells[0] × cells[1]` equal cells; cell
-/// `(i, j)` has index `i + cells[0]·j`.
+/// A box `[lower, upper]` in `D` dimensions cut into `cells[0] × … × cells[D−1]` equal
+/// cells; cell `(i₀, i₁, …)` has index `i₀ + cells[0]·(i₁ + cells[1]·(i₂ + …))` (the first
+/// axis fastest).
 ///
 /// A state is mapped to the cell that contains it; the upper border belongs to the last
 /// cell, and states outside the box are clamped into the nearest border cell (the box is
-/// the state space of Puddle World, so this only matters for foreign data). Size: 7 words.
+/// meant to be the plant's state space, so this only matters for foreign data). Size:
+/// `2D` scalars and `D` words.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct CellGrid<T> {
-    lower: [T; 2],
-    upper: [T; 2],
-    cells: [usize; 2],
+pub struct CellGrid<T, const D: usize> {
+    lower: [T; D],
+    upper: [T; D],
+    cells: [usize; D],
 }
 
-impl<T: Real> CellGrid<T> {
-    /// A grid of `cells[0] × cells[1]` cells over `[lower[0], upper[0]] × [lower[1], upper[1]]`.
+impl<T: Real, const D: usize> CellGrid<T, D> {
+    /// A grid of `cells[0] × … × cells[D−1]` cells over the box `[lower, upper]`.
     ///
     /// Errors: non-finite bounds ([`Error::NonFinite`] naming `lower` or `upper`),
     /// `lower ≥ upper` on an axis or a zero cell count ([`Error::InvalidParameter`]), more
-    /// than `u32::MAX − 1` cells ([`Error::CapacityExceeded`]).
-    pub fn new(lower: [T; 2], upper: [T; 2], cells: [usize; 2]) -> Result<Self> {
+    /// than `u32::MAX − 1` cells ([`Error::CapacityExceeded`]). `D = 0` does not compile.
+    pub fn new(lower: [T; D], upper: [T; D], cells: [usize; D]) -> Result<Self> {
+        const { assert!(D > 0, "a cell grid needs at least one dimension") };
         for (&lo, &hi) in lower.iter().zip(&upper) {
             ensure_finite(lo, "lower")?;
             ensure_finite(hi, "upper")?;
@@ -35,7 +39,7 @@ impl<T: Real> CellGrid<T> {
             return Err(Error::InvalidParameter { parameter: "cells" });
         }
         let limit = u32::MAX as usize - 1;
-        match cells[0].checked_mul(cells[1]) {
+        match cells.iter().try_fold(1usize, |n, &c| n.checked_mul(c)) {
             Some(n) if n <= limit => {}
             _ => return Err(Error::CapacityExceeded { capacity: limit }),
         }
@@ -46,21 +50,22 @@ impl<T: Real> CellGrid<T> {
         })
     }
 
-    /// `n × n` cells over the square `[lower, upper]²` (Puddle World: `[0, 10]²`).
+    /// `n` cells on every axis over the cube `[lower, upper]^D` (Puddle World: `[0, 10]²`).
     ///
     /// Errors: as [`CellGrid::new`].
-    pub fn square(lower: T, upper: T, n: usize) -> Result<Self> {
-        Self::new([lower, lower], [upper, upper], [n, n])
+    pub fn cube(lower: T, upper: T, n: usize) -> Result<Self> {
+        Self::new([lower; D], [upper; D], [n; D])
     }
 
     /// Number of cells along each axis.
-    pub fn cells(&self) -> [usize; 2] {
+    pub fn cells(&self) -> [usize; D] {
         self.cells
     }
 
     /// Total number of cells.
     pub fn len(&self) -> usize {
-        self.cells[0] * self.cells[1]
+        // Checked at construction to stay below u32::MAX.
+        self.cells.iter().product()
     }
 
     /// `false`: a grid has at least one cell.
@@ -69,65 +74,79 @@ impl<T: Real> CellGrid<T> {
     }
 
     /// Lower corner of the box.
-    pub fn lower(&self) -> [T; 2] {
+    pub fn lower(&self) -> [T; D] {
         self.lower
     }
 
     /// Upper corner of the box.
-    pub fn upper(&self) -> [T; 2] {
+    pub fn upper(&self) -> [T; D] {
         self.upper
     }
 
     /// Index of the cell containing `state` (clamped into the box).
     ///
     /// Errors: a non-finite coordinate ([`Error::NonFinite`] naming `state`).
-    pub fn cell_of(&self, state: [T; 2]) -> Result<usize> {
-        ensure_finite(state[0], "state")?;
-        ensure_finite(state[1], "state")?;
+    pub fn cell_of(&self, state: [T; D]) -> Result<usize> {
+        crate::error::ensure_all_finite(&state, "state")?;
         Ok(self.cell_of_finite(state))
     }
 
     /// [`CellGrid::cell_of`] for a state known to be finite.
-    pub(crate) fn cell_of_finite(&self, state: [T; 2]) -> usize {
-        let ix = self.axis_index(state[0], 0);
-        let iy = self.axis_index(state[1], 1);
-        ix + self.cells[0] * iy
-    }
-
-    fn axis_index(&self, x: T, axis: usize) -> usize {
-        let (lo, hi, n) = match axis {
-            0 => (self.lower[0], self.upper[0], self.cells[0]),
-            _ => (self.lower[1], self.upper[1], self.cells[1]),
-        };
-        let t = (x - lo) / (hi - lo) * T::from_usize(n);
-        // `as` truncates towards zero and saturates: ⌊t⌋ for t ≥ 0; 0 for t < 0 and NaN
-        // (as ⌊t⌋ would give after saturating); usize::MAX when huge, then clamp. So no
-        // `floor` is needed (libm's is software, and this runs twice per sample per sweep).
-        let i = t.to_f64() as usize;
-        i.min(n - 1)
-    }
-
-    /// The `(i, j)` coordinates of cell `cell`; `None` out of range.
-    pub fn coordinates(&self, cell: usize) -> Option<[usize; 2]> {
-        let [nx, _] = self.cells;
-        match (cell.checked_rem(nx), cell.checked_div(nx)) {
-            (Some(i), Some(j)) if cell < self.len() => Some([i, j]),
-            _ => None,
+    pub(crate) fn cell_of_finite(&self, state: [T; D]) -> usize {
+        let mut index = 0;
+        let mut stride = 1;
+        for (((&x, &lo), &hi), &n) in state
+            .iter()
+            .zip(&self.lower)
+            .zip(&self.upper)
+            .zip(&self.cells)
+        {
+            index += axis_index(x, lo, hi, n) * stride;
+            stride *= n;
         }
+        index
+    }
+
+    /// The coordinates `(i₀, i₁, …)` of cell `cell`; `None` out of range.
+    pub fn coordinates(&self, cell: usize) -> Option<[usize; D]> {
+        if cell >= self.len() {
+            return None;
+        }
+        let mut rest = cell;
+        let mut out = [0; D];
+        for (o, &n) in out.iter_mut().zip(&self.cells) {
+            *o = rest.checked_rem(n)?;
+            rest = rest.checked_div(n)?;
+        }
+        Some(out)
     }
 
     /// The centre of cell `cell`; `None` out of range.
-    pub fn center(&self, cell: usize) -> Option<[T; 2]> {
-        let [i, j] = self.coordinates(cell)?;
+    pub fn center(&self, cell: usize) -> Option<[T; D]> {
+        let coordinates = self.coordinates(cell)?;
         let half = T::from_f64(0.5);
-        let at = |k: usize, lo: T, hi: T, n: usize| {
-            lo + (hi - lo) * (T::from_usize(k) + half) / T::from_usize(n)
-        };
-        Some([
-            at(i, self.lower[0], self.upper[0], self.cells[0]),
-            at(j, self.lower[1], self.upper[1], self.cells[1]),
-        ])
+        let mut out = self.lower;
+        for ((((o, &k), &lo), &hi), &n) in out
+            .iter_mut()
+            .zip(&coordinates)
+            .zip(&self.lower)
+            .zip(&self.upper)
+            .zip(&self.cells)
+        {
+            *o = lo + (hi - lo) * (T::from_usize(k) + half) / T::from_usize(n);
+        }
+        Some(out)
     }
+}
+
+/// The index of the cell of `[lo, hi]` cut into `n ≥ 1` cells that contains `x`, clamped.
+fn axis_index<T: Real>(x: T, lo: T, hi: T, n: usize) -> usize {
+    let t = (x - lo) / (hi - lo) * T::from_usize(n);
+    // `as` truncates towards zero and saturates: ⌊t⌋ for t ≥ 0; 0 for t < 0 and NaN
+    // (as ⌊t⌋ would give after saturating); usize::MAX when huge, then clamp. So no
+    // `floor` is needed (libm's is software, and this runs twice per sample per sweep).
+    let i = t.to_f64() as usize;
+    i.min(n.saturating_sub(1))
 }
 
 #[cfg(test)]
@@ -136,7 +155,7 @@ mod tests {
 
     #[test]
     fn cells_centres_and_borders() {
-        let g = CellGrid::square(0.0f64, 10.0, 21).unwrap();
+        let g = CellGrid::<f64, 2>::cube(0.0f64, 10.0, 21).unwrap();
         assert_eq!(g.len(), 441);
         assert_eq!(g.cell_of([0.0, 0.0]).unwrap(), 0);
         // The upper border belongs to the last cell.
@@ -163,7 +182,7 @@ mod tests {
     fn cell_index_is_the_clamped_floor_everywhere() {
         // The index is computed by truncation; it must equal ⌊t⌋ clamped into 0..n for
         // states below, inside and above the box, at cell borders, and for huge values.
-        let g = CellGrid::square(-1.0f32, 3.0, 8).unwrap();
+        let g = CellGrid::<f32, 2>::cube(-1.0f32, 3.0, 8).unwrap();
         let expected = |x: f32| -> usize {
             let t = f64::from((x - -1.0) / 4.0 * 8.0).floor();
             t.clamp(0.0, 7.0) as usize
@@ -189,9 +208,9 @@ mod tests {
 
     #[test]
     fn invalid_grids_are_rejected() {
-        assert!(CellGrid::square(0.0f32, 0.0, 3).is_err());
-        assert!(CellGrid::square(0.0f32, 1.0, 0).is_err());
-        assert!(CellGrid::square(f32::NAN, 1.0, 2).is_err());
+        assert!(CellGrid::<f32, 2>::cube(0.0f32, 0.0, 3).is_err());
+        assert!(CellGrid::<f32, 2>::cube(0.0f32, 1.0, 0).is_err());
+        assert!(CellGrid::<f32, 2>::cube(f32::NAN, 1.0, 2).is_err());
         assert!(CellGrid::new([0.0f32, 0.0], [1.0, 1.0], [usize::MAX, 2]).is_err());
         let g = CellGrid::new([0.0f32, -1.0], [4.0, 1.0], [4, 2]).unwrap();
         assert_eq!(g.cell_of([3.5, 0.5]).unwrap(), 3 + 4);

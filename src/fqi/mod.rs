@@ -1,5 +1,5 @@
-//! Weighted fitted Q-iteration over a tabular discretisation of a continuous 2-D state space
-//! (spec §5, §7.2 step 5).
+//! Weighted fitted Q-iteration over a tabular discretisation of a continuous `D`-dimensional
+//! state space (spec §5, §7.2 step 5).
 //!
 //! The regressor of every iteration is a table: the state space is cut into a uniform
 //! [`CellGrid`], and the fitted value of a (cell, action) pair is the weighted mean of the
@@ -22,7 +22,7 @@
 //! **Pairs with no sample.** A (cell, action) pair with no sample of positive weight has no
 //! regression target; [`EmptyCells`] decides what it predicts:
 //! - [`EmptyCells::Nearest`]: the fitted value of the nearest pair with data, for the same
-//!   action — nearest in cell-index units (Euclidean, `Δi² + Δj²`), ties broken by the
+//!   action — nearest in cell-index units (Euclidean, `Σ_k Δi_k²`), ties broken by the
 //!   smallest cell index. This mimics the reference's trees, which extend a leaf's value
 //!   over the region around its samples.
 //! - [`EmptyCells::CappedNearest`] (the default, [`FqiConfig::reference`]): the same, but
@@ -221,15 +221,15 @@ impl<T: Real> FqiConfig<T> {
 /// AWFQI passes the target samples (unweighted) and one set per source, so the records
 /// never need to be copied into one buffer.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SampleSet<'a, T> {
-    samples: &'a [Transition<[T; 2], T>],
+pub struct SampleSet<'a, T, const D: usize> {
+    samples: &'a [Transition<[T; D], T>],
     reward_weights: Option<&'a [T]>,
     transition_weights: Option<&'a [T]>,
 }
 
-impl<'a, T: Real> SampleSet<'a, T> {
+impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
     /// Samples with weight 1 everywhere.
-    pub fn unweighted(samples: &'a [Transition<[T; 2], T>]) -> Self {
+    pub fn unweighted(samples: &'a [Transition<[T; D], T>]) -> Self {
         Self {
             samples,
             reward_weights: None,
@@ -240,7 +240,7 @@ impl<'a, T: Real> SampleSet<'a, T> {
     /// Samples with reward weights (iteration 1) and transition weights (iterations ≥ 2);
     /// `None` means all 1. Lengths are checked by [`TabularFqi::fit`].
     pub fn weighted(
-        samples: &'a [Transition<[T; 2], T>],
+        samples: &'a [Transition<[T; D], T>],
         reward_weights: Option<&'a [T]>,
         transition_weights: Option<&'a [T]>,
     ) -> Self {
@@ -285,16 +285,14 @@ impl<'a, T: Real> SampleSet<'a, T> {
                 });
             }
             ensure_finite(s.reward, "reward")?;
-            ensure_finite(s.state[0], "state")?;
-            ensure_finite(s.state[1], "state")?;
-            ensure_finite(s.next_state[0], "next_state")?;
-            ensure_finite(s.next_state[1], "next_state")?;
+            crate::error::ensure_all_finite(&s.state, "state")?;
+            crate::error::ensure_all_finite(&s.next_state, "next_state")?;
         }
         Ok(())
     }
 
     /// `(sample, w_r, w_s)` triples.
-    fn iter(&self) -> impl Iterator<Item = (&'a Transition<[T; 2], T>, T, T)> + '_ {
+    fn iter(&self) -> impl Iterator<Item = (&'a Transition<[T; D], T>, T, T)> + '_ {
         self.samples.iter().enumerate().map(|(i, s)| {
             let pick = |w: Option<&[T]>| w.and_then(|w| w.get(i).copied()).unwrap_or(T::ONE);
             (s, pick(self.reward_weights), pick(self.transition_weights))
@@ -305,15 +303,15 @@ impl<'a, T: Real> SampleSet<'a, T> {
 /// A tabular Q-function on a [`CellGrid`] with `actions` actions, fitted by weighted FQI,
 /// over caller-provided [`FqiEntry`] storage.
 #[derive(Debug)]
-pub struct TabularFqi<'a, T> {
-    grid: CellGrid<T>,
+pub struct TabularFqi<'a, T, const D: usize> {
+    grid: CellGrid<T, D>,
     actions: usize,
     entries: &'a mut [FqiEntry<T>],
 }
 
-impl<'a, T: Real> TabularFqi<'a, T> {
+impl<'a, T: Real, const D: usize> TabularFqi<'a, T, D> {
     /// Number of [`FqiEntry`] a grid with `actions` actions needs (`None` on overflow).
-    pub fn required_entries(grid: &CellGrid<T>, actions: usize) -> Option<usize> {
+    pub fn required_entries(grid: &CellGrid<T, D>, actions: usize) -> Option<usize> {
         grid.len().checked_mul(actions)
     }
 
@@ -322,7 +320,11 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     ///
     /// Errors: `actions == 0` ([`Error::InvalidParameter`]); `storage` too short
     /// ([`Error::CapacityExceeded`] with its length), or more pairs than `u32::MAX − 1`.
-    pub fn new(grid: CellGrid<T>, actions: usize, storage: &'a mut [FqiEntry<T>]) -> Result<Self> {
+    pub fn new(
+        grid: CellGrid<T, D>,
+        actions: usize,
+        storage: &'a mut [FqiEntry<T>],
+    ) -> Result<Self> {
         if actions == 0 {
             return Err(Error::InvalidParameter {
                 parameter: "actions",
@@ -349,7 +351,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     }
 
     /// The grid.
-    pub fn grid(&self) -> &CellGrid<T> {
+    pub fn grid(&self) -> &CellGrid<T, D> {
         &self.grid
     }
 
@@ -376,7 +378,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// weight or a weight slice whose length differs from its samples'
     /// ([`Error::InvalidParameter`]); rewards, weights and iterations so large that a
     /// value of the fit could overflow `T` ([`Error::InvalidParameter`] `reward`).
-    pub fn fit(&mut self, sets: &[SampleSet<'_, T>], config: &FqiConfig<T>) -> Result<()> {
+    pub fn fit(&mut self, sets: &[SampleSet<'_, T, D>], config: &FqiConfig<T>) -> Result<()> {
         self.fit_sets(sets.iter().copied(), config)
     }
 
@@ -387,7 +389,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// Errors: those of [`TabularFqi::fit`].
     pub fn fit_sets<'s, I>(&mut self, sets: I, config: &FqiConfig<T>) -> Result<()>
     where
-        I: Iterator<Item = SampleSet<'s, T>> + Clone,
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
         let mut total = 0usize;
@@ -418,7 +420,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// Iteration 1: `R̂` into `reward`, `Σ w_s` into `weight`.
     fn fit_reward_model<'s>(
         &mut self,
-        sets: impl Iterator<Item = SampleSet<'s, T>>,
+        sets: impl Iterator<Item = SampleSet<'s, T, D>>,
         config: &FqiConfig<T>,
     ) where
         T: 's,
@@ -462,7 +464,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// One iteration k ≥ 2: Q ← R̂ + γ·(weighted mean of (1−ω)·V_{k−1}(s′)).
     fn bellman_iteration<'s>(
         &mut self,
-        sets: impl Iterator<Item = SampleSet<'s, T>>,
+        sets: impl Iterator<Item = SampleSet<'s, T, D>>,
         config: &FqiConfig<T>,
     ) where
         T: 's,
@@ -497,18 +499,18 @@ impl<'a, T: Real> TabularFqi<'a, T> {
         );
     }
 
-    fn index(&self, state: [T; 2], action: usize) -> usize {
+    fn index(&self, state: [T; D], action: usize) -> usize {
         self.grid.cell_of_finite(state) * self.actions + action
     }
 
-    fn row(&self, state: [T; 2]) -> &[FqiEntry<T>] {
+    fn row(&self, state: [T; D]) -> &[FqiEntry<T>] {
         let start = self.grid.cell_of_finite(state) * self.actions;
         self.entries
             .get(start..start + self.actions)
             .unwrap_or_default()
     }
 
-    fn max_value_finite(&self, state: [T; 2]) -> T {
+    fn max_value_finite(&self, state: [T; D]) -> T {
         self.row(state)
             .iter()
             .map(|e| e.q)
@@ -518,7 +520,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// `Q(state, action)`.
     ///
     /// Errors: a non-finite state, an action `≥ actions`.
-    pub fn value(&self, state: [T; 2], action: usize) -> Result<T> {
+    pub fn value(&self, state: [T; D], action: usize) -> Result<T> {
         self.grid.cell_of(state)?;
         self.row(state)
             .get(action)
@@ -531,7 +533,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// `maxₐ Q(state, a)`.
     ///
     /// Errors: a non-finite state.
-    pub fn max_value(&self, state: [T; 2]) -> Result<T> {
+    pub fn max_value(&self, state: [T; D]) -> Result<T> {
         self.grid.cell_of(state)?;
         Ok(self.max_value_finite(state))
     }
@@ -544,7 +546,7 @@ impl<'a, T: Real> TabularFqi<'a, T> {
     /// index alone (a source dataset from a deterministic policy tries one action per cell).
     ///
     /// Errors: a non-finite state.
-    pub fn greedy_action(&self, state: [T; 2]) -> Result<usize> {
+    pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         self.grid.cell_of(state)?;
         let mut best = 0;
         let mut best_q = T::NEG_INFINITY;
@@ -565,17 +567,16 @@ impl<'a, T: Real> TabularFqi<'a, T> {
 /// Sets every entry's `donor` to the entry index of the nearest entry with the same action
 /// for which `has_data` holds (itself if it holds), or [`NIL`] when the action has none.
 ///
-/// Nearest in cell-index units, Euclidean; ties go to the smallest cell index. Rings of
+/// Nearest in cell-index units, Euclidean; ties go to the smallest cell index. Shells of
 /// growing Chebyshev radius are scanned around the cell until the radius exceeds the best
-/// distance found, so the search is exact and costs O(d²) for a cell at distance d.
-fn nearest_donors<T: Real>(
-    grid: &CellGrid<T>,
+/// distance found, so the search is exact and costs O(d^D) for a cell at distance d.
+fn nearest_donors<T: Real, const D: usize>(
+    grid: &CellGrid<T, D>,
     actions: usize,
     entries: &mut [FqiEntry<T>],
     has_data: impl Fn(&FqiEntry<T>) -> bool,
 ) {
-    let [nx, ny] = grid.cells();
-    let cells = nx * ny;
+    let cells = grid.len();
     for action in 0..actions {
         let visited = |cell: usize, entries: &[FqiEntry<T>]| {
             entries.get(cell * actions + action).is_some_and(&has_data)
@@ -587,7 +588,7 @@ fn nearest_donors<T: Real>(
             } else if visited(cell, entries) {
                 (cell * actions + action) as u32
             } else {
-                nearest_visited(cell, nx, ny, |c| visited(c, entries))
+                nearest_visited(grid, cell, |c| visited(c, entries))
                     .map_or(NIL, |c| (c * actions + action) as u32)
             };
             if let Some(e) = entries.get_mut(cell * actions + action) {
@@ -599,51 +600,105 @@ fn nearest_donors<T: Real>(
 
 /// The nearest cell to `cell` (not itself) for which `visited` holds; see
 /// [`nearest_donors`].
-fn nearest_visited(
+fn nearest_visited<T: Real, const D: usize>(
+    grid: &CellGrid<T, D>,
     cell: usize,
-    nx: usize,
-    ny: usize,
     visited: impl Fn(usize) -> bool,
 ) -> Option<usize> {
-    // nx ≥ 1 (a grid has cells); the checked forms only keep a panic path out of the code.
-    let cx = cell.checked_rem(nx).unwrap_or(0) as isize;
-    let cy = cell.checked_div(nx).unwrap_or(0) as isize;
-    let (w, h) = (nx as isize, ny as isize);
-    let max_radius = w.max(h);
+    let dims = grid.cells();
+    let centre = grid.coordinates(cell)?.map(|c| c as isize);
+    let max_radius = dims.iter().copied().max().unwrap_or(0) as isize;
     let mut best: Option<(isize, usize)> = None;
-    let consider = |x: isize, y: isize, best: &mut Option<(isize, usize)>| {
-        if x < 0 || y < 0 || x >= w || y >= h {
-            return;
-        }
-        let c = (x + w * y) as usize;
-        if !visited(c) {
-            return;
-        }
-        let d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-        let better = match *best {
-            None => true,
-            Some((bd, bc)) => d2 < bd || (d2 == bd && c < bc),
-        };
-        if better {
-            *best = Some((d2, c));
-        }
-    };
     for r in 1..=max_radius {
         if let Some((bd, _)) = best {
             if r * r > bd {
                 break;
             }
         }
-        for x in (cx - r)..=(cx + r) {
-            consider(x, cy - r, &mut best);
-            consider(x, cy + r, &mut best);
+        // The part of the cube [c − r, c + r] inside the grid, as offsets (lo ≤ 0 ≤ hi).
+        let mut lo = [0isize; D];
+        let mut hi = [0isize; D];
+        for (((l, h), &c), &n) in lo.iter_mut().zip(hi.iter_mut()).zip(&centre).zip(&dims) {
+            *l = (-r).max(-c);
+            *h = r.min(n as isize - 1 - c);
         }
-        for y in (cy - r + 1)..=(cy + r - 1) {
-            consider(cx - r, y, &mut best);
-            consider(cx + r, y, &mut best);
-        }
+        for_each_on_shell(r, &lo, &hi, |offset| {
+            let mut index = 0usize;
+            let mut stride = 1usize;
+            let mut d2 = 0isize;
+            for ((&o, &c), &n) in offset.iter().zip(&centre).zip(&dims) {
+                index += (c + o) as usize * stride;
+                stride *= n;
+                d2 += o * o;
+            }
+            if !visited(index) {
+                return;
+            }
+            let better = match best {
+                None => true,
+                Some((bd, bc)) => d2 < bd || (d2 == bd && index < bc),
+            };
+            if better {
+                best = Some((d2, index));
+            }
+        });
     }
     best.map(|(_, c)| c)
+}
+
+/// Calls `visit` with every offset `o` with `lo ≤ o ≤ hi` (per axis) whose largest
+/// |coordinate| is exactly `r`: the Chebyshev shell of radius `r`, clipped. An odometer runs
+/// over the first `D − 1` axes; the last axis takes every value when an earlier one is on
+/// the shell already, else only `±r`, so each offset of the shell is visited once.
+fn for_each_on_shell<const D: usize>(
+    r: isize,
+    lo: &[isize; D],
+    hi: &[isize; D],
+    mut visit: impl FnMut(&[isize; D]),
+) {
+    let Some((&last_lo, &last_hi)) = lo.last().zip(hi.last()) else {
+        return;
+    };
+    let prefix = D - 1;
+    let mut offset = *lo;
+    loop {
+        let on_shell = offset.iter().take(prefix).any(|o| o.abs() == r);
+        if on_shell {
+            for o in last_lo..=last_hi {
+                if let Some(slot) = offset.last_mut() {
+                    *slot = o;
+                }
+                visit(&offset);
+            }
+        } else {
+            for o in [-r, r] {
+                if (last_lo..=last_hi).contains(&o) {
+                    if let Some(slot) = offset.last_mut() {
+                        *slot = o;
+                    }
+                    visit(&offset);
+                }
+            }
+        }
+        // Advance the odometer over the prefix axes.
+        let mut k = 0;
+        loop {
+            if k == prefix {
+                return;
+            }
+            match (offset.get_mut(k), lo.get(k), hi.get(k)) {
+                (Some(o), Some(&l), Some(&h)) => {
+                    if *o < h {
+                        *o += 1;
+                        break;
+                    }
+                    *o = l;
+                }
+                _ => return,
+            }
+            k += 1;
+        }
+    }
 }
 
 /// For every entry without data, sets `field` from its donor (or to the configured value,
@@ -689,8 +744,8 @@ fn fill_empty<T: Real>(
 /// `Σ w_r·|r|` or by `(Σ w_r + Σ w_s) · max|Q|`, and `|Q_k| ≤ k · max(|r|, |fill value|)`
 /// (weighted means never exceed their largest term), so when these bounds are finite (with
 /// a factor 4 for rounding) so is every value the fit computes.
-fn check_magnitudes<'s, T: Real + 's>(
-    sets: impl Iterator<Item = SampleSet<'s, T>>,
+fn check_magnitudes<'s, T: Real + 's, const D: usize>(
+    sets: impl Iterator<Item = SampleSet<'s, T, D>>,
     config: &FqiConfig<T>,
 ) -> Result<()> {
     let mut reward_mass = T::ZERO;

@@ -20,7 +20,7 @@ fn at(i: usize) -> [f64; 2] {
     [i as f64 + 0.5, 0.5]
 }
 
-fn line(n: usize) -> CellGrid<f64> {
+fn line(n: usize) -> CellGrid<f64, 2> {
     CellGrid::new([0.0, 0.0], [n as f64, 1.0], [n, 1]).unwrap()
 }
 
@@ -379,6 +379,7 @@ fn bad_input_is_rejected_and_leaves_q_intact() {
 fn nearest_search_matches_brute_force() {
     // Exhaustive comparison on a 9×7 grid with a pseudo-random visited pattern.
     let (nx, ny) = (9usize, 7usize);
+    let grid = CellGrid::new([0.0f64; 2], [1.0; 2], [nx, ny]).unwrap();
     for seed in 0..20u64 {
         let visited: Vec<bool> = (0..nx * ny)
             .map(|c| (c as u64 * 2_654_435_761 + seed * 97) % 11 < 2)
@@ -392,7 +393,44 @@ fn nearest_search_matches_brute_force() {
                 let (x, y) = ((c % nx) as i64, (c / nx) as i64);
                 ((x - cx).pow(2) + (y - cy).pow(2), c)
             });
-            assert_eq!(nearest_visited(cell, nx, ny, |c| visited[c]), brute);
+            assert_eq!(nearest_visited(&grid, cell, |c| visited[c]), brute);
         }
     }
+}
+
+#[test]
+fn nearest_search_matches_brute_force_in_one_three_and_four_dimensions() {
+    fn check<const D: usize>(dims: [usize; D], density: u64) {
+        let grid = CellGrid::new([0.0f64; D], [1.0; D], dims).unwrap();
+        let n = grid.len();
+        for seed in 0..6u64 {
+            let visited: Vec<bool> = (0..n)
+                .map(|c| (c as u64 * 2_654_435_761 + seed * 97) % 31 < density)
+                .collect();
+            for cell in 0..n {
+                if visited[cell] {
+                    continue;
+                }
+                let at = grid.coordinates(cell).unwrap();
+                let brute = (0..n).filter(|&c| visited[c]).min_by_key(|&c| {
+                    let other = grid.coordinates(c).unwrap();
+                    let d2: i64 = at
+                        .iter()
+                        .zip(&other)
+                        .map(|(&a, &b)| (a as i64 - b as i64).pow(2))
+                        .sum();
+                    (d2, c)
+                });
+                assert_eq!(
+                    nearest_visited(&grid, cell, |c| visited[c]),
+                    brute,
+                    "{dims:?} cell {cell}"
+                );
+            }
+        }
+    }
+    check([13], 3);
+    check([5, 4, 6], 2);
+    check([4, 3, 5, 3], 1);
+    check([3, 3, 3, 3], 0); // nothing visited: no donor
 }

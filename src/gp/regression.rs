@@ -198,6 +198,13 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         Self::with(Hyperparameters::SPEC_INITIAL)
     }
 
+    /// An empty GP whose every bit is zero, hyperparameters included, so storage holding
+    /// it can be a zero-initialised `static` (`.bss`); it must get hyperparameters
+    /// ([`Gp::set_hyperparameters`]) before use, as `crate::awfqi::AwfqiStorage` does.
+    pub(crate) const fn zeroed() -> Self {
+        Self::with(Hyperparameters::isotropic(T::ZERO, T::ZERO, T::ZERO))
+    }
+
     const fn with(hyper: Hyperparameters<T, D>) -> Self {
         Self {
             hyper,

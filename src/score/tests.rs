@@ -1,6 +1,6 @@
 extern crate std;
 use super::*;
-use crate::env::Dynamics;
+use crate::env::{Dynamics, PuddleWorld};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::vec;
@@ -14,7 +14,7 @@ fn population_variance(values: &[f64]) -> f64 {
 
 #[test]
 fn puddle_grid_has_the_thesis_row_count_and_exact_coordinates() {
-    let grid = PointGrid::<f64>::puddle(0.1).unwrap();
+    let grid = PuddleWorld::<f64>::score_grid(0.1).unwrap();
     assert_eq!(grid.points(), [101, 101]);
     let rows = RowSet::grid(grid, 4).unwrap();
     assert_eq!(rows.len(), 40_804);
@@ -26,8 +26,11 @@ fn puddle_grid_has_the_thesis_row_count_and_exact_coordinates() {
     assert!(rows.row(40_804).is_none());
     assert_eq!(rows.iter().count(), 40_804);
     assert_eq!(rows.iter().nth(4 * 5 + 2), rows.row(4 * 5 + 2));
-    assert!(PointGrid::<f64>::puddle(0.3).is_err());
-    assert_eq!(PointGrid::<f32>::puddle(0.5).unwrap().points(), [21, 21]);
+    assert!(PuddleWorld::<f64>::score_grid(0.3).is_err());
+    assert_eq!(
+        PuddleWorld::<f32>::score_grid(0.5).unwrap().points(),
+        [21, 21]
+    );
     assert!(RowSet::grid(grid, 0).is_err());
 }
 
@@ -74,7 +77,7 @@ fn source_rows_follow_the_grid_rows_source_by_source() {
 
 #[test]
 fn oracle_table_is_exactly_zero_where_sources_agree() {
-    let grid = PointGrid::<f64>::puddle(0.5).unwrap();
+    let grid = PuddleWorld::<f64>::score_grid(0.5).unwrap();
     let rows = RowSet::grid(grid, 4).unwrap();
     let mut storage = vec![Scores::default(); rows.len()];
     // Shared dynamics: every source moves by exactly 1, so the next-state columns vanish
@@ -82,12 +85,7 @@ fn oracle_table_is_exactly_zero_where_sources_agree() {
     let sources = PuddleWorld::sources(Dynamics::Shared);
     let table = ScoreTable::compute(rows, &sources, &mut storage).unwrap();
     assert_eq!(table.len(), 21 * 21 * 4);
-    assert!(
-        table
-            .values()
-            .iter()
-            .all(|v| v.next_x == 0.0 && v.next_y == 0.0)
-    );
+    assert!(table.values().iter().all(|v| v.next_state == [0.0; 2]));
     assert!(table.values().iter().any(|v| v.reward > 1.0));
     // Three copies of one source agree everywhere: every score is exactly 0.
     let same = [PuddleWorld::<f64>::source_1(Dynamics::PuddleBased); 3];
@@ -98,7 +96,7 @@ fn oracle_table_is_exactly_zero_where_sources_agree() {
     let sources = PuddleWorld::sources(Dynamics::PuddleBased);
     let mut storage = vec![Scores::default(); rows.len()];
     let table = ScoreTable::compute(rows, &sources, &mut storage).unwrap();
-    assert!(table.values().iter().any(|v| v.next_x > 0.0));
+    assert!(table.values().iter().any(|v| v.next_state[0] > 0.0));
 }
 
 #[test]
@@ -110,7 +108,7 @@ fn oracle_reward_scores_match_the_spec_golden_rewards() {
         ([5.0, 9.0], [-0.039372, -0.039663, -1.039372]),
         ([8.0, 2.0], [-1.134113, -1.061376, -23.870533]),
     ];
-    let grid = PointGrid::<f64>::puddle(1.0).unwrap();
+    let grid = PuddleWorld::<f64>::score_grid(1.0).unwrap();
     let rows = RowSet::grid(grid, 4).unwrap();
     let mut storage = vec![Scores::default(); rows.len()];
     let sources = PuddleWorld::sources(Dynamics::Shared);
@@ -134,7 +132,7 @@ fn oracle_reward_scores_match_the_spec_golden_rewards() {
 
 #[test]
 fn sampler_follows_the_column_or_is_uniform_when_it_is_zero() {
-    let grid = PointGrid::<f64>::puddle(2.0).unwrap();
+    let grid = PuddleWorld::<f64>::score_grid(2.0).unwrap();
     let rows = RowSet::grid(grid, 4).unwrap();
     let mut storage = vec![Scores::default(); rows.len()];
     let sources = PuddleWorld::sources(Dynamics::Shared);
@@ -150,7 +148,9 @@ fn sampler_follows_the_column_or_is_uniform_when_it_is_zero() {
     let (r, s, a) = sampler.draw(&mut rng);
     assert_eq!(table.rows().row(r), Some((s, a)));
     // V_x is identically 0 under shared dynamics: uniform.
-    let sampler = table.sampler(ScoreColumn::NextX, &mut alias).unwrap();
+    let sampler = table
+        .sampler(ScoreColumn::NextState(0), &mut alias)
+        .unwrap();
     let uniform = 1.0 / table.len() as f64;
     for r in 0..table.len() {
         assert!((sampler.alias().probability(r).unwrap() - uniform).abs() < 1e-15);
@@ -161,7 +161,7 @@ fn sampler_follows_the_column_or_is_uniform_when_it_is_zero() {
 
 #[test]
 fn compute_reports_bad_storage_sources_and_states() {
-    let grid = PointGrid::<f64>::puddle(5.0).unwrap();
+    let grid = PuddleWorld::<f64>::score_grid(5.0).unwrap();
     let rows = RowSet::grid(grid, 4).unwrap();
     let sources = PuddleWorld::sources(Dynamics::Shared);
     let mut short = vec![Scores::default(); 5];
@@ -194,7 +194,7 @@ fn realistic_table_uses_the_gp_posterior_means() {
     let xs = [[1.0, 1.0, 0.0], [5.0, 5.0, 1.0], [9.0, 2.0, 2.0]];
     gp_a.fit(&xs, &[-1.0, -20.0, -1.0]).unwrap();
     gp_b.fit(&xs, &[-1.0, -2.0, -6.0]).unwrap();
-    let grid = PointGrid::<f64>::puddle(2.5).unwrap();
+    let grid = PuddleWorld::<f64>::score_grid(2.5).unwrap();
     let rows = RowSet::grid(grid, 4).unwrap();
     let models = [
         GpSourceModel::new(&gp_a, None),
@@ -212,7 +212,7 @@ fn realistic_table_uses_the_gp_posterior_means() {
         // Population variance of two values: ((a − b)/2)².
         let want = ((a - b) / 2.0).powi(2);
         assert!((row.scores.reward - want).abs() < 1e-9 * (1.0 + want));
-        assert_eq!((row.scores.next_x, row.scores.next_y), (0.0, 0.0));
+        assert_eq!(row.scores.next_state, [0.0; 2]);
     }
     assert!(table.values().iter().any(|v| v.reward > 1.0));
     // The same GP for every source (and as its own next-state model): exactly 0.
@@ -223,11 +223,11 @@ fn realistic_table_uses_the_gp_posterior_means() {
 
 #[test]
 fn a_table_can_be_rebuilt_from_stored_scores() {
-    let rows = RowSet::grid(PointGrid::<f64>::puddle(5.0).unwrap(), 4).unwrap();
+    let rows = RowSet::grid(PuddleWorld::<f64>::score_grid(5.0).unwrap(), 4).unwrap();
     let mut storage = vec![Scores::default(); rows.len()];
     let sources = PuddleWorld::sources(Dynamics::Shared);
     let table = ScoreTable::compute(rows, &sources, &mut storage).unwrap();
-    let copy: Vec<Scores<f64>> = table.values().to_vec();
+    let copy: Vec<Scores<f64, 2>> = table.values().to_vec();
     let again = ScoreTable::from_parts(rows, &copy).unwrap();
     assert_eq!(again.values(), table.values());
     assert_eq!(again.row(7), table.row(7));
@@ -236,8 +236,163 @@ fn a_table_can_be_rebuilt_from_stored_scores() {
         Some(Error::CapacityExceeded { capacity: 3 })
     );
     let mut bad = copy.clone();
-    bad[2].next_y = -1.0;
+    bad[2].next_state[1] = -1.0;
     assert!(ScoreTable::from_parts(rows, &bad).is_err());
-    bad[2].next_y = f64::NAN;
+    bad[2].next_state[1] = f64::NAN;
     assert!(ScoreTable::from_parts(rows, &bad).is_err());
+}
+
+#[test]
+fn realistic_table_one_gp_at_a_time_equals_the_table_of_all_gps_bit_for_bit() {
+    use crate::dataset::{GpTraining, Output, SubsetRule, fit_gp};
+    use crate::gp::SearchOptions;
+    // Three sources' records from the Puddle World sources, uniformly drawn.
+    let worlds = PuddleWorld::<f64>::sources(Dynamics::Shared);
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let records: Vec<Vec<Transition<[f64; 2], f64>>> = worlds
+        .iter()
+        .map(|w| {
+            (0..30)
+                .map(|i| {
+                    let s = [
+                        crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
+                        crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
+                    ];
+                    crate::env::GenerativeModel::query(w, s, i % 4, &mut rng).unwrap()
+                })
+                .collect()
+        })
+        .collect();
+    let slices: Vec<&[_]> = records.iter().map(Vec::as_slice).collect();
+    let training = GpTraining {
+        search: SearchOptions {
+            max_evaluations: 40,
+            restarts: 1,
+            isotropic: true,
+        },
+        ..GpTraining::reference()
+    };
+    let rows = RowSet::both(PuddleWorld::score_grid(2.5).unwrap(), 4, &slices).unwrap();
+    // All GPs at once, from the same stream.
+    let mut fit_rng = ChaCha8Rng::seed_from_u64(9);
+    let gps: Vec<Gp<f64, 16, 3>> = slices
+        .iter()
+        .map(|r| {
+            let mut gp = Gp::empty();
+            fit_gp(
+                &mut gp,
+                r,
+                Output::Reward,
+                SubsetRule::Spread,
+                &training,
+                &mut fit_rng,
+            )
+            .unwrap();
+            gp
+        })
+        .collect();
+    let models: Vec<_> = gps.iter().map(|g| GpSourceModel::new(g, None)).collect();
+    let mut all = vec![Scores::ZERO; rows.len()];
+    ScoreTable::compute(rows, &models, &mut all).unwrap();
+    // One GP slot, one source at a time; the callback sees every fitted GP.
+    let mut one = vec![Scores::ZERO; rows.len()];
+    let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
+    let mut gp = Gp::<f64, 16, 3>::empty();
+    let mut seen = Vec::new();
+    let mut fit_rng = ChaCha8Rng::seed_from_u64(9);
+    let table = ScoreTable::realistic(
+        rows,
+        &slices,
+        &mut gp,
+        &training,
+        SubsetRule::Spread,
+        &mut one,
+        &mut scratch,
+        &mut fit_rng,
+        |j, g| {
+            seen.push((j, g.inputs().to_vec()));
+            Ok(())
+        },
+    )
+    .unwrap();
+    assert_eq!(table.values(), &all[..]);
+    assert!(all.iter().any(|v| v.reward > 0.0));
+    for (j, inputs) in &seen {
+        assert_eq!(inputs, gps[*j].inputs());
+    }
+    assert_eq!(seen.len(), 3);
+    // Sizes are checked before anything is fitted.
+    let mut short = vec![AliasEntry::EMPTY; rows.len() - 1];
+    let before = fit_rng.clone();
+    assert_eq!(
+        ScoreTable::realistic(
+            rows,
+            &slices,
+            &mut gp,
+            &training,
+            SubsetRule::Spread,
+            &mut one,
+            &mut short,
+            &mut fit_rng,
+            |_, _| Ok(()),
+        )
+        .err(),
+        Some(Error::CapacityExceeded {
+            capacity: rows.len() - 1
+        })
+    );
+    assert_eq!(fit_rng, before);
+}
+
+#[test]
+fn candidate_pairs_and_grids_in_three_dimensions() {
+    // A 3-D grid: 2 × 3 × 2 points from (−1, 0, 5) with spacings (0.5, 1, 2), first axis
+    // fastest.
+    let grid = PointGrid::new([-1.0, 0.0, 5.0], [0.5, 1.0, 2.0], [2, 3, 2]).unwrap();
+    assert_eq!(grid.len(), 12);
+    assert_eq!(grid.point(0), Some([-1.0, 0.0, 5.0]));
+    assert_eq!(grid.point(1 + 2 * 2 + 6), Some([-0.5, 2.0, 7.0]));
+    assert_eq!(grid.point(12), None);
+    let spanning = PointGrid::<f64, 3>::spanning([0.0; 3], [1.0, 2.0, 0.5], 0.5).unwrap();
+    assert_eq!(spanning.points(), [3, 5, 2]);
+    assert_eq!(
+        PointGrid::<f64, 3>::spanning([0.0; 3], [1.0, 2.0, 0.7], 0.5).err(),
+        Some(Error::InvalidParameter {
+            parameter: "spacing"
+        })
+    );
+    // The caller's own pairs, after the grid rows.
+    let pairs = [([0.25, 0.5, 0.75], 1), ([1.0, 1.0, 1.0], 0)];
+    let rows = RowSet::new(Some((grid, 2)), &pairs, &[]).unwrap();
+    assert_eq!(rows.len(), 24 + 2);
+    assert_eq!(rows.row(24), Some(pairs[0]));
+    assert_eq!(rows.row(25), Some(pairs[1]));
+    assert_eq!(rows.row(26), None);
+    assert_eq!(rows.iter().nth(24), Some(pairs[0]));
+    assert_eq!(rows.row(3), Some(([-0.5, 0.0, 5.0], 1)));
+    let only = RowSet::pairs(&pairs).unwrap();
+    assert_eq!(only.iter().collect::<Vec<_>>(), pairs.to_vec());
+    let bad = [([0.0, f64::NAN, 0.0], 0)];
+    assert_eq!(
+        RowSet::pairs(&bad).err(),
+        Some(Error::NonFinite { parameter: "state" })
+    );
+    assert_eq!(RowSet::<f64, 3>::pairs(&[]).err(), Some(Error::EmptyData));
+    // Scores over 3 next-state coordinates: a column beyond them is refused.
+    let values = [Scores {
+        reward: 1.0,
+        next_state: [0.5, 0.0, 2.0],
+    }; 2];
+    let table = ScoreTable::from_parts(only, &values).unwrap();
+    assert_eq!(values[0].total(), 3.5);
+    assert_eq!(values[0].get(ScoreColumn::NextState(2)), Some(2.0));
+    assert_eq!(values[0].get(ScoreColumn::NextState(3)), None);
+    let mut alias = [AliasEntry::EMPTY; 2];
+    assert_eq!(
+        table.sampler(ScoreColumn::NextState(3), &mut alias).err(),
+        Some(Error::OutOfRange {
+            parameter: "column"
+        })
+    );
+    assert!(table.sampler(ScoreColumn::NextState(2), &mut alias).is_ok());
 }

@@ -5,8 +5,9 @@
 //! been taken, so it has 1 to `horizon` records and only the last can be absorbing. Per
 //! step the policy draws first, then the step's three noise draws ε_x, ε_y, η.
 
-use super::{Policy, PuddleWorld};
+use super::{PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON, Policy, PuddleWorld};
 use crate::env::Transition;
+use crate::evaluation::{EvaluationProtocol, Rollout};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
@@ -39,18 +40,6 @@ impl<T: Real> Default for EpisodeRecord<T> {
             },
         }
     }
-}
-
-/// What one evaluation rollout produced (spec §3.3).
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Rollout<T> {
-    /// The discounted return Σₜ γᵗ rₜ over the rollout's steps.
-    pub discounted_return: T,
-    /// Number of steps taken (1 to the horizon).
-    pub steps: usize,
-    /// `true` when the last step entered the goal (ω = 1).
-    pub reached_goal: bool,
 }
 
 impl<T: Real> PuddleWorld<T> {
@@ -134,17 +123,14 @@ impl<T: Real> PuddleWorld<T> {
         })
     }
 
-    /// One evaluation rollout (spec §3.3): runs an episode from (0, 0) with `policy` for at
-    /// most `horizon` steps, stopping after the step whose ω = 1, and returns its
-    /// discounted return Σₜ γᵗ rₜ (γ = `discount`, accumulated in `T`) and length.
+    /// One evaluation rollout (spec §3.3) from (0, 0): [`crate::evaluation::rollout`]
+    /// with this world's initial state.
     ///
     /// The spec's evaluation is `rollout(&mut greedy, PUDDLE_HORIZON, PUDDLE_DISCOUNT, rng)`
-    /// with the constants converted to `T`, repeated 5 times.
+    /// with the constants converted to `T`, repeated 5 times
+    /// ([`PuddleWorld::evaluation_protocol`]).
     ///
-    /// Errors: `horizon == 0` ([`Error::InvalidParameter`] `horizon`); a non-finite
-    /// `discount` ([`Error::NonFinite`]) or one outside [0, 1] ([`Error::OutOfRange`]
-    /// `discount`), all before anything is drawn; then the first error of the policy or of
-    /// a step.
+    /// Errors: those of [`crate::evaluation::rollout`].
     pub fn rollout<P, R>(
         &self,
         policy: &mut P,
@@ -156,25 +142,17 @@ impl<T: Real> PuddleWorld<T> {
         P: Policy<[T; 2]> + ?Sized,
         R: Rng + ?Sized,
     {
-        crate::error::ensure_finite(discount, "discount")?;
-        if discount < T::ZERO || discount > T::ONE {
-            return Err(Error::OutOfRange {
-                parameter: "discount",
-            });
+        crate::evaluation::rollout(self, policy, self.initial_state(), horizon, discount, rng)
+    }
+
+    /// The reference evaluation of spec §3.3: 5 rollouts from (0, 0) of at most 50 steps,
+    /// γ = 0.99.
+    pub fn evaluation_protocol(&self) -> EvaluationProtocol<T, 2> {
+        EvaluationProtocol {
+            start: self.initial_state(),
+            rollouts: PUDDLE_EVALUATION_ROLLOUTS,
+            horizon: PUDDLE_HORIZON,
+            discount: T::from_f64(PUDDLE_DISCOUNT),
         }
-        let mut discounted_return = T::ZERO;
-        let mut weight = T::ONE;
-        let mut reached_goal = false;
-        let steps = self.run_episode_with(policy, horizon, rng, |record| {
-            discounted_return += weight * record.transition.reward;
-            weight *= discount;
-            reached_goal = record.transition.absorbing;
-            Ok(())
-        })?;
-        Ok(Rollout {
-            discounted_return,
-            steps,
-            reached_goal,
-        })
     }
 }

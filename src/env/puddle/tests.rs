@@ -755,7 +755,7 @@ fn rollout_return_is_the_discounted_sum_of_the_episode_rewards() {
             )
             .unwrap();
         assert_eq!(got.steps, n);
-        assert_eq!(got.reached_goal, records[n - 1].transition.absorbing);
+        assert_eq!(got.absorbed, records[n - 1].transition.absorbing);
         assert!(
             (got.discounted_return - want).abs() < 1e-10,
             "{got:?} vs {want}"

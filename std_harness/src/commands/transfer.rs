@@ -98,7 +98,7 @@ pub struct Args {
     /// Experiment seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Output directory. Default: results/<command>.
+    /// Output directory. Default: `results/<command>`.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Worker threads (0: all cores).

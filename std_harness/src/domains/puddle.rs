@@ -5,9 +5,9 @@
 use std::sync::Arc;
 
 use awfqi::env::{
-    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PUDDLE_INITIAL_STATE, PuddleWorld,
+    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON,
+    PUDDLE_INITIAL_STATE, PuddleWorld,
 };
-use awfqi::evaluation::EVALUATION_ROLLOUTS;
 use rand_chacha::ChaCha8Rng;
 
 use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
@@ -63,7 +63,7 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
         action_values: (0..PUDDLE_ACTIONS).map(|a| a as f64).collect(),
         horizon: PUDDLE_HORIZON,
         discount: PUDDLE_DISCOUNT,
-        evaluation_starts: vec![PUDDLE_INITIAL_STATE; EVALUATION_ROLLOUTS],
+        evaluation_starts: vec![PUDDLE_INITIAL_STATE; PUDDLE_EVALUATION_ROLLOUTS],
         average_reward: false,
         weighting: Weighting {
             reward: GpSpec::fitted(),
@@ -98,7 +98,7 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
 /// Spec §11.1's grid rows: `(0.1 i, 0.1 j)` for `i, j ∈ 0..=10/spacing`, borders included,
 /// × 4 actions, in the core's order.
 fn grid_rows(spacing: f64) -> anyhow::Result<Vec<([f64; 2], usize)>> {
-    let grid = awfqi::score::PointGrid::puddle(spacing)?;
+    let grid = PuddleWorld::score_grid(spacing)?;
     Ok(awfqi::score::RowSet::grid(grid, PUDDLE_ACTIONS)?
         .iter()
         .collect())

@@ -259,7 +259,7 @@ mod tests {
         assert!((table.reward_variance[i] - 2.0 / 9.0 * d * d).abs() < 1e-3);
         // The same numbers as the core's score table.
         let worlds = awfqi::env::PuddleWorld::<f64>::sources(Dynamics::Shared);
-        let grid = awfqi::score::PointGrid::puddle(0.1).unwrap();
+        let grid = awfqi::env::PuddleWorld::score_grid(0.1).unwrap();
         let set = awfqi::score::RowSet::grid(grid, 4).unwrap();
         let mut storage = vec![awfqi::score::Scores::default(); set.len()];
         awfqi::score::ScoreTable::compute(set, &worlds, &mut storage).unwrap();

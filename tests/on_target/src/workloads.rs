@@ -47,46 +47,52 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
     Ok(total + gp.log_marginal_likelihood()?)
 }
 
-use awfqi::alias::AliasEntry;
-use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData, StepReport};
-use awfqi::dataset::{Output, SubsetRule, fit_gp, predict_posteriors};
-use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld, Transition};
-use awfqi::evaluation::{Evaluation, evaluate_greedy};
-use awfqi::fqi::{CellGrid, FqiEntry, TabularFqi};
-use awfqi::policy::EpsilonGreedyPolicy;
-use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
-use awfqi::weights::{NoiseSubtraction, Posterior};
+use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::{
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EpsilonGreedyPolicy, Evaluation, Posterior, RowSet,
+    Scores, StepReport, Transition, evaluate_greedy,
+};
 
 /// A transition record in `f32`.
 pub type Record = Transition<[f32; 2], f32>;
 
-/// Everything the AWFQI Puddle World kernel needs, as one block of caller storage (in an
-/// image: one zero-initialised `static`). `S` source records per source (3 sources), `R`
-/// score rows (= alias entries), `E` FQI entries (cells × 4 actions), `Q` target samples
-/// (steps × budget), `N` the target GP's capacity.
+/// Everything the AWFQI Puddle World workload needs, as one block (in an image: one
+/// zero-initialised `static`): the source records generated on the device and their
+/// stored posteriors (`W` records of 3 sources), the score values (`R` rows, set-up only)
+/// and the kernel's own [`AwfqiStorage`] (`E` FQI entries = cells × 4 actions, `Q` target
+/// samples = steps × budget, `N` the target GP's capacity).
 pub struct KernelStorage<
-    const S: usize,
+    const W: usize,
     const R: usize,
     const E: usize,
     const Q: usize,
     const N: usize,
 > {
-    /// Source datasets.
-    pub sources: [[Record; S]; 3],
+    /// Source datasets, source after source.
+    pub records: [Record; W],
     /// Stored reward posteriors of the source records (§6 step 3).
-    pub posteriors: [[Posterior<f32>; S]; 3],
+    pub posteriors: [Posterior<f32>; W],
     /// Score table values.
-    pub scores: [Scores<f32>; R],
-    /// Alias table of the score sampler.
-    pub alias: [AliasEntry<f32>; R],
-    /// FQI table.
-    pub fqi: [FqiEntry<f32>; E],
-    /// Target dataset `D₀`.
-    pub samples: [Record; Q],
-    /// Reward weights of the source records.
-    pub weights: [[f32; S]; 3],
-    /// Target reward GP (also used to fit the source GPs before the run).
-    pub gp: Gp<f32, N, 3>,
+    pub scores: [Scores<f32, 2>; R],
+    /// The kernel's memory.
+    pub kernel: AwfqiStorage<f32, 2, 3, N, Q, W, R, E>,
+}
+
+impl<const W: usize, const R: usize, const E: usize, const Q: usize, const N: usize>
+    KernelStorage<W, R, E, Q, N>
+{
+    /// All-zero storage, for a `static` in `.bss`.
+    pub const fn new() -> Self {
+        Self {
+            records: [Transition::EMPTY; W],
+            posteriors: [Posterior {
+                mean: 0.0,
+                std: 0.0,
+            }; W],
+            scores: [Scores::ZERO; R],
+            kernel: AwfqiStorage::new(),
+        }
+    }
 }
 
 /// The AWFQI configuration of a run of [`awfqi_puddle`].
@@ -100,109 +106,82 @@ pub struct KernelRun {
     pub budget: usize,
     /// Steps (`Q` must be `steps · budget`).
     pub steps: usize,
-    /// Source episodes per source (`S` must be `episodes · 50`).
+    /// Source episodes per source (`W` must hold `3 · episodes · 50` records).
     pub episodes: usize,
     /// Likelihood evaluations and restarts of each GP search.
     pub search: (usize, usize),
 }
 
 /// The AWFQI Puddle World kernel end to end, on a microcontroller: source datasets from an
-/// ε-greedy walk towards each source's goal (ε = 0.3), one reward GP per source fitted in
-/// the target GP's storage and its posteriors stored with the records, the oracle score
-/// table on the puddle grid (column `V_r`), then `steps` AWFQI steps on the shared-dynamics
-/// target and the greedy policy's evaluation (5 rollouts) after the last one.
+/// ε-greedy walk towards each source's goal (ε = 0.3); then the builder's set-up — one
+/// reward GP per source fitted in the target GP's storage and its posteriors stored, the
+/// oracle score table on the puddle grid (column `V_r`) — then `steps` AWFQI steps on the
+/// shared-dynamics target and the greedy policy's evaluation (5 rollouts) after the last
+/// one. `inspect` sees the target samples of the run.
 pub fn awfqi_puddle<
-    const S: usize,
+    const W: usize,
     const R: usize,
     const E: usize,
     const Q: usize,
     const N: usize,
 >(
-    storage: &mut KernelStorage<S, R, E, Q, N>,
+    storage: &mut KernelStorage<W, R, E, Q, N>,
     run: KernelRun,
     seed: u64,
-) -> Result<(StepReport<f32>, Evaluation<f32>)> {
+    inspect: impl FnOnce(&[Record]),
+) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let KernelStorage {
-        sources,
+        records,
         posteriors,
         scores,
-        alias,
-        fqi,
-        samples,
-        weights,
-        gp,
+        kernel,
     } = storage;
     let worlds = PuddleWorld::<f32>::sources(Dynamics::Shared);
     let mut config = AwfqiConfig::thesis(run.budget);
     config.gp_training.search.max_evaluations = run.search.0;
     config.gp_training.search.restarts = run.search.1;
 
-    // Source data: walk right to the goal's column, then up.
+    // Source data: walk right to the goal's column, then up; sources one after the other.
     let mut lens = [0usize; 3];
-    for ((world, records), len) in worlds.iter().zip(sources.iter_mut()).zip(lens.iter_mut()) {
+    let mut slots = records.iter_mut();
+    for (world, len) in worlds.iter().zip(lens.iter_mut()) {
         let goal_x = world.goal()[0];
         let towards_goal =
             move |s: &[f32; 2]| -> Result<usize> { Ok(if s[0] < goal_x - 0.5 { 0 } else { 2 }) };
         let mut policy = EpsilonGreedyPolicy::new(towards_goal, 0.3, PUDDLE_ACTIONS)?;
-        let mut slots = records.iter_mut();
         for _ in 0..run.episodes {
             world.run_episode_with(&mut policy, 50, &mut rng, |r: EpisodeRecord<f32>| {
                 let slot = slots
                     .next()
-                    .ok_or(awfqi::Error::CapacityExceeded { capacity: S })?;
+                    .ok_or(awfqi::Error::CapacityExceeded { capacity: W })?;
                 *slot = r.transition;
                 *len += 1;
                 Ok(())
             })?;
         }
     }
-    // Source reward GPs, one at a time in the target GP's storage; posteriors stored.
-    for ((records, post), &len) in sources.iter().zip(posteriors.iter_mut()).zip(lens.iter()) {
-        let (records, post) = (
-            records.get(..len).unwrap_or(&[]),
-            post.get_mut(..len).unwrap_or(&mut []),
-        );
-        fit_gp(
-            gp,
-            records,
-            Output::Reward,
-            SubsetRule::Spread,
-            &config.gp_training,
-            &mut rng,
-        )?;
-        predict_posteriors(gp, records, NoiseSubtraction::Reference, post)?;
-    }
-    // Oracle score table and its sampler.
-    let rows = RowSet::grid(PointGrid::puddle(run.spacing)?, PUDDLE_ACTIONS)?;
-    let table = ScoreTable::compute(rows, &worlds, scores)?;
-    let sampler = table.sampler(ScoreColumn::Reward, alias)?;
-
-    let data = [0, 1, 2].map(|k| {
-        let len = lens.get(k).copied().unwrap_or(0);
-        let records = sources.get(k).and_then(|r| r.get(..len)).unwrap_or(&[]);
-        let post = posteriors.get(k).and_then(|p| p.get(..len)).unwrap_or(&[]);
-        SourceData::new(records, post)
-    });
-    let [a, b, c] = data;
-    let data = [a?, b?, c?];
-    let table = TabularFqi::new(CellGrid::square(0.0, 10.0, run.cells)?, PUDDLE_ACTIONS, fqi)?;
-    let target = PuddleWorld::target(Dynamics::Shared);
-    let mut kernel = Awfqi::new(
-        config,
-        target,
-        sampler,
-        &data,
-        samples,
-        weights.as_flattened_mut(),
-        gp,
-        table,
-    )?;
+    let (first, rest) = records.split_at(lens[0]);
+    let (second, rest) = rest.split_at(lens[1]);
+    let sources: [&[Record]; 3] = [first, second, rest.get(..lens[2]).unwrap_or(&[])];
+    let rows = RowSet::grid(PuddleWorld::score_grid(run.spacing)?, PUDDLE_ACTIONS)?;
+    let total = lens.iter().sum::<usize>();
+    let mut kernel = Awfqi::builder(
+        config.validate()?,
+        CellGrid::cube(0.0, 10.0, run.cells)?,
+        &sources,
+        rows,
+    )
+    .fit_posteriors(posteriors.get_mut(..total).unwrap_or(&mut []))
+    .scores_from(&worlds, scores)?
+    .build(PuddleWorld::target(Dynamics::Shared), kernel, &mut rng)?;
     let mut report = None;
     for _ in 0..run.steps {
         report = Some(kernel.step(&mut rng)?);
     }
-    let evaluation = evaluate_greedy(&target, kernel.q(), &mut rng)?;
+    let target = kernel.target();
+    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    inspect(kernel.target_samples());
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 

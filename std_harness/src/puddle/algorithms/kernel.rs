@@ -1,4 +1,4 @@
-//! `awfqi-kernel`: the core's embedded AWFQI path ([`awfqi::awfqi::Awfqi`]) on the same
+//! `awfqi-kernel`: the core's embedded AWFQI path ([`awfqi::Awfqi`]) on the same
 //! protocol as the std algorithms, so the cost of the embedded path is measured, not guessed.
 //!
 //! The kernel runs as it would on a microcontroller, in `f32`, with everything in fixed
@@ -12,14 +12,11 @@
 
 use std::time::Instant;
 
-use awfqi::alias::AliasEntry;
-use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
-use awfqi::dataset::{GpTraining, Output, SubsetRule, fit_gp};
-use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld, Transition};
-use awfqi::fqi::{CellGrid, FqiEntry, TabularFqi};
-use awfqi::gp::Gp;
-use awfqi::score::{GpSourceModel, PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
-use awfqi::weights::Posterior;
+use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::{
+    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, FqiEntry, Gp, GpTraining, Posterior,
+    RowSet, ScoreTable, Scores, SubsetRule, Transition,
+};
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
@@ -55,8 +52,9 @@ fn to_f64(r: &Record32) -> Record {
     }
 }
 
-/// What the kernel path builds once per experiment: the `f32` source data and the score
-/// values of its realistic table.
+/// What the kernel path builds once per experiment and shares by all runs (§11.2): the
+/// `f32` source data with their stored posteriors, and the values of its realistic score
+/// table.
 #[derive(Debug, Clone)]
 pub struct KernelSetup {
     /// Row mode of the score table.
@@ -64,8 +62,9 @@ pub struct KernelSetup {
     /// Grid spacing of the score table.
     pub spacing: f64,
     records: Vec<Vec<Record32>>,
-    posteriors: Vec<Vec<Posterior<T>>>,
-    values: Vec<Scores<T>>,
+    /// Stored reward posteriors of all sources, source after source.
+    posteriors: Vec<Posterior<T>>,
+    values: Vec<Scores<T, 2>>,
     /// Wall time of the set-up (source GP fits and score table), seconds.
     pub setup_seconds: f64,
 }
@@ -73,7 +72,7 @@ pub struct KernelSetup {
 impl KernelSetup {
     /// Converts the sources and builds the realistic score table from one
     /// `Gp<f32, 64, 3>` reward GP per source (an even spread of its records, the core's
-    /// reference training), from the stream `rng`.
+    /// reference training, [`ScoreTable::realistic`]), from the stream `rng`.
     pub fn new(
         sources: &SourceSet,
         mode: Mode,
@@ -89,32 +88,25 @@ impl KernelSetup {
         let posteriors = sources
             .sources
             .iter()
-            .map(|s| {
-                s.reward
-                    .iter()
-                    .map(|p| Posterior::new(p.mean as T, p.std as T))
-                    .collect()
-            })
+            .flat_map(|s| &s.reward)
+            .map(|p| Posterior::new(p.mean as T, p.std as T))
             .collect();
-        let mut gps: Vec<Box<Gp<T, GP_POINTS, 3>>> = Vec::new();
-        for r in &records {
-            let mut gp = Box::new(Gp::empty());
-            let training = GpTraining::reference();
-            fit_gp(
-                &mut *gp,
-                r,
-                Output::Reward,
-                SubsetRule::Spread,
-                &training,
-                rng,
-            )?;
-            gps.push(gp);
-        }
-        let models: Vec<_> = gps.iter().map(|g| GpSourceModel::new(&**g, None)).collect();
         let slices: Vec<&[Record32]> = records.iter().map(Vec::as_slice).collect();
         let rows = row_set(mode, spacing, &slices)?;
-        let mut values = vec![Scores::default(); rows.len()];
-        ScoreTable::compute(rows, &models, &mut values)?;
+        let mut values = vec![Scores::ZERO; rows.len()];
+        let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
+        let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
+        ScoreTable::realistic(
+            rows,
+            &slices,
+            &mut gp,
+            &GpTraining::reference(),
+            SubsetRule::Spread,
+            &mut values,
+            &mut scratch,
+            rng,
+            |_, _| Ok(()),
+        )?;
         Ok(Self {
             mode,
             spacing,
@@ -143,8 +135,8 @@ fn row_set<'a>(
     mode: Mode,
     spacing: f64,
     slices: &'a [&'a [Record32]],
-) -> anyhow::Result<RowSet<'a, T>> {
-    let grid = PointGrid::puddle(spacing as T)?;
+) -> anyhow::Result<RowSet<'a, T, 2>> {
+    let grid = PuddleWorld::score_grid(spacing as T)?;
     Ok(match mode {
         Mode::Source => RowSet::source_data(slices)?,
         Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
@@ -152,9 +144,10 @@ fn row_set<'a>(
     })
 }
 
-/// One run of the kernel on the protocol: `K` steps of [`Awfqi::step`], each followed by
-/// the protocol's evaluation (in `f64`, of the greedy policy of the kernel's `f32` table).
-/// Returns the step records and `D₀`.
+/// One run of the kernel on the protocol: the builder's set-up from the shared source data
+/// and score values, then `K` steps of [`Awfqi::step`], each followed by the protocol's
+/// evaluation (in `f64`, of the greedy policy of the kernel's `f32` table). Returns the step
+/// records and `D₀`.
 pub fn run(
     experiment: &Experiment,
     rng: &mut ChaCha8Rng,
@@ -167,44 +160,32 @@ pub fn run(
     let protocol = &experiment.protocol;
     let slices: Vec<&[Record32]> = setup.records.iter().map(Vec::as_slice).collect();
     let rows = row_set(setup.mode, setup.spacing, &slices)?;
-    let table = ScoreTable::from_parts(rows, &setup.values)?;
-    let mut alias = vec![AliasEntry::default(); table.len()];
-    let sampler = table.sampler(ScoreColumn::Reward, &mut alias)?;
-    let data: Vec<SourceData<'_, T>> = setup
-        .records
-        .iter()
-        .zip(&setup.posteriors)
-        .map(|(r, p)| SourceData::new(r, p))
-        .collect::<awfqi::Result<_>>()?;
     let budget = experiment.budget();
-    let blank = to_f32(&Transition {
-        state: [0.0; 2],
-        action: 0,
-        reward: 0.0,
-        next_state: [0.0; 2],
-        absorbing: false,
-    });
-    let mut samples = vec![blank; protocol.steps * budget];
-    let source_records: usize = setup.records.iter().map(Vec::len).sum();
-    let mut weights = vec![0.0; source_records];
+    // The kernel's memory, sized at run time.
     let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
-    let grid = CellGrid::square(0.0, 10.0, CELLS)?;
-    let mut storage = vec![FqiEntry::default(); CELLS * CELLS * PUDDLE_ACTIONS];
-    let fqi = TabularFqi::new(grid, PUDDLE_ACTIONS, &mut storage)?;
-    let config = AwfqiConfig::thesis(budget);
+    let mut samples = vec![Transition::EMPTY; protocol.steps * budget];
+    let mut weights = vec![0.0; setup.posteriors.len()];
+    let mut alias = vec![AliasEntry::EMPTY; rows.len()];
+    let mut fqi = vec![FqiEntry::EMPTY; CELLS * CELLS * PUDDLE_ACTIONS];
+    let buffers = AwfqiBuffers {
+        gp: &mut gp,
+        samples: &mut samples,
+        weights: &mut weights,
+        alias: &mut alias,
+        fqi: &mut fqi,
+    };
     let dynamics = protocol
         .dynamics
         .ok_or_else(|| anyhow::anyhow!("awfqi-kernel runs on Puddle World only"))?;
-    let mut kernel = Awfqi::new(
-        config,
-        PuddleWorld::target(dynamics),
-        sampler,
-        &data,
-        &mut samples,
-        &mut weights,
-        &mut *gp,
-        fqi,
-    )?;
+    let mut kernel = Awfqi::builder(
+        AwfqiConfig::thesis(budget).validate()?,
+        CellGrid::cube(0.0, 10.0, CELLS)?,
+        &slices,
+        rows,
+    )
+    .stored_posteriors(&setup.posteriors)
+    .stored_scores(&setup.values)
+    .build(PuddleWorld::target(dynamics), buffers, rng)?;
     let mut steps = Vec::new();
     for k in 1..=protocol.steps {
         let start = Instant::now();

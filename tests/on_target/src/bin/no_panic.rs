@@ -11,20 +11,12 @@
 
 use core::hint::black_box as opaque;
 
-use awfqi::Real;
-use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::awfqi::{Awfqi, AwfqiConfig, SourceData};
-use awfqi::dataset::{
-    GpTraining, Output, SubsetRule, batch_transform, fit_gp, input, predict_posteriors,
-};
-use awfqi::env::Transition;
+use awfqi::alias::AliasTable;
+use awfqi::dataset::{batch_transform, fit_gp, input, predict_posteriors};
 use awfqi::env::{
-    Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld,
-    InflowProfile, Puddle, PuddleWorld,
+    Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
+    Puddle, PuddleWorld,
 };
-use awfqi::evaluation::{evaluate, evaluate_greedy};
-use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
-use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::identify::score::{mutual_information_score, uniform_score, variance_score};
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, StateAction, belief_weighted_policy,
@@ -35,12 +27,17 @@ use awfqi::planning::{
     value_iteration,
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-use awfqi::score::{
-    GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceModel,
-};
+use awfqi::score::{GpSourceModel, PointGrid};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
     effective_sample_size, ideal_weight, predictive_stds,
+};
+use awfqi::{
+    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells,
+    EvaluationProtocol, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, HyperparameterBounds,
+    Hyperparameters, Output, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores,
+    SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule, TabularFqi, Transition,
+    WhenFull, evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -352,14 +349,69 @@ fn gp<T: Real>(rng: &mut ChaCha8Rng) {
     keep(gp.len());
 }
 
-fn record<T: Real>(i: usize) -> Transition<[T; 2], T> {
+/// A record with state `[t, 9 − t, t, …]` (`t = i mod 10`), action `i mod actions`.
+fn record<T: Real, const D: usize>(i: usize, actions: usize) -> Transition<[T; D], T> {
     let t = T::from_usize(i % 10);
+    let state = core::array::from_fn(|k| if k % 2 == 0 { t } else { num::<T>(9.0) - t });
     Transition {
-        state: [t, num::<T>(9.0) - t],
-        action: i % 4,
+        state,
+        action: i.checked_rem(actions).unwrap_or(0),
         reward: num::<T>(-1.0) - t,
-        next_state: [t + num(1.0), num::<T>(9.0) - t],
+        next_state: state.map(|x| x + num(1.0)),
         absorbing: i % 7 == 6,
+    }
+}
+
+/// A 4-D plant for the generic API: both actions move every coordinate by ±0.5 in
+/// [−1, 1]⁴ (noise from the generator); reward −|Σ s − shift| / 4.
+#[derive(Clone, Copy)]
+struct Toy<T> {
+    shift: T,
+}
+
+impl<T: Real> SourceModel<T, 4> for Toy<T> {
+    fn predict(&self, state: [T; 4], action: usize) -> awfqi::Result<SourceMeans<T, 4>> {
+        if action > 1 {
+            return Err(awfqi::Error::OutOfRange {
+                parameter: "action",
+            });
+        }
+        let mut sum = T::ZERO;
+        for &x in &state {
+            if !x.is_finite() {
+                return Err(awfqi::Error::NonFinite { parameter: "state" });
+            }
+            sum += x;
+        }
+        let step = if action == 0 { num(-0.5) } else { num(0.5) };
+        Ok(SourceMeans {
+            reward: -(sum - self.shift).abs() / num(4.0),
+            next_state: state.map(|x| (x + step).clamp_to(num(-1.0), num(1.0))),
+        })
+    }
+}
+
+impl<T: Real> GenerativeModel<T> for Toy<T> {
+    type State = [T; 4];
+
+    fn num_actions(&self) -> usize {
+        2
+    }
+
+    fn query<R: rand_core::Rng + ?Sized>(
+        &self,
+        state: [T; 4],
+        action: usize,
+        rng: &mut R,
+    ) -> awfqi::Result<Transition<[T; 4], T>> {
+        let mean = self.predict(state, action)?;
+        Ok(Transition {
+            state,
+            action,
+            reward: awfqi::rng::normal(rng, mean.reward, num(0.1))?,
+            next_state: mean.next_state,
+            absorbing: false,
+        })
     }
 }
 
@@ -432,11 +484,47 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
     ));
     keep(effective_sample_size(opaque(&out[..])));
 
+    // The transfer path at two state dimensions: Puddle World and the 4-D toy plant.
+    let dynamics = if opaque(true) {
+        Dynamics::Shared
+    } else {
+        Dynamics::PuddleBased
+    };
+    let [a, b, c] = PuddleWorld::<T>::sources(dynamics);
+    transfer_path::<T, _, 2, 3>(PuddleWorld::target(dynamics), [a, b, c], num(10.0), rng);
+    let toys = [num::<T>(0.0), num(0.5), num(-0.5)].map(|shift| Toy { shift });
+    transfer_path::<T, _, 4, 5>(Toy { shift: num(0.1) }, toys, num(1.0), rng);
+    keep(PuddleWorld::<T>::score_grid(num(0.5)).map(|g| g.len()));
+    keep(PuddleWorld::<T>::target(dynamics).evaluation_protocol());
+}
+
+/// dataset, fqi, score, evaluation, the builder and the loop for states `[T; D]`, GP inputs
+/// of dimension `I = D + 1`, with `plant` as the target and `sources` as source models;
+/// the state box is `[0, high]^D`.
+fn transfer_path<T, G, const D: usize, const I: usize>(
+    plant: G,
+    sources: [G; 3],
+    high: T,
+    rng: &mut ChaCha8Rng,
+) where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
+{
+    let actions = plant.num_actions();
+    let mode = [
+        NoiseSubtraction::Reference,
+        NoiseSubtraction::Principled,
+        NoiseSubtraction::Off,
+    ][index(1) % 3];
     // dataset
-    let records: [Transition<[T; 2], T>; 12] = core::array::from_fn(record::<T>);
-    let z = input(records[index(3) % 12].state, index(2));
+    let records: [Transition<[T; D], T>; 12] = core::array::from_fn(|i| record::<T, D>(i, actions));
+    let z: [T; I] = input(records[index(3) % 12].state, index(2));
     keep(z);
-    let output = [Output::Reward, Output::NextX, Output::NextY][index(2) % 3];
+    let output = [
+        Output::Reward,
+        Output::NextState(0),
+        Output::NextState(index(1)),
+    ][index(2) % 3];
     keep(output.of(&records[index(4) % 12]));
     let rule = if opaque(true) {
         SubsetRule::Spread
@@ -444,10 +532,11 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
         SubsetRule::Last
     };
     keep(rule.indices(index(12), index(5)).fold(0, |a, i| a + i));
-    let mut training = GpTraining::<T>::reference();
+    let mut training = GpTraining::<T, I>::reference();
     training.search.max_evaluations = index(20);
     training.search.restarts = index(1);
-    let mut gp = Gp::<T, 8, 3>::empty();
+    keep(training.validate());
+    let mut gp = Gp::<T, 8, I>::empty();
     keep(fit_gp(
         &mut gp,
         opaque(&records[..]),
@@ -461,12 +550,8 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
     keep(batch_transform(&gp, &records, mode));
 
     // fqi
-    let grid = CellGrid::new(
-        [num::<T>(0.0), num(0.0)],
-        [num(10.0), num(10.0)],
-        [index(3), index(3)],
-    )
-    .or_else(|_| CellGrid::square(num::<T>(0.0), num(10.0), index(3)));
+    let grid = CellGrid::<T, D>::new([num(0.0); D], [high; D], [index(3); D])
+        .or_else(|_| CellGrid::cube(num(0.0), high, index(3)));
     if let Ok(grid) = grid {
         keep((
             grid.cells(),
@@ -476,13 +561,13 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
             grid.upper(),
         ));
         keep((
-            grid.cell_of([num(3.3), num(7.1)]),
+            grid.cell_of([num(0.3); D]),
             grid.coordinates(index(4)),
             grid.center(index(4)),
         ));
-        keep(TabularFqi::<T>::required_entries(&grid, index(4)));
-        let mut storage = [FqiEntry::<T>::EMPTY; 36];
-        if let Ok(mut fqi) = TabularFqi::new(grid, index(4), &mut storage) {
+        keep(TabularFqi::<T, D>::required_entries(&grid, index(4)));
+        let mut storage = [FqiEntry::<T>::EMPTY; 400];
+        if let Ok(mut fqi) = TabularFqi::new(grid, actions, &mut storage) {
             let empty = match index(1) {
                 0 => EmptyCells::Nearest,
                 1 => EmptyCells::CappedNearest,
@@ -509,131 +594,183 @@ fn transfer<T: Real>(rng: &mut ChaCha8Rng) {
             if let Some(e) = fqi.entries().get(index(5)) {
                 keep((e.q(), e.reward_model(), e.transition_weight(), e.has_data()));
             }
-            keep(fqi.value([num(2.0), num(3.0)], index(1)));
-            keep(fqi.max_value([num(2.0), num(3.0)]));
-            keep(fqi.greedy_action([num(2.0), num(3.0)]));
-            let target = PuddleWorld::<T>::target(Dynamics::Shared);
-            keep(evaluate_greedy(&target, &fqi, rng));
-            let mut uniform = UniformPolicy::new(4).unwrap_or_else(|_| loop {});
-            keep(evaluate(&target, &mut uniform, index(2), rng));
+            let s = [num::<T>(0.2); D];
+            keep(fqi.value(s, index(1)));
+            keep(fqi.max_value(s));
+            keep(fqi.greedy_action(s));
+            // evaluation
+            let protocol = EvaluationProtocol {
+                start: [num(0.0); D],
+                rollouts: index(2),
+                horizon: index(20),
+                discount: num(0.99),
+            };
+            keep(evaluate_greedy(&plant, &fqi, &protocol, rng));
+            let mut uniform = UniformPolicy::new(actions).unwrap_or_else(|_| loop {});
+            keep(evaluate(&plant, &mut uniform, &protocol, rng));
+            keep(rollout(
+                &plant,
+                &mut uniform,
+                [num(0.0); D],
+                index(5),
+                num(0.9),
+                rng,
+            ));
             fqi.clear();
         }
     }
 
     // score
-    let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
-    let point_grid = PointGrid::new(
-        [num::<T>(0.0), num(0.0)],
-        [num(5.0), num(5.0)],
-        [index(3), index(3)],
-    )
-    .or_else(|_| PointGrid::puddle(num::<T>(5.0)));
-    let source_sets: [&[Transition<[T; 2], T>]; 2] = [&records[..4], &records[4..9]];
-    if let Ok(point_grid) = point_grid {
-        keep((
-            point_grid.points(),
-            point_grid.len(),
-            point_grid.is_empty(),
-            point_grid.spacing(),
-            point_grid.point(index(4)),
-        ));
-        let rows = match index(2) {
-            0 => RowSet::grid(point_grid, 4),
-            1 => RowSet::source_data(&source_sets),
-            _ => RowSet::both(point_grid, 4, &source_sets),
-        };
-        if let Ok(rows) = rows {
-            keep((
-                rows.len(),
-                rows.is_empty(),
-                rows.row(index(7)),
-                rows.iter().count(),
-            ));
-            let mut scores = [Scores::<T>::ZERO; 64];
-            let models = [
-                GpSourceModel::new(&gp, None),
-                GpSourceModel::new(&gp, Some([&gp, &gp])),
-            ];
-            keep(models[index(1) % 2].predict([num(1.0), num(2.0)], index(1)));
-            let computed = if opaque(true) {
-                ScoreTable::compute(rows, &worlds, &mut scores)
-            } else {
-                ScoreTable::compute(rows, &models, &mut scores)
-            };
-            if let Ok(table) = computed {
-                keep((
-                    table.len(),
-                    table.is_empty(),
-                    table.rows().len(),
-                    table.values().len(),
-                ));
-                if let Some(row) = table.row(index(3)) {
-                    keep((
-                        row.state,
-                        row.action,
-                        row.scores.total(),
-                        row.scores.get(ScoreColumn::NextY),
-                    ));
-                }
-                keep(ScoreTable::from_parts(rows, table.values()).map(|t| t.len()));
-                let mut alias = [AliasEntry::<T>::EMPTY; 64];
-                let column = [
-                    ScoreColumn::Reward,
-                    ScoreColumn::NextX,
-                    ScoreColumn::NextY,
-                    ScoreColumn::Total,
-                ][index(3) % 4];
-                if let Ok(sampler) = table.sampler(column, &mut alias) {
-                    keep((
-                        sampler.draw(rng),
-                        sampler.rows().len(),
-                        sampler.alias().len(),
-                    ));
-                    kernel::<T>(sampler, &records, &posteriors, rng);
-                }
-            }
+    let point_grid = PointGrid::<T, D>::new([num(0.0); D], [num(0.5); D], [index(3); D])
+        .or_else(|_| PointGrid::spanning([num(0.0); D], [high; D], num(0.5)));
+    let source_sets: [&[Transition<[T; D], T>]; 2] = [&records[..4], &records[4..9]];
+    let pairs = [([num::<T>(0.5); D], index(1)), ([num(0.25); D], 0)];
+    let Ok(point_grid) = point_grid else {
+        return;
+    };
+    keep((
+        point_grid.points(),
+        point_grid.len(),
+        point_grid.is_empty(),
+        point_grid.spacing(),
+        point_grid.point(index(4)),
+    ));
+    let rows = match index(2) {
+        0 => RowSet::grid(point_grid, actions),
+        1 => RowSet::source_data(&source_sets),
+        3 => RowSet::pairs(&pairs),
+        4 => RowSet::new(Some((point_grid, actions)), &pairs, &source_sets),
+        _ => RowSet::both(point_grid, actions, &source_sets),
+    };
+    let Ok(rows) = rows else {
+        return;
+    };
+    keep((
+        rows.len(),
+        rows.is_empty(),
+        rows.row(index(7)),
+        rows.iter().count(),
+    ));
+    let mut scores = [Scores::<T, D>::ZERO; 200];
+    let next = core::array::from_fn::<_, D, _>(|_| &gp);
+    let models = [
+        GpSourceModel::new(&gp, None),
+        GpSourceModel::new(&gp, Some(next)),
+    ];
+    keep(models[index(1) % 2].predict([num(0.5); D], index(1)));
+    keep(sources[index(1) % 3].predict([num(0.5); D], index(1)));
+    let computed = match index(1) {
+        0 => ScoreTable::compute(rows, &sources, &mut scores),
+        1 => ScoreTable::compute(rows, &models, &mut scores),
+        _ => {
+            let mut scratch = [AliasEntry::<T>::EMPTY; 200];
+            ScoreTable::realistic(
+                rows,
+                &source_sets,
+                &mut gp,
+                &training,
+                rule,
+                &mut scores,
+                &mut scratch,
+                rng,
+                |j, g| {
+                    keep((j, g.len()));
+                    Ok(())
+                },
+            )
         }
+    };
+    let Ok(table) = computed else {
+        return;
+    };
+    keep((
+        table.len(),
+        table.is_empty(),
+        table.rows().len(),
+        table.values().len(),
+    ));
+    if let Some(row) = table.row(index(3)) {
+        keep((
+            row.state,
+            row.action,
+            row.scores.total(),
+            row.scores.get(ScoreColumn::NextState(index(1))),
+        ));
     }
+    keep(ScoreTable::from_parts(rows, table.values()).map(|t| t.len()));
+    let mut alias = [AliasEntry::<T>::EMPTY; 200];
+    let column = [
+        ScoreColumn::Reward,
+        ScoreColumn::NextState(0),
+        ScoreColumn::NextState(index(1)),
+        ScoreColumn::Total,
+    ][index(3) % 4];
+    if let Ok(sampler) = table.sampler(column, &mut alias) {
+        keep((
+            sampler.draw(rng),
+            sampler.rows().len(),
+            sampler.alias().len(),
+        ));
+    }
+    let values = table.values();
+    kernel::<T, G, D, I>(
+        plant,
+        &sources,
+        values,
+        &records,
+        &posteriors,
+        rows,
+        high,
+        rng,
+    );
 }
 
-/// `Awfqi` itself: construction, a step, every accessor and `reset`.
-fn kernel<T: Real>(
-    sampler: RowSampler<'_, T>,
-    records: &[Transition<[T; 2], T>],
+/// The builder in every configuration, `Awfqi` itself (a step, every accessor, `reset`),
+/// and the storage block.
+#[allow(clippy::too_many_arguments)]
+fn kernel<T, G, const D: usize, const I: usize>(
+    plant: G,
+    models: &[G],
+    values: &[Scores<T, D>],
+    records: &[Transition<[T; D], T>],
     posteriors: &[Posterior<T>],
+    rows: RowSet<'_, T, D>,
+    high: T,
     rng: &mut ChaCha8Rng,
-) {
-    let mut config = AwfqiConfig::<T>::thesis(index(4));
+) where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
+{
+    let mut config = AwfqiConfig::<T, I>::thesis(index(4));
     config.gp_training.search.max_evaluations = index(10);
     config.gp_training.search.restarts = index(1);
-    keep(config.validate());
-    let Ok(source) = SourceData::new(records, posteriors) else {
+    if opaque(false) {
+        config.sampling = ScoreColumn::NextState(index(1));
+    }
+    let Ok(config) = config.validate() else {
         return;
     };
-    keep((source.records().len(), source.reward_posteriors().len()));
-    let sources = [source];
-    let blank = record::<T>(0);
-    let mut samples = [blank; 8];
-    let mut weights = [T::ZERO; 12];
-    let mut gp = Gp::<T, 8, 3>::empty();
-    let mut storage = [FqiEntry::<T>::EMPTY; 36];
-    let Ok(grid) = CellGrid::square(num::<T>(0.0), num(10.0), index(3)) else {
+    let sources: [&[Transition<[T; D], T>]; 2] = [&records[..5], &records[5..]];
+    keep(SourceData::new(&sources, posteriors).map(|s| (s.len(), s.is_empty())));
+    let Ok(grid) = CellGrid::cube(num::<T>(0.0), high, index(3)) else {
         return;
     };
-    let Ok(fqi) = TabularFqi::new(grid, 4, &mut storage) else {
-        return;
+    let mut storage = AwfqiStorage::<T, D, I, 8, 8, 12, 200, 400>::new();
+    let mut fitted = [Posterior::<T>::default(); 12];
+    let mut computed = [Scores::<T, D>::ZERO; 200];
+    let builder = Awfqi::builder(config, grid, &sources, rows);
+    let builder = if opaque(true) {
+        builder.stored_posteriors(posteriors)
+    } else {
+        builder.fit_posteriors(&mut fitted)
     };
-    let target = PuddleWorld::<T>::target(Dynamics::Shared);
-    if let Ok(mut kernel) = Awfqi::new(
-        config,
-        target,
-        sampler,
-        &sources,
-        &mut samples,
-        &mut weights,
-        &mut gp,
-        fqi,
-    ) {
+    let built = match index(2) {
+        0 => Ok(builder.stored_scores(values)),
+        1 => builder.scores_from(models, &mut computed),
+        _ => Ok(builder.realistic_scores(&mut computed)),
+    }
+    .and_then(|b| b.build(plant, &mut storage, rng));
+    if let Ok(mut kernel) = built {
         keep(kernel.step(rng));
         keep((
             kernel.config().budget,
@@ -644,11 +781,16 @@ fn kernel<T: Real>(
         keep((
             kernel.q().actions(),
             kernel.gp().len(),
-            kernel.target().num_puddles(),
+            kernel.target().num_actions(),
+            kernel.sources().reward_posteriors().len(),
+            kernel.sampler().rows().len(),
         ));
         kernel.reset();
         keep(kernel.steps());
     }
+    let mut heap = AwfqiStorage::<T, D, I, 8, 8, 12, 200, 400>::default();
+    let buffers: AwfqiBuffers<'_, T, D, I, 8> = heap.buffers();
+    keep(buffers.samples.len());
 }
 
 /// Identification and planning on the Grid World candidates.

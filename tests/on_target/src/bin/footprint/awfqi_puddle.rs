@@ -7,14 +7,12 @@
 #![no_main]
 
 use awfqi_on_target::workloads::{KernelRun, KernelStorage, awfqi_puddle};
-use core::mem::MaybeUninit;
 
-static mut STORAGE: MaybeUninit<KernelStorage<250, 484, 484, 150, 64>> = MaybeUninit::zeroed();
+static mut STORAGE: KernelStorage<750, 484, 484, 150, 64> = KernelStorage::new();
 
 awfqi_on_target::footprint_image!({
-    // SAFETY: the only reference to STORAGE; all-zero bits are valid for every field
-    // (floats, integers, `bool` false), and every part is initialised before it is read.
-    let storage = unsafe { (*core::ptr::addr_of_mut!(STORAGE)).assume_init_mut() };
+    // SAFETY: the only reference to STORAGE.
+    let storage = unsafe { &mut *core::ptr::addr_of_mut!(STORAGE) };
     let run = KernelRun {
         cells: 11,
         spacing: 1.0,
@@ -27,5 +25,6 @@ awfqi_on_target::footprint_image!({
         storage,
         core::hint::black_box(run),
         core::hint::black_box(1),
+        |_| {},
     )
 });

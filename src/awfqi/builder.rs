@@ -1,0 +1,391 @@
+//! Setting up AWFQI once: one storage block and a builder.
+//!
+//! The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
+//! records, the score table over a candidate set, its sampler, the source data, the FQI
+//! table — is the same for every plant, so it lives here once. The memory is one owned
+//! block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
+//! (all-zero: `.bss`, no flash image); anything that can lend the same slices
+//! ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
+//! optional stage (posteriors fitted on the device, score values) is lent to that stage.
+//!
+//! The [crate docs](crate) show the whole loop on a plant of their own.
+
+use super::{Awfqi, SourceData, ValidAwfqiConfig};
+use crate::alias::AliasEntry;
+use crate::dataset::{InputDim, Output, fit_gp, predict_posteriors};
+use crate::env::{GenerativeModel, Transition};
+use crate::fqi::{CellGrid, FqiEntry, TabularFqi};
+use crate::gp::Gp;
+use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
+use crate::weights::Posterior;
+use crate::{Error, Real, Result};
+use rand_core::Rng;
+
+/// All the memory an AWFQI run writes, as one block with const-generic capacities: the
+/// target GP (`N` points of dimension `I = D + 1`), `Q` target samples (steps × budget),
+/// `W` reward weights (one per source record), `R` alias entries (one per candidate row)
+/// and `E` FQI entries (cells × actions).
+///
+/// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
+/// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
+/// (39 084 bytes on a Cortex-M4F, see [`crate::awfqi`]). The builder hands out its parts as
+/// slices, so the kernel's code does not depend on the capacities.
+#[derive(Debug, Clone)]
+pub struct AwfqiStorage<
+    T,
+    const D: usize,
+    const I: usize,
+    const N: usize,
+    const Q: usize,
+    const W: usize,
+    const R: usize,
+    const E: usize,
+> {
+    gp: Gp<T, N, I>,
+    samples: [Transition<[T; D], T>; Q],
+    weights: [T; W],
+    alias: [AliasEntry<T>; R],
+    fqi: [FqiEntry<T>; E],
+}
+
+impl<
+    T: Real,
+    const D: usize,
+    const I: usize,
+    const N: usize,
+    const Q: usize,
+    const W: usize,
+    const R: usize,
+    const E: usize,
+> AwfqiStorage<T, D, I, N, Q, W, R, E>
+{
+    /// Empty, all-zero storage (the GP's hyperparameters are set when a kernel is built).
+    pub const fn new() -> Self {
+        Self {
+            gp: Gp::zeroed(),
+            samples: [Transition::EMPTY; Q],
+            weights: [T::ZERO; W],
+            alias: [AliasEntry::EMPTY; R],
+            fqi: [FqiEntry::EMPTY; E],
+        }
+    }
+
+    /// The block as the slices a kernel borrows.
+    pub fn buffers(&mut self) -> AwfqiBuffers<'_, T, D, I, N> {
+        AwfqiBuffers {
+            gp: &mut self.gp,
+            samples: &mut self.samples,
+            weights: &mut self.weights,
+            alias: &mut self.alias,
+            fqi: &mut self.fqi,
+        }
+    }
+}
+
+impl<
+    T: Real,
+    const D: usize,
+    const I: usize,
+    const N: usize,
+    const Q: usize,
+    const W: usize,
+    const R: usize,
+    const E: usize,
+> Default for AwfqiStorage<T, D, I, N, Q, W, R, E>
+{
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The memory of a kernel as borrowed slices, whatever owns it: an [`AwfqiStorage`]
+/// (`(&mut storage).into()`, or [`AwfqiStorage::buffers`]) or buffers sized at run time
+/// (a host's vectors).
+#[derive(Debug)]
+pub struct AwfqiBuffers<'a, T, const D: usize, const I: usize, const N: usize> {
+    /// The target GP (its contents are replaced every step; the builder also fits the
+    /// source GPs in it).
+    pub gp: &'a mut Gp<T, N, I>,
+    /// Room for the target records of all steps (steps × budget).
+    pub samples: &'a mut [Transition<[T; D], T>],
+    /// Room for one reward weight per source record.
+    pub weights: &'a mut [T],
+    /// Room for the sampler's alias table, one entry per candidate row.
+    pub alias: &'a mut [AliasEntry<T>],
+    /// Room for the FQI table, one entry per (cell, action).
+    pub fqi: &'a mut [FqiEntry<T>],
+}
+
+impl<
+    'a,
+    T: Real,
+    const D: usize,
+    const I: usize,
+    const N: usize,
+    const Q: usize,
+    const W: usize,
+    const R: usize,
+    const E: usize,
+> From<&'a mut AwfqiStorage<T, D, I, N, Q, W, R, E>> for AwfqiBuffers<'a, T, D, I, N>
+{
+    fn from(storage: &'a mut AwfqiStorage<T, D, I, N, Q, W, R, E>) -> Self {
+        storage.buffers()
+    }
+}
+
+/// Where the source records' stored reward posteriors come from.
+#[derive(Debug)]
+enum Posteriors<'a, T> {
+    /// Not chosen yet (an error at build time, unless there are no source records).
+    Missing,
+    /// Computed earlier (e.g. on the host, in flash).
+    Stored(&'a [Posterior<T>]),
+    /// Fitted by the builder into this storage.
+    Fit(&'a mut [Posterior<T>]),
+}
+
+/// Where the score values come from.
+#[derive(Debug)]
+enum ScoreValues<'a, T, const D: usize> {
+    /// Not chosen yet (an error at build time).
+    Missing,
+    /// Computed earlier, or by [`AwfqiBuilder::scores_from`].
+    Stored(&'a [Scores<T, D>]),
+    /// The realistic table, computed by the builder into this storage.
+    Realistic(&'a mut [Scores<T, D>]),
+}
+
+/// The set-up of an AWFQI kernel, performed once by [`AwfqiBuilder::build`] (the
+/// [crate docs](crate) show it on a plant of their own).
+///
+/// Required: the validated configuration, the FQI grid, the source records (one slice per
+/// source; none is allowed) and the candidate set ([`Awfqi::builder`]); then where the
+/// stored source posteriors come from ([`stored_posteriors`](Self::stored_posteriors) or
+/// [`fit_posteriors`](Self::fit_posteriors)) and where the scores come from
+/// ([`stored_scores`](Self::stored_scores), [`scores_from`](Self::scores_from) or
+/// [`realistic_scores`](Self::realistic_scores)).
+///
+/// The source GPs the builder fits (for posteriors or realistic scores) use the
+/// configuration's GP training, subset rule and noise subtraction, one at a time in the
+/// storage's GP; with both stages, each source's GP is fitted once and serves both.
+#[derive(Debug)]
+pub struct AwfqiBuilder<'a, T, const D: usize, const I: usize> {
+    config: ValidAwfqiConfig<T, I>,
+    grid: CellGrid<T, D>,
+    sources: &'a [&'a [Transition<[T; D], T>]],
+    candidates: RowSet<'a, T, D>,
+    posteriors: Posteriors<'a, T>,
+    scores: ScoreValues<'a, T, D>,
+}
+
+impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
+    /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
+    /// FQI grid over the state space, the source records and the candidate rows.
+    pub fn new(
+        config: ValidAwfqiConfig<T, I>,
+        grid: CellGrid<T, D>,
+        sources: &'a [&'a [Transition<[T; D], T>]],
+        candidates: RowSet<'a, T, D>,
+    ) -> Self {
+        let () = InputDim::<D, I>::CHECK;
+        Self {
+            config,
+            grid,
+            sources,
+            candidates,
+            posteriors: Posteriors::Missing,
+            scores: ScoreValues::Missing,
+        }
+    }
+
+    /// The source posteriors computed earlier, all sources in one slice, source after
+    /// source (§6 step 3; e.g. computed on the host and kept in flash).
+    pub fn stored_posteriors(mut self, posteriors: &'a [Posterior<T>]) -> Self {
+        self.posteriors = Posteriors::Stored(posteriors);
+        self
+    }
+
+    /// Fits one reward GP per source at build time and stores the posteriors at its records
+    /// in `storage` (one per source record), where the kernel then reads them.
+    pub fn fit_posteriors(mut self, storage: &'a mut [Posterior<T>]) -> Self {
+        self.posteriors = Posteriors::Fit(storage);
+        self
+    }
+
+    /// Score values computed earlier for the candidate rows (e.g. shared by many runs, or
+    /// kept in flash).
+    pub fn stored_scores(mut self, values: &'a [Scores<T, D>]) -> Self {
+        self.scores = ScoreValues::Stored(values);
+        self
+    }
+
+    /// Computes the score values of the candidate rows now, from source models (e.g. the
+    /// sources' own mean functions: the oracle table), into `storage`.
+    ///
+    /// Errors: those of [`ScoreTable::compute`].
+    pub fn scores_from<S: SourceModel<T, D>>(
+        mut self,
+        models: &[S],
+        storage: &'a mut [Scores<T, D>],
+    ) -> Result<Self> {
+        let table = ScoreTable::compute(self.candidates, models, storage)?;
+        self.scores = ScoreValues::Stored(table.values());
+        Ok(self)
+    }
+
+    /// The realistic table of §11.2 (`V_r` from one reward GP per source, fitted at build
+    /// time; [`ScoreTable::realistic`]) into `storage`.
+    pub fn realistic_scores(mut self, storage: &'a mut [Scores<T, D>]) -> Self {
+        self.scores = ScoreValues::Realistic(storage);
+        self
+    }
+
+    /// Performs the set-up in `buffers` and returns the kernel, ready for its first step:
+    /// checks every size, fits the source GPs (posteriors, realistic scores) drawing from
+    /// `rng`, builds the score table and its sampler, pairs the sources with their
+    /// posteriors and clears the FQI table and the target GP.
+    ///
+    /// Errors, sizes first (nothing is fitted when one is wrong): no posterior or score
+    /// stage chosen ([`Error::InvalidParameter`] `posteriors` / `scores`); a model without
+    /// actions, or a candidate row whose action the model does not have
+    /// ([`Error::InvalidParameter`] / [`Error::OutOfRange`] `actions`); `samples` unable to
+    /// hold one step, `weights` or the posterior storage shorter than the source records,
+    /// `alias` or the score storage shorter than the candidate rows, `fqi` shorter than
+    /// cells × actions ([`Error::CapacityExceeded`] with the short length); then those of
+    /// the GP fits, of [`ScoreTable::from_parts`], of [`SourceData::new`].
+    pub fn build<G, R, const N: usize>(
+        self,
+        target: G,
+        buffers: impl Into<AwfqiBuffers<'a, T, D, I, N>>,
+        rng: &mut R,
+    ) -> Result<Awfqi<'a, T, G, D, I, N>>
+    where
+        G: GenerativeModel<T, State = [T; D]>,
+        R: Rng + ?Sized,
+    {
+        let AwfqiBuffers {
+            gp,
+            samples,
+            weights,
+            alias,
+            fqi,
+        } = buffers.into();
+        let config = self.config;
+        let records = self.sources;
+        let source_records = records
+            .iter()
+            .try_fold(0usize, |n, r| n.checked_add(r.len()))
+            .ok_or(Error::CapacityExceeded {
+                capacity: usize::MAX,
+            })?;
+        let rows = self.candidates.len();
+        // Sizes and stages, before anything is computed.
+        let actions = target.num_actions();
+        if actions == 0 {
+            return Err(Error::InvalidParameter {
+                parameter: "actions",
+            });
+        }
+        if self.candidates.iter().any(|(_, a)| a >= actions) {
+            return Err(Error::OutOfRange {
+                parameter: "actions",
+            });
+        }
+        let fqi = TabularFqi::new(self.grid, actions, fqi)?;
+        short(samples.len(), config.budget)?;
+        short(weights.len(), source_records)?;
+        short(alias.len(), rows)?;
+        match &self.posteriors {
+            Posteriors::Missing if source_records > 0 => {
+                return Err(Error::InvalidParameter {
+                    parameter: "posteriors",
+                });
+            }
+            Posteriors::Fit(storage) => short(storage.len(), source_records)?,
+            _ => {}
+        }
+        match &self.scores {
+            ScoreValues::Missing => {
+                return Err(Error::InvalidParameter {
+                    parameter: "scores",
+                });
+            }
+            ScoreValues::Stored(values) => short(values.len(), rows)?,
+            ScoreValues::Realistic(storage) => short(storage.len(), rows)?,
+        }
+
+        // Source GPs: posteriors and/or realistic scores, one source at a time.
+        let (posteriors, mut fit_storage): (&'a [Posterior<T>], Option<&'a mut [Posterior<T>]>) =
+            match self.posteriors {
+                Posteriors::Missing => (&[], None),
+                Posteriors::Stored(p) => (p, None),
+                Posteriors::Fit(storage) => (&[], storage.get_mut(..source_records)),
+            };
+        let fitting = fit_storage.is_some();
+        let noise = config.noise_subtraction;
+        let mut store_posteriors = |j: usize, gp: &Gp<T, N, I>| -> Result<()> {
+            let Some(storage) = fit_storage.as_deref_mut() else {
+                return Ok(());
+            };
+            let start: usize = records.iter().take(j).map(|r| r.len()).sum();
+            let source = records.get(j).copied().unwrap_or(&[]);
+            let out =
+                storage
+                    .get_mut(start..start + source.len())
+                    .ok_or(Error::CapacityExceeded {
+                        capacity: source_records,
+                    })?;
+            predict_posteriors(gp, source, noise, out)
+        };
+        let table = match self.scores {
+            ScoreValues::Missing => {
+                return Err(Error::InvalidParameter {
+                    parameter: "scores",
+                });
+            }
+            ScoreValues::Realistic(storage) => ScoreTable::realistic(
+                self.candidates,
+                records,
+                gp,
+                &config.gp_training,
+                config.subset,
+                storage,
+                alias,
+                rng,
+                &mut store_posteriors,
+            )?,
+            ScoreValues::Stored(values) => {
+                if fitting {
+                    for (j, source) in records.iter().enumerate() {
+                        fit_gp(
+                            gp,
+                            source,
+                            Output::Reward,
+                            config.subset,
+                            &config.gp_training,
+                            rng,
+                        )?;
+                        store_posteriors(j, gp)?;
+                    }
+                }
+                ScoreTable::from_parts(self.candidates, values)?
+            }
+        };
+        let posteriors = match fit_storage {
+            Some(storage) => &*storage,
+            None => posteriors,
+        };
+        let sampler = table.sampler(config.sampling, alias)?;
+        let sources = SourceData::new(records, posteriors)?;
+        Awfqi::assemble(config, target, sampler, sources, samples, weights, gp, fqi)
+    }
+}
+
+/// `Err(CapacityExceeded { capacity: have })` when `have < need`.
+fn short(have: usize, need: usize) -> Result<()> {
+    if have < need {
+        Err(Error::CapacityExceeded { capacity: have })
+    } else {
+        Ok(())
+    }
+}
