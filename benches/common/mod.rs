@@ -17,7 +17,7 @@ use awfqi::{
 };
 use awfqi_harness::fqi as forest_fqi;
 use awfqi_harness::gp_large::{FitOptions, GpHyperparameters, LargeGp, Parallelism};
-use awfqi_harness::reference::gp as reference;
+use awfqi_reference::gp as reference;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 

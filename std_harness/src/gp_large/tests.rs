@@ -74,7 +74,7 @@ fn matches_the_core_gp_for_fixed_hyperparameters() {
 
 #[test]
 fn matches_the_harness_reference_gp() {
-    // The textbook reference of `crate::reference::gp`, on more points than the core holds,
+    // The textbook reference of `awfqi_reference::gp`, on more points than the core holds,
     // with the jitter 10⁻¹⁰ passed as its extra diagonal.
     let (zs, ys) = data(150, 20);
     let rows: Vec<Vec<f64>> = zs.iter().map(|z| z.to_vec()).collect();
@@ -85,10 +85,10 @@ fn matches_the_harness_reference_gp() {
             noise_variance: s2,
         };
         let gp = LargeGp::new(&zs, &ys, hyper, Par::Seq).unwrap();
-        let reference = crate::reference::gp::ReferenceGp::fit_with_diagonal(
+        let reference = awfqi_reference::gp::ReferenceGp::fit_with_diagonal(
             &rows,
             &ys,
-            &crate::reference::gp::Hyperparameters {
+            &awfqi_reference::gp::Hyperparameters {
                 signal_variance: c,
                 length_scales: vec![l; 3],
                 noise_variance: s2,
