@@ -62,10 +62,10 @@ pub mod builder;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 
-use crate::dataset::{GpTraining, InputDim, Output, SubsetRule, batch_transform, fit_gp, input};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{FqiConfig, SampleSet, TabularFqi};
 use crate::gp::{Gp, Hyperparameters};
+use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, batch_transform, fit_gp, input};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
 use crate::{Error, Real, Result};
@@ -108,8 +108,8 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
             weights: WeightParams::reference_reward(),
             noise_subtraction: NoiseSubtraction::Reference,
             subset: SubsetRule::Spread,
-            gp_training: GpTraining::reference(),
-            fqi: FqiConfig::reference(),
+            gp_training: GpTraining::published(),
+            fqi: FqiConfig::published(),
             sampling: ScoreColumn::Reward,
         }
     }
@@ -156,7 +156,7 @@ type Records<'a, T, const D: usize> = &'a [Transition<[T; D], T>];
 
 /// The source datasets with what §6 stores with them: the records, one slice per source,
 /// and per record the posterior `(μ^s_r, σ^s_r)` of its source's reward GP at the record's
-/// own `z` (noise-subtracted; see [`crate::dataset::predict_posteriors`]), all sources'
+/// own `z` (noise-subtracted; see [`crate::record_gp::predict_posteriors`]), all sources'
 /// posteriors in one slice, source after source.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SourceData<'a, T, const D: usize> {

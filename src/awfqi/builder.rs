@@ -12,10 +12,10 @@
 
 use super::{Awfqi, SourceData, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
-use crate::dataset::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{CellGrid, FqiEntry, TabularFqi};
 use crate::gp::Gp;
+use crate::record_gp::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
 use crate::weights::Posterior;
 use crate::{Error, Real, Result};

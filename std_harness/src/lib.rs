@@ -7,9 +7,11 @@
 
 pub mod commands;
 pub mod domains;
-pub mod fqi;
+pub mod forest_fqi;
 pub mod gp_large;
+pub mod identification;
 pub mod plot;
-pub mod puddle;
+pub mod run_range;
 pub mod seeding;
+pub mod transfer;
 pub mod trees;

@@ -49,7 +49,7 @@
 //! the growth time. Measured on the reference machine (one core): 50 trees on 450 records
 //! in ≈ 1.6 ms (3.4 ms before), prediction ≈ 12 ns per query and tree
 //! (`examples/tree_timing.rs`). FQI orders its queries along a Z-order curve so the lanes
-//! of a batch end at similar depths ([`crate::fqi`]).
+//! of a batch end at similar depths ([`crate::forest_fqi`]).
 
 use awfqi::{Error, Result};
 use rand_chacha::ChaCha8Rng;

@@ -6,10 +6,10 @@
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::puddle;
-use crate::puddle::algorithms::{Experiment, kernel};
-use crate::puddle::protocol::StepRecord;
-use crate::puddle::score_tables::Mode;
-use crate::puddle::sources::{Record, SourceSet};
+use crate::transfer::algorithms::{Experiment, awfqi_kernel};
+use crate::transfer::protocol::StepRecord;
+use crate::transfer::score_tables::Mode;
+use crate::transfer::sources::{Record, SourceSet};
 
 pub use super::transfer::{Args, DynamicsArg, NoiseArg};
 use super::transfer::{Config, Defaults, KernelHooks};
@@ -27,8 +27,8 @@ fn kernel_setup(
     mode: Mode,
     spacing: f64,
     rng: &mut ChaCha8Rng,
-) -> anyhow::Result<kernel::KernelSetup> {
-    kernel::KernelSetup::new(sources, mode, spacing, rng)
+) -> anyhow::Result<awfqi_kernel::KernelSetup> {
+    awfqi_kernel::KernelSetup::new(sources, mode, spacing, rng)
 }
 
 fn kernel_run(
@@ -36,7 +36,7 @@ fn kernel_run(
     rng: &mut ChaCha8Rng,
     after_step: &mut dyn FnMut(&StepRecord),
 ) -> anyhow::Result<(Vec<StepRecord>, Vec<Record<2>>)> {
-    kernel::run(experiment, rng, after_step)
+    awfqi_kernel::run(experiment, rng, after_step)
 }
 
 /// Runs the experiment and writes every output.

@@ -23,18 +23,18 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use crate::commands::identify::RunRange;
 use crate::domains::{Domain, IdealMeans};
-use crate::puddle::algorithms::{
-    Algorithm, Experiment, KernelRunner, TransferOptions, Variances, kernel,
+use crate::run_range::RunRange;
+use crate::transfer::algorithms::{
+    Algorithm, Experiment, KernelRunner, TransferOptions, Variances, awfqi_kernel,
 };
-use crate::puddle::gp::{GpOptions, GpSearch};
-use crate::puddle::metrics::{TransferMetrics, markdown_table, transfer_metrics};
-use crate::puddle::protocol::{self, Protocol};
-use crate::puddle::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
-use crate::puddle::score_tables::{self, Mode, ScoreTableData};
-use crate::puddle::sources::SourceSet;
-use crate::puddle::{IDEAL_WEIGHTS, RUN, SCORE_TABLE, figures, stream};
+use crate::transfer::gp::{GpOptions, GpSearch};
+use crate::transfer::metrics::{TransferMetrics, markdown_table, transfer_metrics};
+use crate::transfer::protocol::{self, Protocol};
+use crate::transfer::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
+use crate::transfer::score_tables::{self, Mode, ScoreTableData};
+use crate::transfer::sources::SourceSet;
+use crate::transfer::{IDEAL_WEIGHTS, RUN, SCORE_TABLE, figures, stream};
 
 /// Puddle World's dynamics variants on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -179,7 +179,8 @@ pub struct Defaults {
 #[derive(Debug, Clone, Copy)]
 pub struct KernelHooks<const D: usize> {
     /// Builds the kernel's set-up from the sources, the setting, the spacing and a stream.
-    pub setup: fn(&SourceSet<D>, Mode, f64, &mut ChaCha8Rng) -> anyhow::Result<kernel::KernelSetup>,
+    pub setup:
+        fn(&SourceSet<D>, Mode, f64, &mut ChaCha8Rng) -> anyhow::Result<awfqi_kernel::KernelSetup>,
     /// Runs it.
     pub run: KernelRunner<D>,
 }
@@ -310,7 +311,7 @@ fn load_sources<const D: usize>(
             eprintln!("generating source data ({generation:?})…");
             let start = Instant::now();
             let set =
-                crate::puddle::sources::generate(domain, &generation, &config.gp(), args.seed)?;
+                crate::transfer::sources::generate(domain, &generation, &config.gp(), args.seed)?;
             let dir = config.out.join("sources");
             set.write_dir(&dir, &domain.source_layout)?;
             eprintln!(
@@ -413,7 +414,7 @@ pub fn build_experiment<const D: usize>(
     experiment.variances()?;
     if wants(Algorithm::IwfqiIdeal) {
         let mut rng = stream(args.seed, &[IDEAL_WEIGHTS]);
-        let weights = crate::puddle::algorithms::iwfqi::ideal_weights(
+        let weights = crate::transfer::algorithms::iwfqi::ideal_weights(
             &experiment.domain,
             &experiment.sources,
             experiment.domain.published.ideal_variances,

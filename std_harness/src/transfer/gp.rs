@@ -122,7 +122,7 @@ impl GpSearch {
 
 impl GpOptions {
     /// Spec §4.2: 10 restarts, `max_gp` 4000.
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             restarts: gp_large::DEFAULT_RESTARTS,
             max_gp: gp_large::MAX_GP,

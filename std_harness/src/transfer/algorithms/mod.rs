@@ -1,9 +1,10 @@
 //! The algorithms compared on the protocol of §3, one module each, and the experiment
 //! context they share ([`Experiment`]).
 
-pub mod fqi;
+pub mod awfqi_kernel;
+pub mod episodic;
 pub mod iwfqi;
-pub mod kernel;
+pub mod plain_fqi;
 pub mod rbt;
 pub mod sdt;
 
@@ -188,7 +189,7 @@ impl Default for TransferOptions {
             variances: Variances::Published,
             max_weight: 1000.0,
             noise: NoiseSubtraction::Reference,
-            gp: GpOptions::reference(),
+            gp: GpOptions::published(),
             transition_weights: None,
             rbt_total: 500,
             ideal_means: None,
@@ -222,7 +223,7 @@ pub struct Experiment<const D: usize = 2> {
     /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
     pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
     /// The core kernel's own set-up (awfqi-kernel).
-    pub kernel: Option<Arc<kernel::KernelSetup>>,
+    pub kernel: Option<Arc<awfqi_kernel::KernelSetup>>,
     /// How the kernel path runs on this domain (`None`: not available).
     pub kernel_runner: Option<KernelRunner<D>>,
 }
@@ -358,7 +359,7 @@ impl<const D: usize> Experiment<D> {
     pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner<D> + '_>> {
         use awfqi::weights::Estimator::{Heuristic, Mean};
         Ok(match algorithm {
-            Algorithm::Fqi => Box::new(fqi::Fqi::new(self)),
+            Algorithm::Fqi => Box::new(plain_fqi::Fqi::new(self)),
             Algorithm::Iwfqi => Box::new(iwfqi::Iwfqi::estimated(self, Mean, None)?),
             Algorithm::IwfqiHeuristic => Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None)?),
             Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),

@@ -106,7 +106,7 @@ pub struct GpTraining<T, const I: usize> {
 impl<T: Real, const I: usize> GpTraining<T, I> {
     /// Spec §4.2: start from `c = ℓ = σ²_n = 1`, its bounds, an isotropic search with 10
     /// restarts (the reference's protocol).
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             initial: Hyperparameters::SPEC_INITIAL,
             bounds: HyperparameterBounds::spec_default(),
@@ -249,7 +249,7 @@ mod tests {
             &[r],
             Output::NextState(4),
             SubsetRule::Last,
-            &GpTraining::reference(),
+            &GpTraining::published(),
             &mut rng,
         );
         assert_eq!(
@@ -302,7 +302,7 @@ mod tests {
                 restarts: 3,
                 isotropic: true,
             },
-            ..GpTraining::reference()
+            ..GpTraining::published()
         };
         fit_gp(
             &mut gp,

@@ -7,10 +7,10 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::fqi::Episodic;
+use super::episodic::Episodic;
 use crate::domains::Record;
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Learner};
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::transfer::protocol::{Diagnostics, Learner};
 
 /// SDT.
 #[derive(Debug, Clone)]

@@ -16,10 +16,10 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::fqi::Episodic;
+use super::episodic::Episodic;
 use crate::domains::Record;
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Learner};
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::transfer::protocol::{Diagnostics, Learner};
 
 /// RBT's parameters (spec §8).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,7 +38,7 @@ pub struct RbtParams {
 
 impl RbtParams {
     /// The reference's values.
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             delta_sa: 0.1,
             delta_s: 0.1,
@@ -217,7 +217,7 @@ impl<'e, const D: usize> Rbt<'e, D> {
             run: Episodic::new(experiment),
             params: RbtParams {
                 n_total: experiment.options.rbt_total,
-                ..RbtParams::reference()
+                ..RbtParams::published()
             },
         }
     }

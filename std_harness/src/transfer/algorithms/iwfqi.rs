@@ -29,13 +29,13 @@ use awfqi::weights::{Estimator, WeightParams, WeightSummary, ideal_weight};
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::fqi::Episodic;
+use super::episodic::Episodic;
 use crate::domains::{Domain, GpInput, IdealMeans, Record};
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::gp::{Output, RecordGp};
-use crate::puddle::protocol::{Diagnostics, Learner};
-use crate::puddle::score_tables::ScoreTableData;
-use crate::puddle::sources::SourceSet;
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::transfer::gp::{Output, RecordGp};
+use crate::transfer::protocol::{Diagnostics, Learner};
+use crate::transfer::score_tables::ScoreTableData;
+use crate::transfer::sources::SourceSet;
 
 /// Where the weights come from.
 #[derive(Debug, Clone)]
@@ -125,7 +125,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
     fn source_weights(
         &self,
         rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<crate::puddle::gp::GpSummary>)> {
+    ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<crate::transfer::gp::GpSummary>)> {
         let (reward, transition, transition_dims) = match &self.weights {
             Weights::Ideal(w) => {
                 return Ok((w.0.clone(), w.1.clone(), None));

@@ -1,12 +1,12 @@
-//! Plain FQI on the target's episodes (spec §5, §13.1): per-action Extra-Trees on `D₀`
-//! only, unweighted, from scratch every step.
+//! The episodic behaviour every forest-based algorithm shares: `D₀`, the last Q-function,
+//! collection around it and its greedy action (spec §3.2).
 
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use crate::domains::{Domain, Record};
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
+use crate::forest_fqi::FqiOptions;
+use crate::transfer::protocol::{Greedy, Protocol, collect_episodes};
 use crate::trees::ActionForests;
 
 /// The episodic part every baseline shares: the domain, `D₀` and the last Q-function.
@@ -59,41 +59,5 @@ impl<'e, const D: usize> Episodic<'e, D> {
     /// The greedy action of the last Q (action 0 before the first fit).
     pub fn greedy_action(&self, s: &[f64; D]) -> usize {
         self.q.as_ref().map_or(0, |q| q.greedy_action(s))
-    }
-}
-
-/// Plain FQI.
-#[derive(Debug, Clone)]
-pub struct Fqi<'e, const D: usize = 2> {
-    run: Episodic<'e, D>,
-}
-
-impl<'e, const D: usize> Fqi<'e, D> {
-    /// A fresh run.
-    pub fn new(experiment: &'e Experiment<D>) -> Self {
-        Self {
-            run: Episodic::new(experiment),
-        }
-    }
-}
-
-impl<const D: usize> Learner<D> for Fqi<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
-        self.run.collect(rng)?;
-        let data: Dataset<D> = self.run.data.iter().copied().collect();
-        let options = self.run.options(FqiOptions::plain());
-        self.run.q = Some(fqi(&data, &options, rng)?.q);
-        Ok(Diagnostics {
-            n_source_samples: Some(0),
-            ..Diagnostics::default()
-        })
-    }
-
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
     }
 }

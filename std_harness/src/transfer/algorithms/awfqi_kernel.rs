@@ -20,9 +20,9 @@ use awfqi::{
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use crate::puddle::protocol::{Diagnostics, StepRecord, evaluate_step};
-use crate::puddle::score_tables::Mode;
-use crate::puddle::sources::{Record, SourceSet};
+use crate::transfer::protocol::{Diagnostics, StepRecord, evaluate_step};
+use crate::transfer::score_tables::Mode;
+use crate::transfer::sources::{Record, SourceSet};
 
 /// FQI cells per axis (cells about one unit step wide; see `tests/awfqi_puddle.rs`).
 pub const CELLS: usize = 11;
@@ -100,7 +100,7 @@ impl KernelSetup {
             rows,
             &slices,
             &mut gp,
-            &GpTraining::reference(),
+            &GpTraining::published(),
             SubsetRule::Spread,
             &mut values,
             &mut scratch,
@@ -196,7 +196,7 @@ pub fn run(
             wr_eff: Some(f64::from(report.wr_eff)),
             ws_mean: Some(f64::from(report.ws_mean)),
             ws_eff: Some(f64::from(report.ws_eff)),
-            reward_gp: Some(crate::puddle::gp::GpSummary {
+            reward_gp: Some(crate::transfer::gp::GpSummary {
                 points: report.gp_points,
                 signal_variance: f64::from(report.gp_hyperparameters.signal_variance),
                 length_scale: f64::from(report.gp_hyperparameters.length_scales[0]),
