@@ -25,8 +25,9 @@ use rayon::prelude::*;
 
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
+use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelSetup};
 use crate::transfer::algorithms::{
-    Algorithm, Experiment, KernelRunner, TransferOptions, Variances, awfqi_kernel,
+    Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
 use crate::transfer::gp::{GpOptions, GpSearch};
 use crate::transfer::metrics::{TransferMetrics, markdown_table, transfer_metrics};
@@ -174,15 +175,14 @@ pub struct Defaults {
     pub threshold: f64,
 }
 
-/// The core kernel's hooks on a domain: its set-up and its run (Puddle World only until
-/// the kernel is generic over the state dimension).
+/// The core kernel's hooks on a domain: its set-up and its learner (Puddle World only
+/// until the kernel is generic over the state dimension).
 #[derive(Debug, Clone, Copy)]
 pub struct KernelHooks<const D: usize> {
-    /// Builds the kernel's set-up from the sources, the setting, the spacing and a stream.
-    pub setup:
-        fn(&SourceSet<D>, Mode, f64, &mut ChaCha8Rng) -> anyhow::Result<awfqi_kernel::KernelSetup>,
-    /// Runs it.
-    pub run: KernelRunner<D>,
+    /// Builds the kernel's set-up from the sources, its configuration and a stream.
+    pub setup: fn(&SourceSet<D>, KernelConfig, &mut ChaCha8Rng) -> anyhow::Result<KernelSetup>,
+    /// Hands one run's learner to the protocol.
+    pub learner: ScopedLearner<D>,
 }
 
 /// The options resolved against the domain's defaults.
@@ -384,12 +384,8 @@ pub fn build_experiment<const D: usize>(
     let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            Some(Arc::new((h.setup)(
-                &sources,
-                config.setting,
-                config.spacing,
-                &mut rng,
-            )?))
+            let kernel = KernelConfig::new(config.setting, config.spacing);
+            Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }
         _ => None,
     };
@@ -409,7 +405,7 @@ pub fn build_experiment<const D: usize>(
         realistic_table,
         ideal_weights: None,
         kernel,
-        kernel_runner: hooks.map(|h| h.run),
+        kernel_learner: hooks.map(|h| h.learner),
     };
     experiment.variances()?;
     if wants(Algorithm::IwfqiIdeal) {
@@ -436,25 +432,19 @@ pub fn run_one<const D: usize>(
 ) -> anyhow::Result<RunRecord> {
     let start = Instant::now();
     let mut rng = stream(seed, &[RUN, algorithm.id(), run as u64]);
-    let (steps, samples) = if algorithm == Algorithm::AwfqiKernel {
-        let runner = experiment.kernel_runner.ok_or_else(|| {
-            anyhow!(
-                "awfqi-kernel is not available on {}",
-                experiment.domain.name
-            )
-        })?;
-        runner(experiment, &mut rng, &mut |_| on_step())?
-    } else {
-        let mut learner = experiment.learner(algorithm)?;
+    let mut outcome = None;
+    experiment.with_learner(algorithm, &mut rng, &mut |learner, rng| {
         let steps = protocol::run(
             &experiment.domain,
             &experiment.protocol,
-            learner.as_mut(),
-            &mut rng,
+            learner,
+            rng,
             |_| on_step(),
         )?;
-        (steps, learner.target_samples().to_vec())
-    };
+        outcome = Some((steps, learner.target_samples().to_vec()));
+        Ok(())
+    })?;
+    let (steps, samples) = outcome.ok_or_else(|| anyhow!("{} did not run", algorithm.name()))?;
     let samples = if run < SAMPLE_RUNS {
         samples
             .iter()

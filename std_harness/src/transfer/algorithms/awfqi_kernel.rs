@@ -8,11 +8,12 @@
 //! with the setting's rows whose values come from one fixed-capacity reward GP per source
 //! (realistic table, `V_r` only). The source records and their stored reward posteriors are
 //! the experiment's source data, converted to `f32`. Budget, steps, evaluation and records
-//! are the protocol's.
+//! are the protocol's: the kernel is a [`Learner`] that
+//! [`protocol::run`](crate::transfer::protocol::run) drives like every other algorithm.
 
 use std::time::Instant;
 
-use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
     AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, FqiEntry, Gp, GpTraining, Posterior,
     RowSet, ScoreTable, Scores, SubsetRule, Transition,
@@ -20,11 +21,13 @@ use awfqi::{
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use crate::transfer::protocol::{Diagnostics, StepRecord, evaluate_step};
+use crate::transfer::gp::GpSummary;
+use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::score_tables::Mode;
 use crate::transfer::sources::{Record, SourceSet};
 
-/// FQI cells per axis (cells about one unit step wide; see `tests/awfqi_puddle.rs`).
+/// FQI cells per axis by default (cells about one unit step wide; see
+/// `tests/awfqi_puddle.rs`).
 pub const CELLS: usize = 11;
 /// Capacity of every kernel GP.
 pub const GP_POINTS: usize = 64;
@@ -52,15 +55,37 @@ fn to_f64(r: &Record32) -> Record {
     }
 }
 
+/// Everything that configures the kernel path, in one place: options the kernel gains
+/// (another approximator, transition weights, …) belong here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KernelConfig {
+    /// Row mode of the score table.
+    pub mode: Mode,
+    /// Grid spacing of the score table.
+    pub spacing: f64,
+    /// FQI cells per axis of the tabular Q-function.
+    pub cells: usize,
+}
+
+impl KernelConfig {
+    /// The kernel with the setting's score table (`mode`, `spacing`) and [`CELLS`] cells per
+    /// axis.
+    pub fn new(mode: Mode, spacing: f64) -> Self {
+        Self {
+            mode,
+            spacing,
+            cells: CELLS,
+        }
+    }
+}
+
 /// What the kernel path builds once per experiment and shares by all runs (§11.2): the
 /// `f32` source data with their stored posteriors, and the values of its realistic score
 /// table.
 #[derive(Debug, Clone)]
 pub struct KernelSetup {
-    /// Row mode of the score table.
-    pub mode: Mode,
-    /// Grid spacing of the score table.
-    pub spacing: f64,
+    /// The kernel's configuration.
+    pub config: KernelConfig,
     records: Vec<Vec<Record32>>,
     /// Stored reward posteriors of all sources, source after source.
     posteriors: Vec<Posterior<T>>,
@@ -72,11 +97,10 @@ pub struct KernelSetup {
 impl KernelSetup {
     /// Converts the sources and builds the realistic score table from one
     /// `Gp<f32, 64, 3>` reward GP per source (an even spread of its records, the core's
-    /// reference training, [`ScoreTable::realistic`]), from the stream `rng`.
+    /// published training, [`ScoreTable::realistic`]), from the stream `rng`.
     pub fn new(
         sources: &SourceSet,
-        mode: Mode,
-        spacing: f64,
+        config: KernelConfig,
         rng: &mut ChaCha8Rng,
     ) -> anyhow::Result<Self> {
         let start = Instant::now();
@@ -92,7 +116,7 @@ impl KernelSetup {
             .map(|p| Posterior::new(p.mean as T, p.std as T))
             .collect();
         let slices: Vec<&[Record32]> = records.iter().map(Vec::as_slice).collect();
-        let rows = row_set(mode, spacing, &slices)?;
+        let rows = row_set(&config, &slices)?;
         let mut values = vec![Scores::ZERO; rows.len()];
         let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
         let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
@@ -108,8 +132,7 @@ impl KernelSetup {
             |_, _| Ok(()),
         )?;
         Ok(Self {
-            mode,
-            spacing,
+            config,
             records,
             posteriors,
             values,
@@ -119,107 +142,161 @@ impl KernelSetup {
 
     /// The kernel's fixed parameters for the result files.
     pub fn parameters(&self) -> serde_json::Value {
+        let cells = self.config.cells;
         serde_json::json!({
             "scalar": "f32",
-            "fqi_cells": [CELLS, CELLS],
+            "fqi_cells": [cells, cells],
             "gp_capacity": GP_POINTS,
             "gp_subset": "spread",
             "gp_search": "core Nelder-Mead, 10 restarts",
             "score_rows": self.values.len(),
-            "score_spacing": self.spacing,
+            "score_spacing": self.config.spacing,
         })
+    }
+
+    /// The source records, one slice per source (what the kernel borrows).
+    fn source_slices(&self) -> Vec<&[Record32]> {
+        self.records.iter().map(Vec::as_slice).collect()
     }
 }
 
 fn row_set<'a>(
-    mode: Mode,
-    spacing: f64,
+    config: &KernelConfig,
     slices: &'a [&'a [Record32]],
 ) -> anyhow::Result<RowSet<'a, T, 2>> {
-    let grid = PuddleWorld::score_grid(spacing as T)?;
-    Ok(match mode {
+    let grid = PuddleWorld::score_grid(config.spacing as T)?;
+    Ok(match config.mode {
         Mode::Source => RowSet::source_data(slices)?,
         Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
         Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, slices)?,
     })
 }
 
-/// One run of the kernel on the protocol: the builder's set-up from the shared source data
-/// and score values, then `K` steps of [`Awfqi::step`], each followed by the protocol's
-/// evaluation (in `f64`, of the greedy policy of the kernel's `f32` table). Returns the step
-/// records and `D₀`.
-pub fn run(
-    experiment: &Experiment,
-    rng: &mut ChaCha8Rng,
-    mut after_step: impl FnMut(&StepRecord),
-) -> anyhow::Result<(Vec<StepRecord>, Vec<Record>)> {
-    let setup = experiment
-        .kernel
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("no kernel set-up"))?;
-    let protocol = &experiment.protocol;
-    let slices: Vec<&[Record32]> = setup.records.iter().map(Vec::as_slice).collect();
-    let rows = row_set(setup.mode, setup.spacing, &slices)?;
-    let budget = experiment.budget();
-    // The kernel's memory, sized at run time.
-    let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
-    let mut samples = vec![Transition::EMPTY; protocol.steps * budget];
-    let mut weights = vec![0.0; setup.posteriors.len()];
-    let mut alias = vec![AliasEntry::EMPTY; rows.len()];
-    let mut fqi = vec![FqiEntry::EMPTY; CELLS * CELLS * PUDDLE_ACTIONS];
-    let buffers = AwfqiBuffers {
-        gp: &mut gp,
-        samples: &mut samples,
-        weights: &mut weights,
-        alias: &mut alias,
-        fqi: &mut fqi,
-    };
-    let dynamics = protocol
-        .dynamics
-        .ok_or_else(|| anyhow::anyhow!("awfqi-kernel runs on Puddle World only"))?;
-    let mut kernel = Awfqi::builder(
-        AwfqiConfig::thesis(budget).validate()?,
-        CellGrid::cube(0.0, 10.0, CELLS)?,
-        &slices,
-        rows,
-    )
-    .stored_posteriors(&setup.posteriors)
-    .stored_scores(&setup.values)
-    .build(PuddleWorld::target(dynamics), buffers, rng)?;
-    let mut steps = Vec::new();
-    for k in 1..=protocol.steps {
-        let start = Instant::now();
-        let report = kernel.step(rng)?;
-        let diagnostics = Diagnostics {
+/// The memory one run of the kernel writes, on the heap and sized at run time: what a
+/// firmware holds in an [`awfqi::AwfqiStorage`].
+#[derive(Debug)]
+pub struct KernelMemory {
+    gp: Box<Gp<T, GP_POINTS, 3>>,
+    samples: Vec<Record32>,
+    weights: Vec<T>,
+    alias: Vec<AliasEntry<T>>,
+    fqi: Vec<FqiEntry<T>>,
+}
+
+impl KernelMemory {
+    /// Room for `steps × budget` target samples, one weight per stored posterior, one alias
+    /// entry per score row and the FQI table of `setup`'s configuration.
+    pub fn new(setup: &KernelSetup, steps: usize, budget: usize) -> Self {
+        let cells = setup.config.cells;
+        Self {
+            gp: Box::new(Gp::<T, GP_POINTS, 3>::empty()),
+            samples: vec![Transition::EMPTY; steps * budget],
+            weights: vec![0.0; setup.posteriors.len()],
+            alias: vec![AliasEntry::EMPTY; setup.values.len()],
+            fqi: vec![FqiEntry::EMPTY; cells * cells * PUDDLE_ACTIONS],
+        }
+    }
+
+    fn buffers(&mut self) -> AwfqiBuffers<'_, T, 2, 3, GP_POINTS> {
+        AwfqiBuffers {
+            gp: &mut self.gp,
+            samples: &mut self.samples,
+            weights: &mut self.weights,
+            alias: &mut self.alias,
+            fqi: &mut self.fqi,
+        }
+    }
+}
+
+/// `awfqi-kernel` as a [`Learner`]: each protocol step is one [`Awfqi::step`] (score →
+/// draw → query → weights → weighted FQI); the greedy action is the `f32` table's, and `D₀`
+/// is kept in `f64` for the result files.
+pub struct KernelLearner<'a> {
+    kernel: Awfqi<'a, T, PuddleWorld<T>, 2, 3, GP_POINTS>,
+    collected: Vec<Record>,
+}
+
+impl<'a> KernelLearner<'a> {
+    /// The builder's set-up from the shared source data and score values (`sources` are
+    /// `setup`'s [`KernelSetup::source_slices`]) over `memory`, with a per-step budget, on
+    /// the Puddle World target of `dynamics`, from the stream `rng`.
+    fn new(
+        setup: &'a KernelSetup,
+        sources: &'a [&'a [Record32]],
+        memory: &'a mut KernelMemory,
+        budget: usize,
+        dynamics: Dynamics,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Self> {
+        let cells = setup.config.cells;
+        let kernel = Awfqi::builder(
+            AwfqiConfig::thesis(budget).validate()?,
+            CellGrid::cube(0.0, 10.0, cells)?,
+            sources,
+            row_set(&setup.config, sources)?,
+        )
+        .stored_posteriors(&setup.posteriors)
+        .stored_scores(&setup.values)
+        .build(PuddleWorld::target(dynamics), memory.buffers(), rng)?;
+        Ok(Self {
+            kernel,
+            collected: Vec::new(),
+        })
+    }
+}
+
+impl Learner for KernelLearner<'_> {
+    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+        let report = self.kernel.step(rng)?;
+        let new = &self.kernel.target_samples()[self.collected.len()..];
+        self.collected.extend(new.iter().map(to_f64));
+        let hyper = &report.gp_hyperparameters;
+        Ok(Diagnostics {
             n_source_samples: Some(report.n_source_samples),
             wr_mean: Some(f64::from(report.wr_mean)),
             wr_eff: Some(f64::from(report.wr_eff)),
             ws_mean: Some(f64::from(report.ws_mean)),
             ws_eff: Some(f64::from(report.ws_eff)),
-            reward_gp: Some(crate::transfer::gp::GpSummary {
+            reward_gp: Some(GpSummary {
                 points: report.gp_points,
-                signal_variance: f64::from(report.gp_hyperparameters.signal_variance),
-                length_scale: f64::from(report.gp_hyperparameters.length_scales[0]),
-                noise_variance: f64::from(report.gp_hyperparameters.noise_variance),
+                signal_variance: f64::from(hyper.signal_variance),
+                length_scale: f64::from(hyper.length_scales[0]),
+                noise_variance: f64::from(hyper.noise_variance),
                 log_marginal_likelihood: f64::from(report.gp_log_likelihood),
             }),
             ..Diagnostics::default()
-        };
-        let q = kernel.q();
-        let greedy = |s: &[f64; 2]| q.greedy_action([s[0] as T, s[1] as T]).unwrap_or(0);
-        let record = evaluate_step(
-            &experiment.domain,
-            protocol,
-            k,
-            &greedy,
-            report.n_target_samples,
-            diagnostics,
-            start,
-            rng,
-        )?;
-        after_step(&record);
-        steps.push(record);
+        })
     }
-    let collected = kernel.target_samples().iter().map(to_f64).collect();
-    Ok((steps, collected))
+
+    fn greedy_action(&self, s: &[f64; 2]) -> usize {
+        let state = [s[0] as T, s[1] as T];
+        self.kernel.q().greedy_action(state).unwrap_or(0)
+    }
+
+    fn target_samples(&self) -> &[Record] {
+        &self.collected
+    }
+}
+
+/// Hands a fresh kernel learner for one run of `experiment` to `f`: the kernel borrows its
+/// memory and the source data for the whole run, so they live in this frame while
+/// [`protocol::run`](crate::transfer::protocol::run) drives the learner inside `f`.
+pub fn with_learner(
+    experiment: &Experiment,
+    rng: &mut ChaCha8Rng,
+    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let setup = experiment
+        .kernel
+        .as_deref()
+        .ok_or_else(|| anyhow::anyhow!("no kernel set-up"))?;
+    let dynamics = experiment
+        .protocol
+        .dynamics
+        .ok_or_else(|| anyhow::anyhow!("awfqi-kernel runs on Puddle World only"))?;
+    let budget = experiment.budget();
+    let sources = setup.source_slices();
+    let mut memory = KernelMemory::new(setup, experiment.protocol.steps, budget);
+    let mut learner = KernelLearner::new(setup, &sources, &mut memory, budget, dynamics, rng)?;
+    f(&mut learner, rng)
 }

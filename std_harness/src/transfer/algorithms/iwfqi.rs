@@ -29,11 +29,11 @@ use awfqi::weights::{Estimator, WeightParams, WeightSummary, ideal_weight};
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::episodic::Episodic;
-use crate::domains::{Domain, GpInput, IdealMeans, Record};
+use super::episodic::{Episodic, EpisodicLearner};
+use crate::domains::{Domain, GpInput, IdealMeans};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
 use crate::transfer::gp::{Output, RecordGp};
-use crate::transfer::protocol::{Diagnostics, Learner};
+use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::ScoreTableData;
 use crate::transfer::sources::SourceSet;
 
@@ -228,8 +228,8 @@ pub fn ideal_weights<const D: usize>(
     Ok((wr, ws))
 }
 
-impl<const D: usize> Learner<D> for Iwfqi<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+impl<const D: usize> EpisodicLearner<D> for Iwfqi<'_, D> {
+    fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.query(rng)?;
         let (wr_source, ws_source, gp) = self.source_weights(rng)?;
         let n_target = self.run.data.len();
@@ -259,12 +259,8 @@ impl<const D: usize> Learner<D> for Iwfqi<'_, D> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+    fn episodic(&self) -> &Episodic<'_, D> {
+        &self.run
     }
 }
 

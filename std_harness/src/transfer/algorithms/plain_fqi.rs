@@ -4,10 +4,9 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::episodic::Episodic;
-use crate::domains::Record;
+use super::episodic::{Episodic, EpisodicLearner};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::transfer::protocol::{Diagnostics, Learner};
+use crate::transfer::protocol::Diagnostics;
 
 /// Plain FQI.
 #[derive(Debug, Clone)]
@@ -24,8 +23,8 @@ impl<'e, const D: usize> Fqi<'e, D> {
     }
 }
 
-impl<const D: usize> Learner<D> for Fqi<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+impl<const D: usize> EpisodicLearner<D> for Fqi<'_, D> {
+    fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.run.collect(rng)?;
         let data: Dataset<D> = self.run.data.iter().copied().collect();
         let options = self.run.options(FqiOptions::plain());
@@ -36,11 +35,7 @@ impl<const D: usize> Learner<D> for Fqi<'_, D> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+    fn episodic(&self) -> &Episodic<'_, D> {
+        &self.run
     }
 }

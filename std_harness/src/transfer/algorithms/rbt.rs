@@ -16,10 +16,10 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::episodic::Episodic;
+use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::Record;
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::transfer::protocol::{Diagnostics, Learner};
+use crate::transfer::protocol::Diagnostics;
 
 /// RBT's parameters (spec §8).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -223,8 +223,8 @@ impl<'e, const D: usize> Rbt<'e, D> {
     }
 }
 
-impl<const D: usize> Learner<D> for Rbt<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+impl<const D: usize> EpisodicLearner<D> for Rbt<'_, D> {
+    fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         use rayon::prelude::*;
         self.run.collect(rng)?;
         let sources = &self.experiment.sources.sources;
@@ -266,12 +266,8 @@ impl<const D: usize> Learner<D> for Rbt<'_, D> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+    fn episodic(&self) -> &Episodic<'_, D> {
+        &self.run
     }
 }
 
