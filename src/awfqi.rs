@@ -65,7 +65,7 @@ pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{FqiConfig, SampleSet, TabularFqi};
 use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, batch_transform, fit_gp, input};
+use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
 use crate::{Error, Real, Result};
@@ -473,13 +473,13 @@ fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     if records.is_empty() {
         return Ok(());
     }
-    let transform = batch_transform(gp, records, noise)?;
-    for ((w, r), &s) in out.iter_mut().zip(records).zip(posteriors) {
-        let p = gp.predict(&input(r.state, r.action))?;
-        let t = Posterior::new(p.mean, transform.apply(p.noisy_variance));
-        *w = params.weight(r.reward, t, s)?;
-    }
-    Ok(())
+    let mut slots = out.iter_mut().zip(posteriors);
+    visit_posteriors(gp, records, noise, |r, target| {
+        if let Some((w, &source)) = slots.next() {
+            *w = params.weight(r.reward, target, source)?;
+        }
+        Ok(())
+    })
 }
 
 #[cfg(test)]

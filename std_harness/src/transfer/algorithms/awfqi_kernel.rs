@@ -23,7 +23,7 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use crate::transfer::gp::GpSummary;
 use crate::transfer::protocol::{Diagnostics, Learner};
-use crate::transfer::score_tables::Mode;
+use crate::transfer::score_tables::{GridRows, Mode};
 use crate::transfer::sources::{Record, SourceSet};
 
 /// FQI cells per axis by default (cells about one unit step wide; see
@@ -165,11 +165,8 @@ fn row_set<'a>(
     slices: &'a [&'a [Record32]],
 ) -> anyhow::Result<RowSet<'a, T, 2>> {
     let grid = PuddleWorld::score_grid(config.spacing as T)?;
-    Ok(match config.mode {
-        Mode::Source => RowSet::source_data(slices)?,
-        Mode::Grid => RowSet::grid(grid, PUDDLE_ACTIONS)?,
-        Mode::Both => RowSet::both(grid, PUDDLE_ACTIONS, slices)?,
-    })
+    let grid = GridRows::Points(grid, PUDDLE_ACTIONS);
+    Ok(config.mode.row_set(grid, slices)?)
 }
 
 /// The memory one run of the kernel writes, on the heap and sized at run time: what a
