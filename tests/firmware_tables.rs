@@ -10,6 +10,12 @@
 //! UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables
 //! ```
 //!
+//! The second test does the same for the 32 KiB Puddle World footprint image
+//! (`tests/on_target/src/puddle_tables.rs`): the published shared-dynamics source records
+//! and their stored reward posteriors, and the realistic score table of the recommended
+//! configuration — exactly the set-up `std_harness/examples/kernel_capacity.rs` measures
+//! the return of (`24 11 1.25`).
+//!
 //! The heavy, one-off work (source GP fits on every record, the score table) happens here,
 //! on the host, with the same core code the device runs; the device only reads the tables.
 
@@ -268,6 +274,146 @@ fn committed_firmware_tables_are_what_the_generator_makes() {
     assert!(
         committed == text,
         "{TABLES} is not what tests/firmware_tables.rs generates; regenerate it with \
+         `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`"
+    );
+}
+
+/// The 32 KiB configuration's GP capacity and score-grid spacing (324 rows).
+const PUDDLE_GP_POINTS: usize = 24;
+const PUDDLE_SPACING: f32 = 1.25;
+const PUDDLE_TABLES: &str = "tests/on_target/src/puddle_tables.rs";
+
+#[test]
+fn committed_puddle_32k_tables_are_what_the_generator_makes() {
+    use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
+    use awfqi::{AliasEntry, Gp, GpTraining, ScoreTable, SubsetRule};
+    use awfqi_harness::puddle::sources::SourceSet;
+    use awfqi_harness::puddle::{SCORE_TABLE, stream};
+
+    let set = SourceSet::published(Dynamics::Shared).expect("published sources");
+    let records: Vec<Vec<Record>> = set
+        .sources
+        .iter()
+        .map(|s| {
+            s.records
+                .iter()
+                .map(|r| Transition {
+                    state: r.state.map(|x| x as f32),
+                    action: r.action,
+                    reward: r.reward as f32,
+                    next_state: r.next_state.map(|x| x as f32),
+                    absorbing: r.absorbing,
+                })
+                .collect()
+        })
+        .collect();
+    let posteriors: Vec<Posterior<f32>> = set
+        .sources
+        .iter()
+        .flat_map(|s| &s.reward)
+        .map(|p| Posterior::new(p.mean as f32, p.std as f32))
+        .collect();
+    let slices: Vec<&[Record]> = records.iter().map(Vec::as_slice).collect();
+    let rows = RowSet::grid(
+        PuddleWorld::score_grid(PUDDLE_SPACING).unwrap(),
+        PUDDLE_ACTIONS,
+    )
+    .unwrap();
+    assert_eq!(rows.len(), 324);
+    // The harness kernel path's realistic table (its stream), at this GP capacity.
+    let mut scores = vec![Scores::ZERO; rows.len()];
+    let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
+    let mut gp = Box::new(Gp::<f32, PUDDLE_GP_POINTS, 3>::empty());
+    ScoreTable::realistic(
+        rows,
+        &slices,
+        &mut gp,
+        &GpTraining::reference(),
+        SubsetRule::Spread,
+        &mut scores,
+        &mut scratch,
+        &mut stream(0, &[SCORE_TABLE, 100]),
+        |_, _| Ok(()),
+    )
+    .unwrap();
+    assert!(scores.iter().all(|v| v.reward >= 0.0) && scores.iter().any(|v| v.reward > 0.0));
+
+    let mut s = String::new();
+    let w = &mut s;
+    let lens: Vec<usize> = records.iter().map(Vec::len).collect();
+    let _ = writeln!(
+        w,
+        "//! Source data of the 32 KiB Puddle World footprint image, generated on the host by\n\
+         //! `tests/firmware_tables.rs` (do not edit; regenerate with\n\
+         //! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`): the published\n\
+         //! shared-dynamics source records and their stored reward posteriors, and the\n\
+         //! realistic score table (`V_r` from one {PUDDLE_GP_POINTS}-point reward GP per source) over the\n\
+         //! spacing-{PUDDLE_SPACING} puddle grid. All `static`: flash.\n\
+         \n\
+         use awfqi::{{Posterior, Scores, Transition}};\n\
+         \n\
+         /// Records of all sources.\n\
+         pub const SOURCE_RECORDS: usize = {};\n\
+         /// Candidate rows.\n\
+         pub const SCORE_ROWS: usize = {};\n\
+         \n\
+         const fn r(state: [f32; 2], action: usize, reward: f32, next_state: [f32; 2], absorbing: bool) -> Transition<[f32; 2], f32> {{\n\
+         \x20   Transition {{ state, action, reward, next_state, absorbing }}\n\
+         }}\n\
+         \n\
+         const fn p(mean: f32, std: f32) -> Posterior<f32> {{\n\
+         \x20   Posterior {{ mean, std }}\n\
+         }}\n\
+         \n\
+         const fn v(reward: f32, next_state: [f32; 2]) -> Scores<f32, 2> {{\n\
+         \x20   Scores {{ reward, next_state }}\n\
+         }}\n",
+        posteriors.len(),
+        scores.len()
+    );
+    for (k, (source, len)) in records.iter().zip(&lens).enumerate() {
+        let _ = writeln!(
+            w,
+            "/// Source {}'s records.\npub static SOURCE_{}: [Transition<[f32; 2], f32>; {len}] = [",
+            k + 1,
+            k + 1
+        );
+        for r in source {
+            let _ = writeln!(
+                w,
+                "    r({:?}, {}, {:?}, {:?}, {}),",
+                r.state, r.action, r.reward, r.next_state, r.absorbing
+            );
+        }
+        let _ = writeln!(w, "];\n");
+    }
+    let _ = writeln!(
+        w,
+        "/// The stored reward posteriors, source after source.\n\
+         pub static SOURCE_POSTERIORS: [Posterior<f32>; SOURCE_RECORDS] = ["
+    );
+    for p in &posteriors {
+        let _ = writeln!(w, "    p({:?}, {:?}),", p.mean, p.std);
+    }
+    let _ = writeln!(
+        w,
+        "];\n\n/// The score values of the candidate rows.\n\
+         pub static SCORES: [Scores<f32, 2>; SCORE_ROWS] = ["
+    );
+    for v in &scores {
+        let _ = writeln!(w, "    v({:?}, {:?}),", v.reward, v.next_state);
+    }
+    let _ = writeln!(w, "];");
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(PUDDLE_TABLES);
+    if std::env::var_os("UPDATE_FIRMWARE_TABLES").is_some() {
+        std::fs::write(&path, &s).expect("write the tables");
+        return;
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        committed == s,
+        "{PUDDLE_TABLES} is not what tests/firmware_tables.rs generates; regenerate it with \
          `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`"
     );
 }
