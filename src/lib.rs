@@ -39,7 +39,10 @@ pub use awfqi::{
 pub use dataset::{GpTraining, Output, SubsetRule};
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
-pub use fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+pub use fqi::{
+    Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, QFunction, SampleSet,
+    TabularFqi, TileFqi, Tilings,
+};
 pub use gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use score::{

@@ -205,7 +205,7 @@ fn awfqi_recovers_the_closed_form_policy_at_four_dimensions() {
 
     // The greedy policy is π* in every cell whose centre is clearly on one side.
     let q = kernel.q();
-    let grid = *q.grid();
+    let grid = *q.as_tabular().unwrap().grid();
     let mut checked = 0;
     for cell in 0..grid.len() {
         let centre = grid.center(cell).unwrap();
@@ -251,7 +251,7 @@ fn awfqi_recovers_the_closed_form_policy_at_four_dimensions() {
 
 /// The greedy policy of a Q-function as a [`Policy`].
 fn greedy<'q, T: Real, const D: usize>(
-    q: &'q awfqi::TabularFqi<'_, T, D>,
+    q: &'q awfqi::QFunction<'_, T, D>,
 ) -> impl Policy<[T; D]> + 'q {
     move |s: &[T; D]| q.greedy_action(*s)
 }
