@@ -64,6 +64,16 @@ pub enum NoiseArg {
     Principled,
 }
 
+/// The Q-function approximator of `awfqi-kernel`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KernelQ {
+    /// One table of `--kernel-resolution` cells per axis (spec §5.1).
+    Tabular,
+    /// Tile coding: `--kernel-tilings` offset tilings of `--kernel-resolution` tiles per
+    /// axis, averaged (the core's `TileFqi`).
+    Tiles,
+}
+
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
 /// the domain's default (see each command's help).
 #[derive(Debug, Clone, ClapArgs)]
@@ -150,6 +160,16 @@ pub struct Args {
     /// World −25, Dam −1000, Acrobot −50.
     #[arg(long, allow_hyphen_values = true)]
     pub threshold: Option<f64>,
+    /// Q-function approximator of awfqi-kernel's FQI.
+    #[arg(long, value_enum, default_value = "tabular")]
+    pub kernel_q: KernelQ,
+    /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
+    /// the table, 6 for tiles.
+    #[arg(long)]
+    pub kernel_resolution: Option<usize>,
+    /// Offset tilings of `--kernel-q tiles`.
+    #[arg(long, default_value_t = 4)]
+    pub kernel_tilings: usize,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -383,12 +403,12 @@ pub fn build_experiment<const D: usize>(
     let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            Some(Arc::new((h.setup)(
-                &sources,
-                config.setting,
-                config.spacing,
-                &mut rng,
-            )?))
+            let setup = (h.setup)(&sources, config.setting, config.spacing, &mut rng)?;
+            Some(Arc::new(setup.with_q(kernel::KernelQFunction::from_args(
+                args.kernel_q,
+                args.kernel_resolution,
+                args.kernel_tilings,
+            )?)))
         }
         _ => None,
     };

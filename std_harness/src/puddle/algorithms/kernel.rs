@@ -14,8 +14,9 @@ use std::time::Instant;
 
 use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
-    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, FqiEntry, Gp, GpTraining, Posterior,
-    RowSet, ScoreTable, Scores, SubsetRule, Transition,
+    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, FqiEntry, Gp,
+    GpTraining, Posterior, RowSet, ScoreTable, Scores, SubsetRule, Tilings, Transition,
+    WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -26,6 +27,50 @@ use crate::puddle::sources::{Record, SourceSet};
 
 /// FQI cells per axis (cells about one unit step wide; see `tests/awfqi_puddle.rs`).
 pub const CELLS: usize = 11;
+/// Tiles per axis of `--kernel-q tiles` by default.
+pub const TILES: usize = 6;
+
+/// The Q-function approximator of the kernel's FQI (`--kernel-q`, `--kernel-resolution`,
+/// `--kernel-tilings`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KernelQFunction {
+    /// A table of this many cells per axis.
+    Tabular(usize),
+    /// Tile coding: tiles per axis, tilings.
+    Tiles(usize, usize),
+}
+
+impl KernelQFunction {
+    /// The approximator the options name.
+    ///
+    /// Errors: a zero resolution or tiling count.
+    pub fn from_args(
+        q: crate::commands::transfer::KernelQ,
+        resolution: Option<usize>,
+        tilings: usize,
+    ) -> anyhow::Result<Self> {
+        use crate::commands::transfer::KernelQ;
+        let out = match q {
+            KernelQ::Tabular => Self::Tabular(resolution.unwrap_or(CELLS)),
+            KernelQ::Tiles => Self::Tiles(resolution.unwrap_or(TILES), tilings),
+        };
+        match out {
+            Self::Tabular(0) | Self::Tiles(0, _) => {
+                anyhow::bail!("--kernel-resolution must be at least 1")
+            }
+            Self::Tiles(_, 0) => anyhow::bail!("--kernel-tilings must be at least 1"),
+            _ => Ok(out),
+        }
+    }
+
+    /// The core's approximator over Puddle World's `[0, 10]²`.
+    fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
+        Ok(match self {
+            Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
+            Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
+        })
+    }
+}
 /// Capacity of every kernel GP.
 pub const GP_POINTS: usize = 64;
 
@@ -65,8 +110,13 @@ pub struct KernelSetup {
     /// Stored reward posteriors of all sources, source after source.
     posteriors: Vec<Posterior<T>>,
     values: Vec<Scores<T, 2>>,
+    /// Stored next-state posteriors of all sources, record after record, 2 per record
+    /// (empty when the sources have none).
+    transition_posteriors: Vec<Posterior<T>>,
     /// Wall time of the set-up (source GP fits and score table), seconds.
     pub setup_seconds: f64,
+    /// The FQI approximator.
+    pub q: KernelQFunction,
 }
 
 impl KernelSetup {
@@ -107,27 +157,56 @@ impl KernelSetup {
             rng,
             |_, _| Ok(()),
         )?;
+        let transition_posteriors = sources
+            .sources
+            .iter()
+            .flat_map(|s| {
+                (0..s.records.len()).flat_map(move |i| {
+                    s.next_state
+                        .iter()
+                        .filter_map(move |dim| dim.get(i))
+                        .map(|p| Posterior::new(p.mean as T, p.std as T))
+                })
+            })
+            .collect();
         Ok(Self {
             mode,
             spacing,
             records,
             posteriors,
             values,
+            transition_posteriors,
             setup_seconds: start.elapsed().as_secs_f64(),
+            q: KernelQFunction::Tabular(CELLS),
         })
+    }
+
+    /// The same set-up with another FQI approximator.
+    pub fn with_q(self, q: KernelQFunction) -> Self {
+        Self { q, ..self }
     }
 
     /// The kernel's fixed parameters for the result files.
     pub fn parameters(&self) -> serde_json::Value {
-        serde_json::json!({
+        let fqi_cells = match self.q {
+            KernelQFunction::Tabular(n) => n,
+            // Tile coding is described by its own keys below.
+            KernelQFunction::Tiles(..) => 0,
+        };
+        let mut out = serde_json::json!({
             "scalar": "f32",
-            "fqi_cells": [CELLS, CELLS],
+            "fqi_cells": [fqi_cells, fqi_cells],
             "gp_capacity": GP_POINTS,
             "gp_subset": "spread",
             "gp_search": "core Nelder-Mead, 10 restarts",
             "score_rows": self.values.len(),
             "score_spacing": self.spacing,
-        })
+        });
+        if let KernelQFunction::Tiles(n, k) = self.q {
+            out["fqi_tiles"] = serde_json::json!([n, n]);
+            out["fqi_tilings"] = k.into();
+        }
+        out
     }
 }
 
@@ -166,7 +245,23 @@ pub fn run(
     let mut samples = vec![Transition::EMPTY; protocol.steps * budget];
     let mut weights = vec![0.0; setup.posteriors.len()];
     let mut alias = vec![AliasEntry::EMPTY; rows.len()];
-    let mut fqi = vec![FqiEntry::EMPTY; CELLS * CELLS * PUDDLE_ACTIONS];
+    let approximator = setup.q.approximator()?;
+    let entries = approximator
+        .required_entries(PUDDLE_ACTIONS)
+        .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
+    let mut fqi = vec![FqiEntry::EMPTY; entries];
+    // Transition weights as IWFQI has them here (§7.6: on for puddle-based dynamics), on
+    // every coordinate, with the estimator variance v_s of the experiment.
+    let transition_weights = experiment.transition_weights();
+    let mut ws = vec![
+        0.0;
+        if transition_weights {
+            setup.posteriors.len()
+        } else {
+            0
+        }
+    ];
+    let (_, v_s) = experiment.variances()?;
     let buffers = AwfqiBuffers {
         gp: &mut gp,
         samples: &mut samples,
@@ -177,15 +272,25 @@ pub fn run(
     let dynamics = protocol
         .dynamics
         .ok_or_else(|| anyhow::anyhow!("awfqi-kernel runs on Puddle World only"))?;
-    let mut kernel = Awfqi::builder(
+    let mut builder = Awfqi::builder(
         AwfqiConfig::thesis(budget).validate()?,
-        CellGrid::cube(0.0, 10.0, CELLS)?,
+        approximator,
         &slices,
         rows,
     )
     .stored_posteriors(&setup.posteriors)
-    .stored_scores(&setup.values)
-    .build(PuddleWorld::target(dynamics), buffers, rng)?;
+    .stored_scores(&setup.values);
+    if transition_weights {
+        if setup.transition_posteriors.len() != 2 * setup.posteriors.len() {
+            anyhow::bail!("transition weights need the sources' stored next-state posteriors");
+        }
+        builder = builder.transition_weights(
+            WeightParams::new(Estimator::Mean, v_s as T, 1000.0)?,
+            &setup.transition_posteriors,
+            &mut ws,
+        );
+    }
+    let mut kernel = builder.build(PuddleWorld::target(dynamics), buffers, rng)?;
     let mut steps = Vec::new();
     for k in 1..=protocol.steps {
         let start = Instant::now();
