@@ -14,10 +14,15 @@
 //! 4. give every source record its **reward weight** (§7.3 estimator, `v_r`, `w_max`) from
 //!    the target GP's posterior at the record's `z`, noise-subtracted over each source's
 //!    batch, and the source GP posterior stored with the source data (§6 step 3);
-//! 5. run **weighted tabular FQI** ([`TabularFqi`]) on `D₀` (weight 1) followed by the
-//!    sources in order; iteration 1 fits the reward model with the reward weights, later
-//!    iterations use transition weights, which are all 1 (the shared-dynamics
-//!    configuration of §7.6 that §12 prescribes: `weight_st = (off, off)`).
+//! 5. run **weighted FQI** — the table ([`crate::TabularFqi`]) or tile coding
+//!    ([`crate::TileFqi`]), the builder's [`crate::fqi::Approximator`] — on `D₀` (weight 1)
+//!    followed by the sources in order; iteration 1 fits the reward model with the reward
+//!    weights, later iterations use transition weights. These are all 1 by default (the
+//!    shared-dynamics configuration of §7.6 that §12 prescribes: `weight_st = (off, off)`);
+//!    with [`AwfqiBuilder::transition_weights`] each step first fits one target GP per
+//!    next-state coordinate in turn (in the same GP, before the reward GP) and weighs
+//!    every source record by the product over coordinates of the §7.3 estimator against
+//!    the stored source next-state posteriors (§7.2 step 4).
 //!
 //! The caller evaluates the greedy policy between steps ([`Awfqi::q`],
 //! [`crate::evaluation::evaluate_greedy`]) — nothing here depends on the evaluation.
