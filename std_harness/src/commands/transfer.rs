@@ -141,7 +141,8 @@ pub struct Args {
     pub noise: NoiseArg,
     /// Transition weights of IWFQI on (every state coordinate) or off (default: the
     /// published configuration: off for shared, on for puddle dynamics, spec §7.6; the
-    /// Dam's storage; Acrobot's four coordinates).
+    /// Dam's storage; Acrobot's four coordinates). awfqi-kernel weighs transitions only
+    /// with `true` (spec §12.1).
     #[arg(long)]
     pub transition_weights: Option<bool>,
     /// How IWFQI-ideal gets the models' mean next states (default: the published way:

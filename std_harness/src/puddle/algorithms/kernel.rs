@@ -6,7 +6,7 @@
 //! (the core's [`SubsetRule::Spread`]) with the core's bounded Nelder–Mead search,
 //! weighted FQI by tile coding ([`TILINGS`] offset tilings of [`TILES`] × [`TILES`] tiles;
 //! `--kernel-q tabular` for the [`CELLS`] × [`CELLS`] table) instead of Extra-Trees,
-//! transition weights where IWFQI has them (puddle-based dynamics), and a score table
+//! transition weights on request (`--transition-weights true`), and a score table
 //! with the setting's rows whose values come from one fixed-capacity reward GP per source
 //! (realistic table, `V_r` only). The source records and their stored reward posteriors are
 //! the experiment's source data, converted to `f32`. Budget, steps, evaluation and records
@@ -253,9 +253,11 @@ pub fn run(
         .required_entries(PUDDLE_ACTIONS)
         .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
     let mut fqi = vec![FqiEntry::EMPTY; entries];
-    // Transition weights as IWFQI has them here (§7.6: on for puddle-based dynamics), on
-    // every coordinate, with the estimator variance v_s of the experiment.
-    let transition_weights = experiment.transition_weights();
+    // Transition weights only on request (`--transition-weights true`), on every
+    // coordinate, with the estimator variance v_s of the experiment: the active algorithms
+    // run without them (§12), and on this small-GP path they were measured to hurt under
+    // puddle-based dynamics (§12.1).
+    let transition_weights = experiment.options.transition_weights == Some(true);
     let mut ws = vec![
         0.0;
         if transition_weights {
