@@ -14,9 +14,9 @@
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
-    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells, Error, FqiConfig, FqiEntry,
-    GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real, RowSet, ScoreColumn, Scores,
-    SourceMeans, SourceModel, SubsetRule, Tilings, Transition, WeightParams,
+    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells, Error,
+    FqiConfig, FqiEntry, GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real, RowSet,
+    ScoreColumn, Scores, SourceMeans, SourceModel, SubsetRule, Tilings, Transition, WeightParams,
 };
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, kind, trace};
 use libfuzzer_sys::fuzz_target;
@@ -130,8 +130,7 @@ fn run<T: Real, G, const D: usize, const I: usize>(
     b: &mut Bytes,
     plant: Plant<G, D>,
     options: Options,
-)
-where
+) where
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy + core::fmt::Debug,
 {
     // Configuration.
@@ -247,12 +246,7 @@ where
         .collect();
     let mut computed = vec![Scores::<T, D>::ZERO; size(b, rows.len())];
     let approximator: Approximator<T, D> = if options.tiles {
-        match Tilings::cube(
-            T::from_f64(low),
-            T::from_f64(high),
-            b.index(4),
-            b.index(5),
-        ) {
+        match Tilings::cube(T::from_f64(low), T::from_f64(high), b.index(4), b.index(5)) {
             Ok(t) => t.into(),
             Err(e) => {
                 expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
@@ -269,7 +263,14 @@ where
     } else {
         Vec::new()
     };
-    let mut transition_weights = vec![T::ZERO; if options.transitions { size(b, total) } else { 0 }];
+    let mut transition_weights = vec![
+        T::ZERO;
+        if options.transitions {
+            size(b, total)
+        } else {
+            0
+        }
+    ];
     let builder = Awfqi::builder(config, approximator, &slices, rows);
     let builder = if options.transitions {
         builder.transition_weights(
@@ -314,7 +315,10 @@ where
     let mut samples = vec![Transition::EMPTY; size(b, steps * config.budget)];
     let mut weights = vec![T::ZERO; size(b, total)];
     let mut alias = vec![AliasEntry::EMPTY; size(b, rows.len())];
-    let needed = approximator.required_entries(actions).unwrap_or(usize::MAX).min(1 << 16);
+    let needed = approximator
+        .required_entries(actions)
+        .unwrap_or(usize::MAX)
+        .min(1 << 16);
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
     let buffers = AwfqiBuffers {
         gp: &mut gp,
