@@ -67,10 +67,10 @@ pub mod builder;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 
-use crate::dataset::{GpTraining, InputDim, Output, SubsetRule, batch_transform, fit_gp, input};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, FqiConfig, QFunction, SampleSet};
 use crate::gp::{Gp, Hyperparameters};
+use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
 use crate::{Error, Real, Result};
@@ -113,8 +113,8 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
             weights: WeightParams::reference_reward(),
             noise_subtraction: NoiseSubtraction::Reference,
             subset: SubsetRule::Spread,
-            gp_training: GpTraining::reference(),
-            fqi: FqiConfig::reference(),
+            gp_training: GpTraining::published(),
+            fqi: FqiConfig::published(),
             sampling: ScoreColumn::Reward,
         }
     }
@@ -161,7 +161,7 @@ type Records<'a, T, const D: usize> = &'a [Transition<[T; D], T>];
 
 /// The source datasets with what §6 stores with them: the records, one slice per source,
 /// and per record the posterior `(μ^s_r, σ^s_r)` of its source's reward GP at the record's
-/// own `z` (noise-subtracted; see [`crate::dataset::predict_posteriors`]), all sources'
+/// own `z` (noise-subtracted; see [`crate::record_gp::predict_posteriors`]), all sources'
 /// posteriors in one slice, source after source.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SourceData<'a, T, const D: usize> {
@@ -543,13 +543,13 @@ fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     if records.is_empty() {
         return Ok(());
     }
-    let transform = batch_transform(gp, records, noise)?;
-    for ((w, r), &s) in out.iter_mut().zip(records).zip(posteriors) {
-        let p = gp.predict(&input(r.state, r.action))?;
-        let t = Posterior::new(p.mean, transform.apply(p.noisy_variance));
-        *w = params.weight(r.reward, t, s)?;
-    }
-    Ok(())
+    let mut slots = out.iter_mut().zip(posteriors);
+    visit_posteriors(gp, records, noise, |r, target| {
+        if let Some((w, &source)) = slots.next() {
+            *w = params.weight(r.reward, target, source)?;
+        }
+        Ok(())
+    })
 }
 
 /// Multiplies `out[i]` by the weight of coordinate `d` of record `i`'s next state under the
@@ -568,23 +568,21 @@ fn transition_weights_of<T: Real, const N: usize, const D: usize, const I: usize
     if records.is_empty() {
         return Ok(());
     }
-    let transform = batch_transform(gp, records, noise)?;
-    for (i, (w, r)) in out.iter_mut().zip(records).enumerate() {
-        let p = gp.predict(&input(r.state, r.action))?;
-        let t = Posterior::new(p.mean, transform.apply(p.noisy_variance));
-        let s = posteriors
-            .get(i * D + d)
-            .copied()
-            .ok_or(Error::InvalidParameter {
-                parameter: "transition_posteriors",
-            })?;
+    let mut slots = out.iter_mut().zip(posteriors.chunks_exact(D));
+    visit_posteriors(gp, records, noise, |r, target| {
+        let Some((w, source)) = slots.next() else {
+            return Ok(());
+        };
+        let s = source.get(d).copied().ok_or(Error::InvalidParameter {
+            parameter: "transition_posteriors",
+        })?;
         let y = r.next_state.get(d).copied().ok_or(Error::OutOfRange {
             parameter: "output",
         })?;
-        let w_d = params.weight(y, t, s)?;
+        let w_d = params.weight(y, target, s)?;
         *w = if d == 0 { w_d } else { *w * w_d };
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 #[cfg(test)]

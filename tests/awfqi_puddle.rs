@@ -97,7 +97,7 @@ fn plain_fqi_on_episodes(
                 episode(env, &mut policy, &mut data, rng);
             }
         }
-        fqi.fit(&[SampleSet::unweighted(&data)], &FqiConfig::reference())
+        fqi.fit(&[SampleSet::unweighted(&data)], &FqiConfig::published())
             .unwrap();
         after_step(step + 1, &fqi, &data);
     }
@@ -136,7 +136,7 @@ fn source_dataset(env: &PuddleWorld<T>, seed: u64) -> Vec<Record> {
 /// search budget (2 restarts, 120 likelihood evaluations) to keep the debug build fast, the
 /// measurement the reference's (10 restarts, 550 evaluations).
 fn training(reference: bool) -> GpTraining<T, 3> {
-    let mut t = GpTraining::reference();
+    let mut t = GpTraining::published();
     if !reference {
         t.search.restarts = 2;
         t.search.max_evaluations = 120;

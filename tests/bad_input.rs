@@ -5,7 +5,6 @@
 //! were. Run in `f32` (the microcontroller's precision) and `f64` where the code is generic.
 
 use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::dataset::{GpTraining, Output, SubsetRule, batch_transform, fit_gp, predict_posteriors};
 use awfqi::env::{
     Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld, Transition,
 };
@@ -16,6 +15,9 @@ use awfqi::fqi::{
 };
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi::record_gp::{
+    GpTraining, Output, SubsetRule, batch_transform, fit_gp, predict_posteriors,
+};
 use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans, SourceModel};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
@@ -735,7 +737,7 @@ fn record<T: Real>(i: usize) -> Transition<[T; 2], T> {
 
 fn dataset_calls<T: Real>() {
     let mut gp3 = Gp::<T, 8, 3>::empty();
-    let training = GpTraining::<T, 3>::reference();
+    let training = GpTraining::<T, 3>::published();
     let mut r = rng();
     assert_eq!(
         err(fit_gp(
@@ -831,7 +833,7 @@ fn fqi_calls<T: Real>() {
             nf("empty_cells")
         );
         assert_eq!(
-            err(FqiConfig::<T>::reference().with_min_weight(x)),
+            err(FqiConfig::<T>::published().with_min_weight(x)),
             nf("min_weight")
         );
     }
@@ -866,7 +868,7 @@ fn fqi_calls<T: Real>() {
         inv("iterations")
     );
     assert_eq!(
-        err(FqiConfig::<T>::reference().with_min_weight(t(-1.0))),
+        err(FqiConfig::<T>::published().with_min_weight(t(-1.0))),
         inv("min_weight")
     );
 

@@ -120,7 +120,7 @@ fn config() -> AwfqiConfig<T, 2> {
     let mut config = AwfqiConfig::thesis(BUDGET);
     config.gp_training.search.max_evaluations = 150;
     config.gp_training.search.restarts = 2;
-    config.fqi = FqiConfig::reference();
+    config.fqi = FqiConfig::published();
     config
 }
 

@@ -12,10 +12,10 @@
 
 use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
-use crate::dataset::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
+use crate::record_gp::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
 use crate::weights::{Posterior, WeightParams};
 use crate::{Error, Real, Result};

@@ -610,7 +610,7 @@ mod tests {
         let mut storage = vec![FqiEntry::EMPTY; 96];
         let mut fqi = TileFqi::new(tilings, 3, &mut storage).unwrap();
         let mut samples = random_samples(&mut ChaCha8Rng::seed_from_u64(3), 20);
-        let config = FqiConfig::reference();
+        let config = FqiConfig::published();
         fqi.fit(&[SampleSet::unweighted(&samples)], &config)
             .unwrap();
         let before = fqi.entries().to_vec();

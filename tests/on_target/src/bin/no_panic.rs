@@ -12,12 +12,12 @@
 use core::hint::black_box as opaque;
 
 use awfqi::alias::AliasTable;
-use awfqi::dataset::{batch_transform, fit_gp, input, predict_posteriors};
+use awfqi::record_gp::{batch_transform, fit_gp, input, predict_posteriors};
 use awfqi::env::{
     Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
     Puddle, PuddleWorld,
 };
-use awfqi::identify::score::{mutual_information_score, uniform_score, variance_score};
+use awfqi::identify::query_score::{mutual_information_score, uniform_score, variance_score};
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, StateAction, belief_weighted_policy,
     belief_weighted_q, compute_score, draw_pair, draw_pairs, log_likelihood, run_queries,
@@ -532,7 +532,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         SubsetRule::Last
     };
     keep(rule.indices(index(12), index(5)).fold(0, |a, i| a + i));
-    let mut training = GpTraining::<T, I>::reference();
+    let mut training = GpTraining::<T, I>::published();
     training.search.max_evaluations = index(20);
     training.search.restarts = index(1);
     keep(training.validate());
@@ -575,7 +575,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
             };
             let config = FqiConfig::new(num::<T>(0.9), index(5), empty)
                 .and_then(|c| c.with_min_weight(num(0.5)))
-                .unwrap_or_else(|_| FqiConfig::reference());
+                .unwrap_or_else(|_| FqiConfig::published());
             keep((
                 config.discount(),
                 config.iterations(),
@@ -627,7 +627,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         keep((tilings.tiles(), tilings.count(), tilings.tiles_per_tiling()));
         keep(TileFqi::<T, D>::required_entries(&tilings, index(4)));
         let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
-            .unwrap_or_else(|_| FqiConfig::reference());
+            .unwrap_or_else(|_| FqiConfig::published());
         let w = [num::<T>(0.5); 12];
         let sets = [
             SampleSet::unweighted(&records[..6]),
