@@ -38,7 +38,10 @@ pub use awfqi::{
 };
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
-pub use fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+pub use fqi::{
+    Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, QFunction, SampleSet,
+    TabularFqi, TileFqi, Tilings,
+};
 pub use gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use record_gp::{GpTraining, Output, SubsetRule};

@@ -1,5 +1,6 @@
 extern crate std;
 use super::*;
+use crate::TabularFqi;
 use crate::alias::AliasEntry;
 use crate::env::{Dynamics, PuddleWorld};
 use crate::fqi::{CellGrid, FqiEntry};

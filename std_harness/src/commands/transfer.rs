@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
-use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelSetup};
+use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, KernelSetup};
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
@@ -63,6 +63,16 @@ pub enum NoiseArg {
     Reference,
     /// `√max(v − σ²ₙ, 0)`.
     Principled,
+}
+
+/// The Q-function approximator of `awfqi-kernel`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KernelQ {
+    /// One table of `--kernel-resolution` cells per axis (spec §5.1).
+    Tabular,
+    /// Tile coding: `--kernel-tilings` offset tilings of `--kernel-resolution` tiles per
+    /// axis, averaged (the core's `TileFqi`).
+    Tiles,
 }
 
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
@@ -132,7 +142,8 @@ pub struct Args {
     pub noise: NoiseArg,
     /// Transition weights of IWFQI on (every state coordinate) or off (default: the
     /// published configuration: off for shared, on for puddle dynamics, spec §7.6; the
-    /// Dam's storage; Acrobot's four coordinates).
+    /// Dam's storage; Acrobot's four coordinates). awfqi-kernel weighs transitions only
+    /// with `true` (spec §12.1).
     #[arg(long)]
     pub transition_weights: Option<bool>,
     /// How IWFQI-ideal gets the models' mean next states (default: the published way:
@@ -151,6 +162,17 @@ pub struct Args {
     /// World −25, Dam −1000, Acrobot −50.
     #[arg(long, allow_hyphen_values = true)]
     pub threshold: Option<f64>,
+    /// Q-function approximator of awfqi-kernel's FQI (`tabular`: the 11 × 11 table of
+    /// spec §12.1 before tile coding became the default, measured worse).
+    #[arg(long, value_enum, default_value = "tiles")]
+    pub kernel_q: KernelQ,
+    /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
+    /// the table, 6 for tiles.
+    #[arg(long)]
+    pub kernel_resolution: Option<usize>,
+    /// Offset tilings of `--kernel-q tiles`.
+    #[arg(long, default_value_t = 4)]
+    pub kernel_tilings: usize,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -384,7 +406,13 @@ pub fn build_experiment<const D: usize>(
     let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            let kernel = KernelConfig::new(config.setting, config.spacing);
+            let kernel = KernelConfig::new(config.setting, config.spacing).with_q(
+                KernelQFunction::from_args(
+                    args.kernel_q,
+                    args.kernel_resolution,
+                    args.kernel_tilings,
+                )?,
+            );
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }
         _ => None,
