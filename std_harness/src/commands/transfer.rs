@@ -25,6 +25,7 @@ use rayon::prelude::*;
 
 use crate::commands::identify::RunRange;
 use crate::domains::{Domain, IdealMeans};
+use crate::puddle::algorithms::adaptive::{AdaptiveOptions, AdaptiveSetup};
 use crate::puddle::algorithms::{
     Algorithm, Experiment, KernelRunner, TransferOptions, Variances, kernel,
 };
@@ -159,6 +160,62 @@ pub struct Args {
     /// Compute nothing: summarise and plot the runs of this configuration already in --out.
     #[arg(long)]
     pub no_run: bool,
+    /// awfqi-adaptive: sub-batches (re-planning points) per step.
+    #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
+    pub adaptive_sub_batches: usize,
+    /// awfqi-adaptive: share of each sub-batch spent verifying the greedy policy.
+    #[arg(long, default_value_t = AdaptiveOptions::default().verify)]
+    pub adaptive_verify: f64,
+    /// awfqi-adaptive: score rows by residual surprise.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise)]
+    pub adaptive_surprise: bool,
+    /// awfqi-adaptive: scale scores by the residual GP's remaining variance.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().uncertainty)]
+    pub adaptive_uncertainty: bool,
+    /// awfqi-adaptive: weight rows by closeness to the verified greedy paths.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().decision)]
+    pub adaptive_decision: bool,
+    /// awfqi-adaptive: source-informed prior mean of the weights' target reward GP.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().prior)]
+    pub adaptive_prior: bool,
+    /// awfqi-adaptive: coverage floor (share of the drawn probability spread uniformly).
+    #[arg(long, default_value_t = AdaptiveOptions::default().floor)]
+    pub adaptive_floor: f64,
+    /// awfqi-adaptive: candidate rows scored per sub-batch.
+    #[arg(long, default_value_t = AdaptiveOptions::default().candidates)]
+    pub adaptive_candidates: usize,
+    /// awfqi-adaptive: trees of the intermediate plans.
+    #[arg(long, default_value_t = AdaptiveOptions::default().plan_trees)]
+    pub adaptive_plan_trees: usize,
+    /// awfqi-adaptive: relevance-kernel width (share of each state coordinate's range).
+    #[arg(long, default_value_t = AdaptiveOptions::default().relevance_width)]
+    pub adaptive_relevance_width: f64,
+    /// awfqi-adaptive: FQI's rewards from the target reward model.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().model_rewards)]
+    pub adaptive_model_rewards: bool,
+    /// awfqi-adaptive: weigh source records by their source's plausibility.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().source_weights)]
+    pub adaptive_source_weights: bool,
+}
+
+impl Args {
+    /// awfqi-adaptive's options.
+    pub fn adaptive(&self) -> AdaptiveOptions {
+        AdaptiveOptions {
+            sub_batches: self.adaptive_sub_batches,
+            verify: self.adaptive_verify,
+            surprise: self.adaptive_surprise,
+            uncertainty: self.adaptive_uncertainty,
+            decision: self.adaptive_decision,
+            prior: self.adaptive_prior,
+            floor: self.adaptive_floor,
+            candidates: self.adaptive_candidates,
+            plan_trees: self.adaptive_plan_trees,
+            relevance_width: self.adaptive_relevance_width,
+            model_rewards: self.adaptive_model_rewards,
+            source_weights: self.adaptive_source_weights,
+        }
+    }
 }
 
 /// A command's defaults for the options left out.
@@ -368,17 +425,33 @@ pub fn build_experiment<const D: usize>(
     } else {
         None
     };
-    let realistic_table = if wants(Algorithm::Awfqi) {
-        let gps = score_tables::fit_source_gps(&domain, &sources, &options.gp, args.seed)?;
-        Some(Arc::new(ScoreTableData::realistic(
+    // The realistic table's source GPs also serve awfqi-adaptive (same streams).
+    let source_gps = if wants(Algorithm::Awfqi) || wants(Algorithm::AwfqiAdaptive) {
+        Some(score_tables::fit_source_gps(
+            &domain,
+            &sources,
+            &options.gp,
+            args.seed,
+        )?)
+    } else {
+        None
+    };
+    let realistic_table = match &source_gps {
+        Some(gps) if wants(Algorithm::Awfqi) => Some(Arc::new(ScoreTableData::realistic(
             &domain,
             config.setting,
             &sources,
-            &gps,
+            gps,
             config.spacing,
-        )?))
-    } else {
-        None
+        )?)),
+        _ => None,
+    };
+    let adaptive = match source_gps {
+        Some(gps) if wants(Algorithm::AwfqiAdaptive) => {
+            let rows = score_tables::rows(&domain, config.setting, &sources, config.spacing)?;
+            Some(Arc::new(AdaptiveSetup::new(&domain, rows, &sources, gps)))
+        }
+        _ => None,
     };
     let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
         (true, Some(h)) => {
@@ -409,6 +482,8 @@ pub fn build_experiment<const D: usize>(
         ideal_weights: None,
         kernel,
         kernel_runner: hooks.map(|h| h.run),
+        adaptive,
+        adaptive_options: args.adaptive(),
     };
     experiment.variances()?;
     if wants(Algorithm::IwfqiIdeal) {
@@ -477,7 +552,7 @@ pub fn run_one<const D: usize>(
 /// Rough cost order, so the longest runs start first.
 fn cost_rank(a: Algorithm) -> usize {
     match a {
-        Algorithm::Awfqi | Algorithm::AwfqiOracle => 0,
+        Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiAdaptive => 0,
         Algorithm::Iwfqi | Algorithm::IwfqiHeuristic => 1,
         Algorithm::Sdt | Algorithm::IwfqiIdeal | Algorithm::Rbt => 2,
         Algorithm::Fqi => 3,

@@ -1,6 +1,7 @@
 //! The algorithms compared on the protocol of §3, one module each, and the experiment
 //! context they share ([`Experiment`]).
 
+pub mod adaptive;
 pub mod fqi;
 pub mod iwfqi;
 pub mod kernel;
@@ -40,11 +41,14 @@ pub enum Algorithm {
     AwfqiOracle,
     /// The core's embedded AWFQI (fixed-capacity f32 GP, tabular FQI) on the same protocol.
     AwfqiKernel,
+    /// AWFQI with a query distribution recomputed from the target's answers within every
+    /// step (issue 11; not a thesis algorithm).
+    AwfqiAdaptive,
 }
 
 impl Algorithm {
     /// Every algorithm.
-    pub const ALL: [Algorithm; 9] = [
+    pub const ALL: [Algorithm; 10] = [
         Algorithm::Fqi,
         Algorithm::Iwfqi,
         Algorithm::IwfqiHeuristic,
@@ -54,6 +58,7 @@ impl Algorithm {
         Algorithm::Awfqi,
         Algorithm::AwfqiOracle,
         Algorithm::AwfqiKernel,
+        Algorithm::AwfqiAdaptive,
     ];
 
     /// The name used in file names, tables and on the command line.
@@ -68,6 +73,7 @@ impl Algorithm {
             Algorithm::Awfqi => "awfqi",
             Algorithm::AwfqiOracle => "awfqi-oracle",
             Algorithm::AwfqiKernel => "awfqi-kernel",
+            Algorithm::AwfqiAdaptive => "awfqi-adaptive",
         }
     }
 
@@ -83,6 +89,7 @@ impl Algorithm {
             Algorithm::Awfqi => 7,
             Algorithm::AwfqiOracle => 8,
             Algorithm::AwfqiKernel => 9,
+            Algorithm::AwfqiAdaptive => 10,
         }
     }
 
@@ -90,7 +97,10 @@ impl Algorithm {
     pub fn is_active(self) -> bool {
         matches!(
             self,
-            Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiKernel
+            Algorithm::Awfqi
+                | Algorithm::AwfqiOracle
+                | Algorithm::AwfqiKernel
+                | Algorithm::AwfqiAdaptive
         )
     }
 
@@ -125,6 +135,7 @@ impl Algorithm {
             Algorithm::Sdt => 3,
             Algorithm::Awfqi => 1,
             Algorithm::AwfqiOracle => 2,
+            Algorithm::AwfqiAdaptive => 6,
         }
     }
 }
@@ -225,6 +236,10 @@ pub struct Experiment<const D: usize = 2> {
     pub kernel: Option<Arc<kernel::KernelSetup>>,
     /// How the kernel path runs on this domain (`None`: not available).
     pub kernel_runner: Option<KernelRunner<D>>,
+    /// The shared set-up of awfqi-adaptive (its rows and source GPs).
+    pub adaptive: Option<Arc<adaptive::AdaptiveSetup<D>>>,
+    /// awfqi-adaptive's options.
+    pub adaptive_options: adaptive::AdaptiveOptions,
 }
 
 impl<const D: usize> Experiment<D> {
@@ -325,6 +340,11 @@ impl<const D: usize> Experiment<D> {
                     o["kernel"] = k.parameters();
                 }
             }
+            Algorithm::AwfqiAdaptive => {
+                o["var_rw"] = v_r.into();
+                o["max_weight"] = self.options.max_weight.into();
+                o["adaptive"] = serde_json::to_value(self.adaptive_options).unwrap_or_default();
+            }
             Algorithm::Fqi | Algorithm::Sdt => {}
         }
         if algorithm.is_active() {
@@ -332,6 +352,7 @@ impl<const D: usize> Experiment<D> {
             let table = match algorithm {
                 Algorithm::AwfqiOracle => self.oracle_table.as_ref().map(|t| (t.mode, "oracle")),
                 Algorithm::Awfqi => self.realistic_table.as_ref().map(|t| (t.mode, "realistic")),
+                Algorithm::AwfqiAdaptive => None,
                 _ => self
                     .kernel
                     .as_ref()
@@ -374,6 +395,7 @@ impl<const D: usize> Experiment<D> {
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
                 Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
             }
+            Algorithm::AwfqiAdaptive => Box::new(adaptive::Adaptive::new(self)?),
             Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through its kernel runner"),
         })
     }
