@@ -122,8 +122,8 @@ impl Algorithm {
         Algorithm::AwfqiKernel,
     ];
 
-    /// Colour index in the plot palette (8 colours; the yellow one is left for the source
-    /// states of the scatter plots). The kernel shares the blue of IWFQI: the learning
+    /// Colour index in the plot palette (9 colours; the yellow one is left for the source
+    /// states of the scatter plots, the crimson one is awfqi-adaptive's). The kernel shares the blue of IWFQI: the learning
     /// curves draw it in a separate panel, next to AWFQI, where IWFQI is absent; the
     /// heuristic IWFQI shares it too (not in the default set).
     pub fn color(self) -> usize {
@@ -135,7 +135,7 @@ impl Algorithm {
             Algorithm::Sdt => 3,
             Algorithm::Awfqi => 1,
             Algorithm::AwfqiOracle => 2,
-            Algorithm::AwfqiAdaptive => 6,
+            Algorithm::AwfqiAdaptive => 8,
         }
     }
 }
