@@ -196,6 +196,9 @@ pub struct Args {
     /// awfqi-adaptive: weigh source records by their source's plausibility.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().source_weights)]
     pub adaptive_source_weights: bool,
+    /// awfqi-adaptive: end a verification rollout at the first surprising reward.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise_stop)]
+    pub adaptive_surprise_stop: bool,
 }
 
 impl Args {
@@ -214,6 +217,7 @@ impl Args {
             relevance_width: self.adaptive_relevance_width,
             model_rewards: self.adaptive_model_rewards,
             source_weights: self.adaptive_source_weights,
+            surprise_stop: self.adaptive_surprise_stop,
         }
     }
 }

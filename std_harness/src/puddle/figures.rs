@@ -183,3 +183,58 @@ pub fn sample_scatter<const D: usize>(
         height: 460,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rows(means: &[f64]) -> Vec<SummaryRow> {
+        means
+            .iter()
+            .enumerate()
+            .map(|(i, &mean)| SummaryRow {
+                algorithm: "a".into(),
+                step: i + 1,
+                n_episodes: i + 1,
+                n_target_samples: 0.0,
+                mean,
+                stderr: 2.0,
+                runs: 10,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn clipped_points_sit_on_the_edge_and_are_marked() {
+        let curves = vec![("a".to_string(), 0, rows(&[-400.0, -60.0, -25.0, -20.0]))];
+        let figure = learning_curves("t", &curves, &[]);
+        assert_eq!(figure.panels.len(), 2);
+        let main = &figure.panels[0];
+        let (lo, hi) = main.y_range.unwrap();
+        assert_eq!(lo, CLIP_BELOW);
+        // Top: the best mean plus its error (−18), padded by 5 % of the range.
+        assert!((hi - (-18.0 + 0.05 * (CLIP_BELOW + 18.0).abs())).abs() < 1e-9);
+        let line = &main.series[0];
+        assert_eq!(line.points[0], (1.0, CLIP_BELOW));
+        assert_eq!(line.points[1], (2.0, -60.0));
+        // The clipped point has no band; the others keep theirs.
+        assert_eq!(line.errors.as_ref().unwrap()[..2], [0.0, 2.0]);
+        let marks = &main.series[1];
+        assert_eq!(marks.points, vec![(1.0, CLIP_BELOW)]);
+        assert_eq!(marks.style, SeriesStyle::Points);
+        // The zoom keeps steps 2–4 and starts just below the lowest mean − s.e. there,
+        // capped at −50: −60 lies below it and is marked.
+        let zoom = &figure.panels[1];
+        assert_eq!(zoom.series[0].points.len(), 3);
+        assert_eq!(zoom.y_range.unwrap().0, -51.0);
+        assert_eq!(zoom.series[1].points, vec![(2.0, -51.0)]);
+    }
+
+    #[test]
+    fn unclipped_curves_keep_their_automatic_range() {
+        let curves = vec![("a".to_string(), 0, rows(&[-40.0, -30.0]))];
+        let figure = learning_curves("t", &curves, &[]);
+        assert_eq!(figure.panels[0].y_range, None);
+        assert_eq!(figure.panels[0].series.len(), 1);
+    }
+}

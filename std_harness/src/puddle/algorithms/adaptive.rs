@@ -66,6 +66,10 @@ pub struct AdaptiveOptions {
     /// FQI's rewards from the target reward model (prior mean plus residual GP mean) at
     /// every record, instead of the weighted records' own rewards.
     pub model_rewards: bool,
+    /// End a verification rollout at the first surprise (a reward more than `3·√v_r` from
+    /// the reward model's prediction; the plan changes there anyway) and give the rest of
+    /// its quota to drawn queries (which the relevance kernel puts around the surprise).
+    pub surprise_stop: bool,
     /// Multiply every source record's weights by its source's plausibility (relative to the
     /// most plausible source), in every FQI iteration.
     pub source_weights: bool,
@@ -86,6 +90,7 @@ impl Default for AdaptiveOptions {
             relevance_width: 0.1,
             model_rewards: false,
             source_weights: false,
+            surprise_stop: false,
         }
     }
 }
@@ -448,9 +453,30 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             .collect()
     }
 
-    /// `n` queries along greedy rollouts from the target's initial state (ε-greedy after
-    /// the first rollout of the call).
-    fn verify(&mut self, n: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<()> {
+    /// The reward model's mean at one record (the uniform source mixture before any
+    /// target data).
+    fn predict(&self, record: &Record<D>) -> f64 {
+        let z = [self.experiment.domain.input(record)];
+        let means = self.source_means(&z);
+        let m = means.len() as f64;
+        match &self.model {
+            Some(model) => {
+                let prior: f64 = means
+                    .iter()
+                    .zip(&model.plausibility)
+                    .map(|(x, p)| p * x[0])
+                    .sum();
+                prior + model.residual.means(&z)[0]
+            }
+            None => means.iter().map(|x| x[0] / m).sum(),
+        }
+    }
+
+    /// Up to `n` queries along greedy rollouts from the target's initial state (ε-greedy
+    /// after the first rollout of the call); returns how many were made (fewer than `n`
+    /// only when a surprise stopped them).
+    fn verify(&mut self, n: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<usize> {
+        let threshold = 3.0 * self.reward_variance.sqrt();
         let domain = self.run.domain;
         let num_actions = domain.num_actions();
         let epsilon = self.run.protocol.epsilon;
@@ -469,9 +495,14 @@ impl<'e, const D: usize> Adaptive<'e, D> {
                     self.run.greedy_action(&state)
                 };
                 let record = domain.target.step(state, action, rng)?;
+                let surprised = self.options.surprise_stop
+                    && (record.reward - self.predict(&record)).abs() > threshold;
                 self.run.data.push(record);
                 self.path.push(state);
                 left -= 1;
+                if surprised {
+                    return Ok(n - left);
+                }
                 if record.absorbing {
                     break;
                 }
@@ -479,7 +510,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             }
             first = false;
         }
-        Ok(())
+        Ok(n)
     }
 
     /// `n` queries drawn from a candidate subset of the rows by the adaptive score.
@@ -605,9 +636,9 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
         }
         for b in 0..s {
             let quota = n * (b + 1) / s - n * b / s;
-            let verify = (quota as f64 * self.options.verify).round() as usize;
-            self.verify(verify.min(quota), rng)?;
-            self.draw(quota - verify.min(quota), rng)?;
+            let verify = ((quota as f64 * self.options.verify).round() as usize).min(quota);
+            let made = self.verify(verify, rng)?;
+            self.draw(quota - made, rng)?;
             let t = if b + 1 == s {
                 trees
             } else {
