@@ -184,7 +184,7 @@ pub struct Args {
     /// awfqi-adaptive: candidate rows scored per sub-batch.
     #[arg(long, default_value_t = AdaptiveOptions::default().candidates)]
     pub adaptive_candidates: usize,
-    /// awfqi-adaptive: trees of the intermediate plans.
+    /// awfqi-adaptive: trees of the intermediate plans (0: the protocol's).
     #[arg(long, default_value_t = AdaptiveOptions::default().plan_trees)]
     pub adaptive_plan_trees: usize,
     /// awfqi-adaptive: relevance-kernel width (share of each state coordinate's range).

@@ -59,7 +59,8 @@ pub struct AdaptiveOptions {
     pub floor: f64,
     /// Candidate rows scored per sub-batch (a uniform subset of the setting's rows).
     pub candidates: usize,
-    /// Trees of the intermediate plans (the last sub-batch of a step uses the protocol's).
+    /// Trees of the intermediate plans (0: the protocol's; the last sub-batch of a step
+    /// always uses the protocol's).
     pub plan_trees: usize,
     /// Width of the relevance kernel, as a share of each state coordinate's range.
     pub relevance_width: f64,
@@ -78,15 +79,15 @@ pub struct AdaptiveOptions {
 impl Default for AdaptiveOptions {
     fn default() -> Self {
         Self {
-            sub_batches: 5,
-            verify: 0.5,
+            sub_batches: 3,
+            verify: 0.7,
             surprise: true,
             uncertainty: true,
             decision: true,
             prior: true,
             floor: 0.1,
             candidates: 4000,
-            plan_trees: 20,
+            plan_trees: 0,
             relevance_width: 0.1,
             model_rewards: false,
             source_weights: false,
@@ -244,7 +245,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             (0.0..=1.0).contains(&options.verify) && (0.0..=1.0).contains(&options.floor),
             "--adaptive-verify and --adaptive-floor must lie in [0, 1]"
         );
-        anyhow::ensure!(options.candidates >= 1 && options.plan_trees >= 1);
+        anyhow::ensure!(options.candidates >= 1, "--adaptive-candidates must be ≥ 1");
         let (v_r, _) = experiment.variances()?;
         let sources = experiment.sources.union();
         Ok(Self {
@@ -630,20 +631,20 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
         let n = self.experiment.budget();
         let s = self.options.sub_batches;
         let trees = self.run.protocol.trees;
+        let plan_trees = match self.options.plan_trees {
+            0 => trees,
+            t => t,
+        };
         self.path.clear();
         if self.run.q.is_none() {
-            self.refit(self.options.plan_trees, rng)?;
+            self.refit(plan_trees, rng)?;
         }
         for b in 0..s {
             let quota = n * (b + 1) / s - n * b / s;
             let verify = ((quota as f64 * self.options.verify).round() as usize).min(quota);
             let made = self.verify(verify, rng)?;
             self.draw(quota - made, rng)?;
-            let t = if b + 1 == s {
-                trees
-            } else {
-                self.options.plan_trees
-            };
+            let t = if b + 1 == s { trees } else { plan_trees };
             self.refit(t, rng)?;
         }
         Ok(self.last.clone())
