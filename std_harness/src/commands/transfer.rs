@@ -85,7 +85,7 @@ pub struct Args {
     #[arg(long)]
     pub runs: Option<RunRange>,
     /// Algorithms to run. Default: all but iwfqi-heuristic (and, on the Dam and Acrobot,
-    /// the Puddle-World-only awfqi-kernel).
+    /// awfqi-kernel (Puddle World only) and awfqi-adaptive (by name there)).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub algorithms: Vec<Algorithm>,
     /// Puddle World's dynamics variant (puddle only). Default: shared.
@@ -286,9 +286,14 @@ impl Config {
     ) -> anyhow::Result<Self> {
         let p = &domain.published;
         let mut algorithms = if args.algorithms.is_empty() {
+            // awfqi-kernel and awfqi-adaptive: Puddle World's default set only (see
+            // `Algorithm::DEFAULT`).
             Algorithm::DEFAULT
                 .into_iter()
-                .filter(|&a| kernel_available || a != Algorithm::AwfqiKernel)
+                .filter(|&a| {
+                    kernel_available
+                        || !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptive)
+                })
                 .collect()
         } else {
             args.algorithms.clone()
@@ -739,6 +744,7 @@ fn run_in_pool<const D: usize>(
                         | Algorithm::AwfqiOracle
                         | Algorithm::Awfqi
                         | Algorithm::AwfqiKernel
+                        | Algorithm::AwfqiAdaptive
                 )
             })
             .map(|(_, name, color, pts)| (name.clone(), *color, pts.clone()))
