@@ -84,7 +84,7 @@ impl Default for AdaptiveOptions {
             surprise: true,
             uncertainty: true,
             decision: true,
-            prior: true,
+            prior: false,
             floor: 0.1,
             candidates: 4000,
             plan_trees: 0,
