@@ -20,8 +20,9 @@ static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 /// Family name under which the embedded font is registered.
 pub const FONT_FAMILY: &str = "sans-serif";
 
-/// The Okabe–Ito colour-blind-safe palette (black last).
-pub const PALETTE: [RGBColor; 8] = [
+/// The Okabe–Ito colour-blind-safe palette (black eighth), then a crimson for a ninth
+/// series (awfqi-adaptive's).
+pub const PALETTE: [RGBColor; 9] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
     RGBColor(0, 158, 115),
@@ -30,6 +31,7 @@ pub const PALETTE: [RGBColor; 8] = [
     RGBColor(86, 180, 233),
     RGBColor(240, 228, 66),
     RGBColor(0, 0, 0),
+    RGBColor(170, 0, 60),
 ];
 
 fn ensure_font() -> anyhow::Result<()> {

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
+use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveSetup};
 use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, KernelSetup};
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
@@ -95,7 +96,7 @@ pub struct Args {
     #[arg(long)]
     pub runs: Option<RunRange>,
     /// Algorithms to run. Default: all but iwfqi-heuristic (and, on the Dam and Acrobot,
-    /// the Puddle-World-only awfqi-kernel).
+    /// awfqi-kernel (Puddle World only) and awfqi-adaptive (by name there)).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub algorithms: Vec<Algorithm>,
     /// Puddle World's dynamics variant (puddle only). Default: shared.
@@ -182,6 +183,66 @@ pub struct Args {
     /// Compute nothing: summarise and plot the runs of this configuration already in --out.
     #[arg(long)]
     pub no_run: bool,
+    /// awfqi-adaptive: sub-batches (re-planning points) per step.
+    #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
+    pub adaptive_sub_batches: usize,
+    /// awfqi-adaptive: share of each sub-batch spent verifying the greedy policy.
+    #[arg(long, default_value_t = AdaptiveOptions::default().verify)]
+    pub adaptive_verify: f64,
+    /// awfqi-adaptive: score rows by residual surprise.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise)]
+    pub adaptive_surprise: bool,
+    /// awfqi-adaptive: scale scores by the residual GP's remaining variance.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().uncertainty)]
+    pub adaptive_uncertainty: bool,
+    /// awfqi-adaptive: weight rows by closeness to the verified greedy paths.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().decision)]
+    pub adaptive_decision: bool,
+    /// awfqi-adaptive: source-informed prior mean of the weights' target reward GP.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().prior)]
+    pub adaptive_prior: bool,
+    /// awfqi-adaptive: coverage floor (share of the drawn probability spread uniformly).
+    #[arg(long, default_value_t = AdaptiveOptions::default().floor)]
+    pub adaptive_floor: f64,
+    /// awfqi-adaptive: candidate rows scored per sub-batch.
+    #[arg(long, default_value_t = AdaptiveOptions::default().candidates)]
+    pub adaptive_candidates: usize,
+    /// awfqi-adaptive: trees of the intermediate plans (0: the protocol's).
+    #[arg(long, default_value_t = AdaptiveOptions::default().plan_trees)]
+    pub adaptive_plan_trees: usize,
+    /// awfqi-adaptive: relevance-kernel width (share of each state coordinate's range).
+    #[arg(long, default_value_t = AdaptiveOptions::default().relevance_width)]
+    pub adaptive_relevance_width: f64,
+    /// awfqi-adaptive: FQI's rewards from the target reward model.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().model_rewards)]
+    pub adaptive_model_rewards: bool,
+    /// awfqi-adaptive: weigh source records by their source's plausibility.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().source_weights)]
+    pub adaptive_source_weights: bool,
+    /// awfqi-adaptive: end a verification rollout at the first surprising reward.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise_stop)]
+    pub adaptive_surprise_stop: bool,
+}
+
+impl Args {
+    /// awfqi-adaptive's options.
+    pub fn adaptive(&self) -> AdaptiveOptions {
+        AdaptiveOptions {
+            sub_batches: self.adaptive_sub_batches,
+            verify: self.adaptive_verify,
+            surprise: self.adaptive_surprise,
+            uncertainty: self.adaptive_uncertainty,
+            decision: self.adaptive_decision,
+            prior: self.adaptive_prior,
+            floor: self.adaptive_floor,
+            candidates: self.adaptive_candidates,
+            plan_trees: self.adaptive_plan_trees,
+            relevance_width: self.adaptive_relevance_width,
+            model_rewards: self.adaptive_model_rewards,
+            source_weights: self.adaptive_source_weights,
+            surprise_stop: self.adaptive_surprise_stop,
+        }
+    }
 }
 
 /// A command's defaults for the options left out.
@@ -248,9 +309,14 @@ impl Config {
     ) -> anyhow::Result<Self> {
         let p = &domain.published;
         let mut algorithms = if args.algorithms.is_empty() {
+            // awfqi-kernel and awfqi-adaptive: Puddle World's default set only (see
+            // `Algorithm::DEFAULT`).
             Algorithm::DEFAULT
                 .into_iter()
-                .filter(|&a| kernel_available || a != Algorithm::AwfqiKernel)
+                .filter(|&a| {
+                    kernel_available
+                        || !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptive)
+                })
                 .collect()
         } else {
             args.algorithms.clone()
@@ -391,17 +457,33 @@ pub fn build_experiment<const D: usize>(
     } else {
         None
     };
-    let realistic_table = if wants(Algorithm::Awfqi) {
-        let gps = score_tables::fit_source_gps(&domain, &sources, &options.gp, args.seed)?;
-        Some(Arc::new(ScoreTableData::realistic(
+    // The realistic table's source GPs also serve awfqi-adaptive (same streams).
+    let source_gps = if wants(Algorithm::Awfqi) || wants(Algorithm::AwfqiAdaptive) {
+        Some(score_tables::fit_source_gps(
+            &domain,
+            &sources,
+            &options.gp,
+            args.seed,
+        )?)
+    } else {
+        None
+    };
+    let realistic_table = match &source_gps {
+        Some(gps) if wants(Algorithm::Awfqi) => Some(Arc::new(ScoreTableData::realistic(
             &domain,
             config.setting,
             &sources,
-            &gps,
+            gps,
             config.spacing,
-        )?))
-    } else {
-        None
+        )?)),
+        _ => None,
+    };
+    let adaptive = match source_gps {
+        Some(gps) if wants(Algorithm::AwfqiAdaptive) => {
+            let rows = score_tables::rows(&domain, config.setting, &sources, config.spacing)?;
+            Some(Arc::new(AdaptiveSetup::new(&domain, rows, &sources, gps)))
+        }
+        _ => None,
     };
     let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
         (true, Some(h)) => {
@@ -434,6 +516,8 @@ pub fn build_experiment<const D: usize>(
         ideal_weights: None,
         kernel,
         kernel_learner: hooks.map(|h| h.learner),
+        adaptive,
+        adaptive_options: args.adaptive(),
     };
     experiment.variances()?;
     if wants(Algorithm::IwfqiIdeal) {
@@ -496,7 +580,7 @@ pub fn run_one<const D: usize>(
 /// Rough cost order, so the longest runs start first.
 fn cost_rank(a: Algorithm) -> usize {
     match a {
-        Algorithm::Awfqi | Algorithm::AwfqiOracle => 0,
+        Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiAdaptive => 0,
         Algorithm::Iwfqi | Algorithm::IwfqiHeuristic => 1,
         Algorithm::Sdt | Algorithm::IwfqiIdeal | Algorithm::Rbt => 2,
         Algorithm::Fqi => 3,
@@ -679,6 +763,7 @@ fn run_in_pool<const D: usize>(
                         | Algorithm::AwfqiOracle
                         | Algorithm::Awfqi
                         | Algorithm::AwfqiKernel
+                        | Algorithm::AwfqiAdaptive
                 )
             })
             .map(|(_, name, color, pts)| (name.clone(), *color, pts.clone()))

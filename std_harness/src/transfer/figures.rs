@@ -35,19 +35,101 @@ fn curve_panel(title: String, curves: &Curves) -> Panel {
     }
 }
 
-/// Learning curves: the faithful std algorithms in the left panel; FQI, AWFQI,
-/// AWFQI_oracle and the kernel's embedded AWFQI in the right one (omitted when empty).
+/// The lowest mean a clipped panel shows: returns below it (stuck or puddle-crossing
+/// runs, −100 to −600 at the first steps) would squash every other difference.
+pub const CLIP_BELOW: f64 = -110.0;
+
+/// `panel` restricted to `y ∈ [lo, hi]` (bands cut at the edges) over the steps with
+/// `x ≥ from`; every mean below `lo` is drawn on the bottom edge and marked with a black
+/// point ("clipped") so that it is not read as a value. `hi` is the data's maximum (with
+/// errors) padded by 5 % of the range when `None`.
+fn clipped(mut panel: Panel, lo: f64, hi: Option<f64>, from: f64) -> Panel {
+    let mut marks = Vec::new();
+    let mut top = f64::NEG_INFINITY;
+    for s in &mut panel.series {
+        let errors = s.errors.take().unwrap_or_else(|| vec![0.0; s.points.len()]);
+        let kept: Vec<((f64, f64), f64)> = s
+            .points
+            .iter()
+            .copied()
+            .zip(errors)
+            .filter(|((x, _), _)| *x >= from)
+            .collect();
+        s.points = kept.iter().map(|&((x, y), _)| (x, y.max(lo))).collect();
+        s.errors = Some(
+            kept.iter()
+                .map(|&((_, y), e)| if y < lo { 0.0 } else { e.min(y - lo) })
+                .collect(),
+        );
+        for &((x, y), e) in &kept {
+            top = top.max(y + e);
+            if y < lo {
+                marks.push((x, lo));
+            }
+        }
+    }
+    let hi = hi.unwrap_or(top + 0.05 * (top - lo).abs().max(1.0));
+    if !marks.is_empty() {
+        panel.series.push(Series {
+            label: format!("clipped (mean below {lo})"),
+            points: marks,
+            errors: None,
+            style: SeriesStyle::Points,
+            color: 7,
+        });
+    }
+    panel.y_range = Some((lo, hi));
+    panel
+}
+
+/// Learning curves: the faithful std algorithms with the main panel clipped at
+/// [`CLIP_BELOW`] (clipped means marked) and a zoom on the asymptote (the second half of
+/// the steps, as the thesis's figures do); FQI, AWFQI, AWFQI_oracle and the kernel's
+/// embedded AWFQI in a last panel (omitted without the kernel).
 pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Figure {
-    let mut panels = vec![curve_panel(title.to_string(), std_path)];
+    let full = curve_panel(title.to_string(), std_path);
+    let min = std_path
+        .iter()
+        .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))
+        .fold(f64::INFINITY, f64::min);
+    let last = std_path
+        .iter()
+        .flat_map(|(_, _, rows)| rows.iter().map(|r| r.n_episodes as f64))
+        .fold(0.0, f64::max);
+    let mut panels = Vec::new();
+    if min < CLIP_BELOW {
+        panels.push(clipped(full.clone(), CLIP_BELOW, None, 0.0));
+    } else {
+        panels.push(full.clone());
+    }
+    // The zoom: from the middle step on, down to the lowest of those means (or −50).
+    let from = (last / 2.0).ceil();
+    let zoom_lo = std_path
+        .iter()
+        .flat_map(|(_, _, rows)| rows.iter().filter(|r| r.n_episodes as f64 >= from))
+        .map(|r| r.mean - r.stderr)
+        .fold(f64::INFINITY, f64::min)
+        .max(-50.0);
+    if last >= 2.0 && zoom_lo.is_finite() {
+        let mut zoom = clipped(full, zoom_lo.floor() - 1.0, None, from);
+        zoom.title = "zoom: the second half of the steps".into();
+        panels.push(zoom);
+    }
     if embedded.iter().any(|(name, ..)| name == "awfqi-kernel") {
-        panels.push(curve_panel(
-            "embedded kernel path vs std AWFQI".into(),
-            embedded,
-        ));
+        let panel = curve_panel("embedded kernel path vs std AWFQI".into(), embedded);
+        let min = embedded
+            .iter()
+            .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))
+            .fold(f64::INFINITY, f64::min);
+        panels.push(if min < CLIP_BELOW {
+            clipped(panel, CLIP_BELOW, None, 0.0)
+        } else {
+            panel
+        });
     }
     Figure {
         panels,
-        panel_width: 820,
+        panel_width: 620,
         height: 560,
     }
 }
@@ -99,5 +181,60 @@ pub fn sample_scatter<const D: usize>(
         panels,
         panel_width: 420,
         height: 460,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rows(means: &[f64]) -> Vec<SummaryRow> {
+        means
+            .iter()
+            .enumerate()
+            .map(|(i, &mean)| SummaryRow {
+                algorithm: "a".into(),
+                step: i + 1,
+                n_episodes: i + 1,
+                n_target_samples: 0.0,
+                mean,
+                stderr: 2.0,
+                runs: 10,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn clipped_points_sit_on_the_edge_and_are_marked() {
+        let curves = vec![("a".to_string(), 0, rows(&[-400.0, -60.0, -25.0, -20.0]))];
+        let figure = learning_curves("t", &curves, &[]);
+        assert_eq!(figure.panels.len(), 2);
+        let main = &figure.panels[0];
+        let (lo, hi) = main.y_range.unwrap();
+        assert_eq!(lo, CLIP_BELOW);
+        // Top: the best mean plus its error (−18), padded by 5 % of the range.
+        assert!((hi - (-18.0 + 0.05 * (CLIP_BELOW + 18.0).abs())).abs() < 1e-9);
+        let line = &main.series[0];
+        assert_eq!(line.points[0], (1.0, CLIP_BELOW));
+        assert_eq!(line.points[1], (2.0, -60.0));
+        // The clipped point has no band; the others keep theirs.
+        assert_eq!(line.errors.as_ref().unwrap()[..2], [0.0, 2.0]);
+        let marks = &main.series[1];
+        assert_eq!(marks.points, vec![(1.0, CLIP_BELOW)]);
+        assert_eq!(marks.style, SeriesStyle::Points);
+        // The zoom keeps steps 2–4 and starts just below the lowest mean − s.e. there,
+        // capped at −50: −60 lies below it and is marked.
+        let zoom = &figure.panels[1];
+        assert_eq!(zoom.series[0].points.len(), 3);
+        assert_eq!(zoom.y_range.unwrap().0, -51.0);
+        assert_eq!(zoom.series[1].points, vec![(2.0, -51.0)]);
+    }
+
+    #[test]
+    fn unclipped_curves_keep_their_automatic_range() {
+        let curves = vec![("a".to_string(), 0, rows(&[-40.0, -30.0]))];
+        let figure = learning_curves("t", &curves, &[]);
+        assert_eq!(figure.panels[0].y_range, None);
+        assert_eq!(figure.panels[0].series.len(), 1);
     }
 }
