@@ -203,12 +203,35 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let text = std::fs::read_to_string(&args.cases)
         .with_context(|| format!("reading {}", args.cases.display()))?;
+    check_document(&text).with_context(|| format!("{}", args.cases.display()))?;
     let output = run_json(&text, engine)?;
     let json = serde_json::to_string_pretty(&output)?;
     match &args.out {
         Some(path) => std::fs::write(path, json + "\n")
             .with_context(|| format!("writing {}", path.display()))?,
         None => println!("{json}"),
+    }
+    Ok(())
+}
+
+/// Checks a case file strictly before anything is computed: every case must have every
+/// field with the right type (serde's message names the field, the line and the column).
+pub fn check_document(text: &str) -> anyhow::Result<()> {
+    #[derive(Deserialize)]
+    #[allow(dead_code)]
+    struct Strict {
+        cases: Vec<Case>,
+    }
+    let doc: Strict = serde_json::from_str(text).map_err(|e| {
+        anyhow::anyhow!(
+            "line {}, column {}: {e} (the input must be {{\"cases\":[{{\"name\", \"x\", \"y\", \
+             \"signal_variance\", \"length_scales\", \"noise_variance\", \"x_test\"}}, …]}})",
+            e.line(),
+            e.column()
+        )
+    })?;
+    for (i, case) in doc.cases.iter().enumerate() {
+        check_shape(case).map_err(|e| anyhow::anyhow!("case #{i} ({}): {e}", case.name))?;
     }
     Ok(())
 }
