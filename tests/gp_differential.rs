@@ -636,7 +636,9 @@ fn run_exact(
         let class_name = value["class"].as_str().expect("class").to_owned();
         let class = exact_class(&class_name);
         let case: Case = serde_json::from_value(value.clone()).expect("a gp case");
-        let kappa = value["condition_number"].as_f64().expect("condition_number");
+        let kappa = value["condition_number"]
+            .as_f64()
+            .expect("condition_number");
         assert!((1e6..=1e9).contains(&kappa), "{}: κ₁ {kappa:e}", case.name);
         if !summaries.iter().any(|(c, _)| *c == class_name) {
             summaries.push((class_name.clone(), ExactSummary::default()));

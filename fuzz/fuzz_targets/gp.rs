@@ -239,6 +239,7 @@ fn run<T: Real>(b: &mut Bytes) {
                                 Kind::Capacity,
                                 Kind::Empty,
                                 Kind::NotPd,
+                                Kind::Conditioning,
                             ],
                         );
                         unchanged_after_error("optimize_hyperparameters", &gp, &before);

@@ -203,11 +203,17 @@ mod tests {
         assert!((f.max_condition() / (1e-2 / f32::EPSILON) - 1.0).abs() < 1e-6);
         let d = Conditioning::<f64>::default();
         assert!((d.max_jitter_ratio() - 1.4901161193847656e-8).abs() < 1e-20);
-        assert_eq!(d.allowed_jitter(1e-2), d.max_jitter_ratio() * (1e-2 + 1e-10));
+        assert_eq!(
+            d.allowed_jitter(1e-2),
+            d.max_jitter_ratio() * (1e-2 + 1e-10)
+        );
         let exact = d.without_base_jitter();
         assert_eq!(exact.base_jitter(), 0.0);
         assert_eq!(exact.allowed_jitter(0.0), 0.0);
-        assert_eq!(Conditioning::<f64>::UNBOUNDED.allowed_jitter(0.0), f64::INFINITY);
+        assert_eq!(
+            Conditioning::<f64>::UNBOUNDED.allowed_jitter(0.0),
+            f64::INFINITY
+        );
     }
 
     #[test]

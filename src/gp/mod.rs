@@ -65,8 +65,8 @@ mod kernel;
 mod regression;
 pub mod search;
 
-pub use kernel::Hyperparameters;
 pub use conditioning::{BASE_JITTER, Conditioning};
+pub use kernel::Hyperparameters;
 pub use regression::{Gp, JITTER_ESCALATIONS, Prediction, WhenFull};
 pub use search::{HyperparameterBounds, MAX_SEARCH_PARAMETERS, SearchOptions};
 

@@ -113,7 +113,11 @@ fn factorize<T: Real, const D: usize>(
             // Beyond the policy: find the jitter that would have worked, to name it.
             let needed = (level..=JITTER_ESCALATIONS).find_map(|l| {
                 let j = jitter_at(l, c, policy);
-                let (row, solve) = if l == start.level { (row, solve) } else { (0, 0) };
+                let (row, solve) = if l == start.level {
+                    (row, solve)
+                } else {
+                    (0, 0)
+                };
                 (attempt(hyper, xs, ys, factor, stride, z, j, row, solve)
                     && conditioning::diagonal_condition(factor, stride, n) <= limit)
                     .then_some(j)
@@ -613,14 +617,18 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the
     /// search's own arrays (a simplex of at most 9 points and the box) take under 1 KiB of
     /// stack in `f64`. Each evaluation factorises in place, so the factor is rebuilt at the
-    /// end. Failed factorisations count as `−∞`. The generator is used only for the
+    /// end. Failed factorisations count as `−∞`. The evaluations may use the whole jitter
+    /// ladder (the search explores, and its path does not depend on the policy); the optimum
+    /// is then held to the GP's [`Conditioning`]. The generator is used only for the
     /// restarts: one `u64` per searched parameter per restart.
     ///
     /// Errors: those of [`HyperparameterBounds::validate`] and [`SearchOptions::validate`];
     /// [`Error::CapacityExceeded`] for an ARD search (`isotropic == false`) with
     /// `D + 2 >` [`MAX_SEARCH_PARAMETERS`](super::MAX_SEARCH_PARAMETERS);
     /// [`Error::EmptyData`] without data; [`Error::NotPositiveDefinite`] when no evaluated
-    /// point could be factorised. On error the previous hyperparameters are kept.
+    /// point could be factorised; [`Error::JitterLimit`] or [`Error::IllConditioned`] when
+    /// the optimum is beyond the conditioning policy. On error the previous hyperparameters
+    /// are kept.
     pub fn optimize_hyperparameters<R: Rng + ?Sized>(
         &mut self,
         bounds: &HyperparameterBounds<T, D>,
@@ -639,7 +647,14 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         let factor = self.factor.as_flattened_mut();
         let whitened = &mut self.whitened;
-        let policy = &self.conditioning;
+        // The evaluations climb the whole jitter ladder (the search explores; its path does
+        // not depend on the policy), the optimum is held to the policy below.
+        let explore = if self.conditioning.base_jitter() == T::ZERO {
+            Conditioning::UNBOUNDED.without_base_jitter()
+        } else {
+            Conditioning::UNBOUNDED
+        };
+        let policy = &explore;
         let fresh = Start {
             level: 0,
             row: 0,
@@ -654,8 +669,12 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         let (best, value) = search::maximize(&space, options, rng, &mut objective);
         let best_hyper = space.hyperparameters::<D>(&best);
-        if value.is_finite() && self.set_hyperparameters(best_hyper).is_ok() {
-            return self.log_marginal_likelihood();
+        if value.is_finite() {
+            // On error `set_hyperparameters` keeps (and refactorises) the previous ones.
+            return match self.set_hyperparameters(best_hyper) {
+                Ok(()) => self.log_marginal_likelihood(),
+                Err(e) => Err(e),
+            };
         }
         self.hyper = previous;
         self.restore();

@@ -403,7 +403,9 @@ fn a_jitter_beyond_the_policy_is_an_error_naming_it() {
         Err(Error::JitterLimit { .. })
     ));
     strict.set_conditioning(Conditioning::UNBOUNDED).unwrap();
-    strict.fit(&[[0.0], [0.0], [0.0]], &[1.0, 1.0, 1.0]).unwrap();
+    strict
+        .fit(&[[0.0], [0.0], [0.0]], &[1.0, 1.0, 1.0])
+        .unwrap();
     assert!(strict.jitter() > 1e-6);
 }
 
@@ -419,9 +421,8 @@ fn without_base_jitter_the_model_is_exactly_the_one_asked_for() {
         .unwrap();
     gp.fit(&[[0.0], [0.0]], &[1.0, 1.0]).unwrap();
     assert_eq!(gp.jitter(), 0.0);
-    let exact = -0.5 * 2.0 / (2.0 + s2)
-        - 0.5 * (s2 * (2.0 + s2)).ln()
-        - (2.0 * core::f64::consts::PI).ln();
+    let exact =
+        -0.5 * 2.0 / (2.0 + s2) - 0.5 * (s2 * (2.0 + s2)).ln() - (2.0 * core::f64::consts::PI).ln();
     let lml = gp.log_marginal_likelihood().unwrap();
     assert!((lml - exact).abs() < 1e-7 * exact.abs(), "{lml} vs {exact}");
     // With the base jitter the model's noise is 1e-8 + 1e-10: the LML moves by ½ ln(1.01).

@@ -78,8 +78,10 @@ fn refused(result: (bool, String), parts: &[&str], out: &Path) {
         .map(|d| d.filter_map(|e| e.ok()).map(|e| e.file_name()).collect())
         .unwrap_or_default();
     assert!(
-        written.iter().all(|n| !n.to_string_lossy().ends_with(".json")
-            && !n.to_string_lossy().ends_with(".csv")),
+        written
+            .iter()
+            .all(|n| !n.to_string_lossy().ends_with(".json")
+                && !n.to_string_lossy().ends_with(".csv")),
         "result files left behind: {written:?}"
     );
 }
@@ -92,14 +94,25 @@ fn a_state_outside_the_world_names_file_line_and_field() {
     let out = dir.join("out");
     refused(
         puddle_on(&dir, &out),
-        &["shared_dynamics_source_2.csv", "line 5", "`s_x`", "55", "[0, 10]"],
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 5",
+            "`s_x`",
+            "55",
+            "[0, 10]",
+        ],
         &out,
     );
     // A next state too.
     sources_with(&dir, 7, |c| c[6] = "-0.5".into());
     refused(
         puddle_on(&dir, &out),
-        &["shared_dynamics_source_2.csv", "line 7", "`next_s_y`", "-0.5"],
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 7",
+            "`next_s_y`",
+            "-0.5",
+        ],
         &out,
     );
 }
@@ -113,15 +126,35 @@ fn bad_actions_flags_numbers_and_columns_are_named() {
     sources_with(&dir, 3, |c| c[3] = "1.5".into());
     refused(puddle_on(&dir, &out), &["line 3", "`a`", "1.5"], &out);
     sources_with(&dir, 4, |c| c[7] = "2".into());
-    refused(puddle_on(&dir, &out), &["line 4", "`absorbing`", "not 0 or 1"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["line 4", "`absorbing`", "not 0 or 1"],
+        &out,
+    );
     sources_with(&dir, 6, |c| c[4] = "NaN".into());
-    refused(puddle_on(&dir, &out), &["line 6", "`r`", "non-finite"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["line 6", "`r`", "non-finite"],
+        &out,
+    );
     sources_with(&dir, 6, |c| c[4] = "inf".into());
-    refused(puddle_on(&dir, &out), &["line 6", "`r`", "non-finite"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["line 6", "`r`", "non-finite"],
+        &out,
+    );
     sources_with(&dir, 6, |c| c[2] = "one".into());
-    refused(puddle_on(&dir, &out), &["line 6", "`s_y`", "not a number"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["line 6", "`s_y`", "not a number"],
+        &out,
+    );
     sources_with(&dir, 8, |c| c[0] = "-1".into());
-    refused(puddle_on(&dir, &out), &["line 8", "`t`", "time index"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["line 8", "`t`", "time index"],
+        &out,
+    );
     sources_with(&dir, 8, |c| c[9] = "-0.5".into());
     refused(
         puddle_on(&dir, &out),
@@ -131,18 +164,31 @@ fn bad_actions_flags_numbers_and_columns_are_named() {
     sources_with(&dir, 9, |c| {
         c.pop();
     });
-    refused(puddle_on(&dir, &out), &["line 9", "13 columns instead of 14"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["line 9", "13 columns instead of 14"],
+        &out,
+    );
     // The column set: a header without `absorbing`.
     sources_with(&dir, 1, |c| c[7] = "done".into());
     refused(
         puddle_on(&dir, &out),
-        &["shared_dynamics_source_2.csv", "line 1", "missing columns [\"absorbing\"]", "done"],
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 1",
+            "missing columns [\"absorbing\"]",
+            "done",
+        ],
         &out,
     );
     // A missing file.
     sources_with(&dir, 2, |_| {});
     std::fs::remove_file(dir.join("shared_dynamics_source_3.csv")).unwrap();
-    refused(puddle_on(&dir, &out), &["shared_dynamics_source_3.csv"], &out);
+    refused(
+        puddle_on(&dir, &out),
+        &["shared_dynamics_source_3.csv"],
+        &out,
+    );
 }
 
 #[test]
@@ -161,7 +207,15 @@ fn cli_ranges_are_checked_before_anything_runs() {
     let dir = scratch("cli");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    let base = ["puddle", "--algorithms", "fqi", "--quiet", "--no-plots", "--out", out_s];
+    let base = [
+        "puddle",
+        "--algorithms",
+        "fqi",
+        "--quiet",
+        "--no-plots",
+        "--out",
+        out_s,
+    ];
     for (extra, named) in [
         (&["--steps", "0"][..], "--steps 0"),
         (&["--steps", "100000"], "--steps 100000"),
@@ -199,7 +253,10 @@ fn an_output_directory_that_cannot_be_written_is_named() {
         out.to_str().unwrap(),
     ]);
     assert!(!ok);
-    assert!(stderr.contains("output directory") && stderr.contains("not-a-directory/results"), "{stderr}");
+    assert!(
+        stderr.contains("output directory") && stderr.contains("not-a-directory/results"),
+        "{stderr}"
+    );
 }
 
 #[test]

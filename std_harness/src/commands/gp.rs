@@ -357,7 +357,11 @@ impl Policy {
 }
 
 /// [`fit_core`] under a conditioning [`Policy`].
-pub fn fit_core_under(case: &Case, precision: Precision, policy: &Policy) -> Result<Fit, CaseError> {
+pub fn fit_core_under(
+    case: &Case,
+    precision: Precision,
+    policy: &Policy,
+) -> Result<Fit, CaseError> {
     check_shape(case)?;
     let capacity = capacity_for(case.x.len())?;
     match precision {

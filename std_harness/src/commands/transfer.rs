@@ -290,7 +290,12 @@ impl Config {
             Ok(())
         };
         within("steps", self.steps, 1, MAX_STEPS)?;
-        within("episodes-per-step", self.episodes_per_step, 1, MAX_EPISODES_PER_STEP)?;
+        within(
+            "episodes-per-step",
+            self.episodes_per_step,
+            1,
+            MAX_EPISODES_PER_STEP,
+        )?;
         within("iterations", self.iterations, 1, MAX_ITERATIONS)?;
         within("trees", self.trees, 1, MAX_TREES)?;
         within("max-gp", self.max_gp, 1, MAX_GP_POINTS)?;
@@ -304,7 +309,10 @@ impl Config {
             );
         }
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
-            bail!("--spacing {} must be a positive finite number", self.spacing);
+            bail!(
+                "--spacing {} must be a positive finite number",
+                self.spacing
+            );
         }
         if !self.threshold.is_finite() {
             bail!("--threshold {} must be a finite number", self.threshold);
@@ -548,14 +556,18 @@ pub fn run<const D: usize>(
 
 /// Creates `out` and checks that a file can be written in it, before any run starts.
 pub fn ensure_writable(out: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out).with_context(|| {
-        format!("output directory {}: cannot be created", out.display())
-    })?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("output directory {}: cannot be created", out.display()))?;
     let probe = out.join(".awfqi-write-probe");
     std::fs::write(&probe, b"")
         .with_context(|| format!("output directory {}: cannot be written", out.display()))?;
-    std::fs::remove_file(&probe)
-        .with_context(|| format!("output directory {}: cannot remove {}", out.display(), probe.display()))
+    std::fs::remove_file(&probe).with_context(|| {
+        format!(
+            "output directory {}: cannot remove {}",
+            out.display(),
+            probe.display()
+        )
+    })
 }
 
 fn run_in_pool<const D: usize>(

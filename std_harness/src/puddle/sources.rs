@@ -214,9 +214,9 @@ impl<const D: usize> SourceDataset<D> {
             }
             let mut v = Vec::with_capacity(columns);
             for (cell, name) in cells.iter().zip(&expected) {
-                let x: f64 = cell
-                    .parse()
-                    .with_context(|| format!("line {row}, field `{name}`: {cell:?} is not a number"))?;
+                let x: f64 = cell.parse().with_context(|| {
+                    format!("line {row}, field `{name}`: {cell:?} is not a number")
+                })?;
                 if !x.is_finite() {
                     bail!("line {row}, field `{name}`: non-finite value {cell}");
                 }
