@@ -119,7 +119,7 @@ impl<T: Real> Conditioning<T> {
     /// Errors: [`Error::InvalidParameter`] `max_condition` unless `limit ≥ 1` (a condition
     /// number is never below 1).
     pub fn with_max_condition(self, limit: T) -> Result<Self> {
-        if !(limit >= T::ONE) {
+        if limit.is_nan() || limit < T::ONE {
             return Err(Error::InvalidParameter {
                 parameter: "max_condition",
             });
@@ -185,7 +185,7 @@ pub(crate) fn diagonal_condition<T: Real>(factor: &[T], stride: usize, n: usize)
     if n == 0 {
         return T::ONE;
     }
-    if !(smallest > T::ZERO) {
+    if smallest.is_nan() || smallest <= T::ZERO {
         return T::INFINITY;
     }
     (largest / smallest).squared()

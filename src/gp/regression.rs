@@ -109,7 +109,7 @@ fn factorize<T: Real, const D: usize>(
         } else {
             (0, 0)
         };
-        if level > 0 && !(jitter <= allowed) {
+        if level > 0 && (jitter.is_nan() || jitter > allowed) {
             // Beyond the policy: find the jitter that would have worked, to name it.
             let needed = (level..=JITTER_ESCALATIONS).find_map(|l| {
                 let j = jitter_at(l, c, policy);

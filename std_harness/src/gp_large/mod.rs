@@ -90,7 +90,7 @@ impl LargeConditioning {
                 parameter: "jitter",
             });
         }
-        if !(self.max_condition >= 1.0) {
+        if self.max_condition.is_nan() || self.max_condition < 1.0 {
             return Err(Error::InvalidParameter {
                 parameter: "max_condition",
             });
