@@ -216,6 +216,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 
 /// Checks a case file strictly before anything is computed: every case must have every
 /// field with the right type (serde's message names the field, the line and the column).
+/// The command refuses such a file; [`run_json`] (the library) keeps turning a malformed
+/// case into an `error` entry.
 pub fn check_document(text: &str) -> anyhow::Result<()> {
     #[derive(Deserialize)]
     #[allow(dead_code)]
@@ -230,9 +232,8 @@ pub fn check_document(text: &str) -> anyhow::Result<()> {
             e.column()
         )
     })?;
-    for (i, case) in doc.cases.iter().enumerate() {
-        check_shape(case).map_err(|e| anyhow::anyhow!("case #{i} ({}): {e}", case.name))?;
-    }
+    // Shapes the core cannot take (dimension, capacity) stay per-case `error` entries.
+    drop(doc);
     Ok(())
 }
 
