@@ -12,13 +12,13 @@
 //! `√ε · √128 · √c` — `3.9·10⁻³·√c` in `f32`, `1.7·10⁻⁷·√c` in `f64` for `n ≤ 128` — inside
 //! the tolerance table of `tests/gp_differential.rs` (hard cases: 10⁻² in `f32`, 10⁻⁶ in
 //! `f64`, relative to the data scale). A fit that would need more returns
-//! [`Error::JitterLimit`](crate::Error::JitterLimit) naming the jitter it needed.
+//! [`Error::JitterLimit`] naming the jitter it needed.
 //!
 //! After a factorisation the GP estimates the spectral condition number from the factor's
 //! diagonal, `κ̂ = (max Lᵢᵢ / min Lᵢᵢ)²` (O(n), a lower bound on `κ₂`: `Lᵢᵢ²` are Schur
 //! complements, between `λ_min` and `λ_max`). A forward error of order `ε·κ` is what a
 //! backward-stable solve promises, so when `ε·κ̂` exceeds `10⁻²` (`κ̂ > 8.4·10⁴` in `f32`,
-//! `4.5·10¹³` in `f64`) the GP refuses with [`Error::IllConditioned`](crate::Error::IllConditioned)
+//! `4.5·10¹³` in `f64`) the GP refuses with [`Error::IllConditioned`]
 //! (after trying the jitters the policy allows). Together with the Cholesky pivot guard this is
 //! what keeps a wrong `f32` answer from being returned as a success.
 
