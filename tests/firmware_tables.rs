@@ -287,8 +287,8 @@ const PUDDLE_TABLES: &str = "tests/on_target/src/puddle_tables.rs";
 fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
     use awfqi::{AliasEntry, Gp, GpTraining, ScoreTable, SubsetRule};
-    use awfqi_harness::puddle::sources::SourceSet;
-    use awfqi_harness::puddle::{SCORE_TABLE, stream};
+    use awfqi_harness::transfer::sources::SourceSet;
+    use awfqi_harness::transfer::{SCORE_TABLE, stream};
 
     let set = SourceSet::published(Dynamics::Shared).expect("published sources");
     let records: Vec<Vec<Record>> = set
@@ -328,7 +328,7 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
         rows,
         &slices,
         &mut gp,
-        &GpTraining::reference(),
+        &GpTraining::published(),
         SubsetRule::Spread,
         &mut scores,
         &mut scratch,

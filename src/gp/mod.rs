@@ -8,7 +8,7 @@
 //! hyperparameters inside box bounds with a fixed budget of evaluations
 //! ([`Gp::optimize_hyperparameters`]).
 //!
-//! The numerical work lives in slice-based functions (`cholesky`, `kernel`), so the code is
+//! The numerical work lives in slice-based functions (`cholesky`, `covariance`), so the code is
 //! generated once per scalar type and dimension, not once per capacity `N`.
 //!
 //! # Memory
@@ -61,12 +61,12 @@
 
 mod cholesky;
 pub mod conditioning;
-mod kernel;
+mod covariance;
 mod regression;
 pub mod search;
 
 pub use conditioning::{BASE_JITTER, Conditioning};
-pub use kernel::Hyperparameters;
+pub use covariance::Hyperparameters;
 pub use regression::{Gp, JITTER_ESCALATIONS, Prediction, WhenFull};
 pub use search::{HyperparameterBounds, MAX_SEARCH_PARAMETERS, SearchOptions};
 

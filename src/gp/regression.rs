@@ -2,7 +2,7 @@
 
 use super::cholesky;
 use super::conditioning::{self, BASE_JITTER, Conditioning};
-use super::kernel::{self, Hyperparameters};
+use super::covariance::{self, Hyperparameters};
 use super::search::{self, HyperparameterBounds, LogBox, SearchOptions};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
@@ -62,7 +62,7 @@ fn attempt<T: Real, const D: usize>(
     if !jitter.is_finite() || ys.len() != n {
         return false;
     }
-    if !(kernel::fill_rows(hyper, xs, jitter, factor, stride, row, n)
+    if !(covariance::fill_rows(hyper, xs, jitter, factor, stride, row, n)
         && cholesky::factor_rows(factor, stride, row, n))
     {
         return false;

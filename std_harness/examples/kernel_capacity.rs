@@ -22,9 +22,9 @@ use awfqi::{
     RowSet, ScoreTable, Scores, SubsetRule, Transition,
 };
 use awfqi_harness::domains::puddle::domain;
-use awfqi_harness::puddle::algorithms::Algorithm;
-use awfqi_harness::puddle::sources::SourceSet;
-use awfqi_harness::puddle::{RUN, SCORE_TABLE, stream};
+use awfqi_harness::transfer::algorithms::Algorithm;
+use awfqi_harness::transfer::sources::SourceSet;
+use awfqi_harness::transfer::{RUN, SCORE_TABLE, stream};
 
 type Record32 = Transition<[f32; 2], f32>;
 const STEPS: usize = 6;
@@ -77,7 +77,7 @@ fn run<const N: usize>(
         rows()?,
         &slices,
         &mut gp,
-        &GpTraining::reference(),
+        &GpTraining::published(),
         SubsetRule::Spread,
         &mut values,
         &mut scratch,

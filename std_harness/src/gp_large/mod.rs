@@ -18,8 +18,9 @@
 //!   published source GP and on the target GPs measured, 10–20 times faster at
 //!   `n ≥ 1000`, but it is not the spec's procedure.
 //! * **Prediction**: mean `k*ᵀK⁻¹y` and std `√max(c + σ²ₙ − k*ᵀK⁻¹k*, 0)`, which
-//!   **includes** the noise; [`subtract_noise`] applies the reference's noise-subtraction
-//!   rule (or the principled variance version, spec §14.7).
+//!   **includes** the noise; the core's [`awfqi::weights::predictive_stds`] applies the
+//!   reference's noise-subtraction rule (or the principled variance version, spec §14.7)
+//!   where the record GPs turn these into posteriors (`transfer::gp`).
 //!
 //! # Cost
 //!
@@ -1044,61 +1045,6 @@ impl<const D: usize> LargeGp<D> {
             }
         }
         Ok(())
-    }
-}
-
-/// How the fitted noise is removed from predicted standard deviations.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NoiseSubtraction {
-    /// The reference's rule (spec §4.2, §14.7): with `σ̂ = √σ²ₙ` and `m` the smallest std of
-    /// the batch, subtract `σ̂` from every std if `σ̂ ≤ m`, otherwise subtract `m`.
-    Reference,
-    /// The principled alternative (spec §14.7): `std ← √max(std² − σ²ₙ, 0)`.
-    Variance,
-}
-
-/// Which branch [`subtract_noise`] took.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NoiseBranch {
-    /// [`NoiseSubtraction::Reference`] with `σ̂ ≤ min std`: `σ̂` was subtracted.
-    Noise,
-    /// [`NoiseSubtraction::Reference`] with `σ̂ > min std`: the minimum std was subtracted
-    /// (the smallest std became exactly 0). The source-data generation requires the other
-    /// branch (spec §6), so callers there should check for this one.
-    MinimumStd,
-    /// [`NoiseSubtraction::Variance`] was applied.
-    Variance,
-    /// The batch was empty; nothing changed.
-    Empty,
-}
-
-/// Removes the noise `σ²ₙ` (a fitted [`GpHyperparameters::noise_variance`]) from the
-/// predicted `stds` of one batch of points, in place, as `mode` says.
-pub fn subtract_noise(
-    stds: &mut [f64],
-    noise_variance: f64,
-    mode: NoiseSubtraction,
-) -> NoiseBranch {
-    if stds.is_empty() {
-        return NoiseBranch::Empty;
-    }
-    match mode {
-        NoiseSubtraction::Reference => {
-            let noise_std = noise_variance.sqrt();
-            let min = stds.iter().copied().fold(f64::INFINITY, f64::min);
-            let (amount, branch) = if noise_std <= min {
-                (noise_std, NoiseBranch::Noise)
-            } else {
-                (min, NoiseBranch::MinimumStd)
-            };
-            stds.iter_mut().for_each(|s| *s -= amount);
-            branch
-        }
-        NoiseSubtraction::Variance => {
-            stds.iter_mut()
-                .for_each(|s| *s = (*s * *s - noise_variance).max(0.0).sqrt());
-            NoiseBranch::Variance
-        }
     }
 }
 

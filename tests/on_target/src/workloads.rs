@@ -337,9 +337,10 @@ pub fn awfqi_4d(storage: &mut Storage4d, seed: u64) -> Result<(usize, usize)> {
     config.gp_training.search.max_evaluations = 120;
     config.gp_training.search.restarts = 2;
     config.fqi = FqiConfig::new(0.8, 30, EmptyCells::CappedNearest)?.with_min_weight(0.05)?;
+    let grid = CellGrid::cube(-1.0, 1.0, 4)?;
     let mut kernel = Awfqi::builder(
         config.validate()?,
-        CellGrid::cube(-1.0, 1.0, 4)?,
+        grid,
         &sources,
         RowSet::grid(lattice, 2)?,
     )
@@ -350,7 +351,6 @@ pub fn awfqi_4d(storage: &mut Storage4d, seed: u64) -> Result<(usize, usize)> {
         kernel.step(&mut rng)?;
     }
     let q = kernel.q();
-    let grid = *q.grid();
     let (mut checked, mut optimal) = (0, 0);
     for cell in 0..grid.len() {
         let centre = grid.center(cell).ok_or(awfqi::Error::EmptyData)?;

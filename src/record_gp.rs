@@ -106,7 +106,7 @@ pub struct GpTraining<T, const I: usize> {
 impl<T: Real, const I: usize> GpTraining<T, I> {
     /// Spec §4.2: start from `c = ℓ = σ²_n = 1`, its bounds, an isotropic search with 10
     /// restarts (the reference's protocol).
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             initial: Hyperparameters::SPEC_INITIAL,
             bounds: HyperparameterBounds::spec_default(),
@@ -176,10 +176,32 @@ pub fn predict_posteriors<T: Real, const N: usize, const D: usize, const I: usiz
     if out.len() != records.len() {
         return Err(Error::InvalidParameter { parameter: "out" });
     }
+    let mut out = out.iter_mut();
+    visit_posteriors(gp, records, noise, |_, posterior| {
+        if let Some(o) = out.next() {
+            *o = posterior;
+        }
+        Ok(())
+    })
+}
+
+/// Calls `visit` with every record and the posterior of the mean function at its `z`, the
+/// predictive variances turned into standard deviations by `noise` with the records as one
+/// batch (§6 step 3, §7.2 step 2), in the records' order: the one place the stored source
+/// posteriors ([`predict_posteriors`]) and the target posteriors of the weights come from.
+/// Nothing is stored; `visit`'s first error stops the pass.
+///
+/// Errors: no records ([`Error::EmptyData`]), those of [`Gp::predict`] and of `visit`.
+pub fn visit_posteriors<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
+    noise: NoiseSubtraction,
+    mut visit: impl FnMut(&Transition<[T; D], T>, Posterior<T>) -> Result<()>,
+) -> Result<()> {
     let transform = batch_transform(gp, records, noise)?;
-    for (o, r) in out.iter_mut().zip(records) {
+    for r in records {
         let p = gp.predict(&input(r.state, r.action))?;
-        *o = Posterior::new(p.mean, transform.apply(p.noisy_variance));
+        visit(r, Posterior::new(p.mean, transform.apply(p.noisy_variance)))?;
     }
     Ok(())
 }
@@ -249,7 +271,7 @@ mod tests {
             &[r],
             Output::NextState(4),
             SubsetRule::Last,
-            &GpTraining::reference(),
+            &GpTraining::published(),
             &mut rng,
         );
         assert_eq!(
@@ -302,7 +324,7 @@ mod tests {
                 restarts: 3,
                 isotropic: true,
             },
-            ..GpTraining::reference()
+            ..GpTraining::published()
         };
         fit_gp(
             &mut gp,

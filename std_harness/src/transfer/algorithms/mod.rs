@@ -1,9 +1,10 @@
 //! The algorithms compared on the protocol of §3, one module each, and the experiment
 //! context they share ([`Experiment`]).
 
-pub mod fqi;
+pub mod awfqi_kernel;
+pub mod episodic;
 pub mod iwfqi;
-pub mod kernel;
+pub mod plain_fqi;
 pub mod rbt;
 pub mod sdt;
 
@@ -14,10 +15,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use super::gp::GpOptions;
-use super::protocol::{Learner, Protocol, StepRecord};
+use super::protocol::{Learner, Protocol};
 use super::score_tables::ScoreTableData;
 use super::sources::SourceSet;
-use crate::domains::{Domain, IdealMeans, Record};
+use crate::domains::{Domain, IdealMeans};
 
 /// The algorithms of issue 5, in the order the outputs list them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
@@ -188,7 +189,7 @@ impl Default for TransferOptions {
             variances: Variances::Published,
             max_weight: 1000.0,
             noise: NoiseSubtraction::Reference,
-            gp: GpOptions::reference(),
+            gp: GpOptions::published(),
             transition_weights: None,
             rbt_total: 500,
             ideal_means: None,
@@ -196,13 +197,15 @@ impl Default for TransferOptions {
     }
 }
 
-/// The core kernel's path on an experiment: steps, records and `D₀` of one run (Puddle
-/// World only until the kernel is generic over the state dimension).
-pub type KernelRunner<const D: usize> = fn(
+/// A learner that borrows run-long storage (the core kernel's memory and source slices):
+/// the hook allocates the storage in its own frame, builds the learner from the stream and
+/// hands it to the continuation, which runs the protocol on it. Puddle World only until the
+/// kernel is generic over the state dimension.
+pub type ScopedLearner<const D: usize> = fn(
     &Experiment<D>,
     &mut ChaCha8Rng,
-    &mut dyn FnMut(&StepRecord),
-) -> anyhow::Result<(Vec<StepRecord>, Vec<Record<D>>)>;
+    &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()>;
 
 /// Everything the runs of one experiment share (read-only, across threads).
 #[derive(Debug, Clone)]
@@ -222,9 +225,9 @@ pub struct Experiment<const D: usize = 2> {
     /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
     pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
     /// The core kernel's own set-up (awfqi-kernel).
-    pub kernel: Option<Arc<kernel::KernelSetup>>,
-    /// How the kernel path runs on this domain (`None`: not available).
-    pub kernel_runner: Option<KernelRunner<D>>,
+    pub kernel: Option<Arc<awfqi_kernel::KernelSetup>>,
+    /// The kernel's learner on this domain (`None`: not available).
+    pub kernel_learner: Option<ScopedLearner<D>>,
 }
 
 impl<const D: usize> Experiment<D> {
@@ -335,7 +338,7 @@ impl<const D: usize> Experiment<D> {
                 _ => self
                     .kernel
                     .as_ref()
-                    .map(|k| (k.mode, "realistic (kernel GPs)")),
+                    .map(|k| (k.config.mode, "realistic (kernel GPs)")),
             };
             if let Some((mode, kind)) = table {
                 o["score_table"] =
@@ -352,13 +355,31 @@ impl<const D: usize> Experiment<D> {
             .unwrap_or(self.domain.published.ideal_means)
     }
 
-    /// A fresh learner of `algorithm` for one run (the kernel runs through
-    /// [`Experiment::kernel_runner`] instead, since it borrows its storage for the whole
-    /// run).
+    /// Hands a fresh learner of `algorithm` for one run to `f`, with the stream `rng`
+    /// (which the kernel's set-up draws from first): every algorithm, the kernel included,
+    /// through this one door.
+    pub fn with_learner(
+        &self,
+        algorithm: Algorithm,
+        rng: &mut ChaCha8Rng,
+        f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        if algorithm == Algorithm::AwfqiKernel {
+            let scoped = self.kernel_learner.ok_or_else(|| {
+                anyhow::anyhow!("awfqi-kernel is not available on {}", self.domain.name)
+            })?;
+            return scoped(self, rng, f);
+        }
+        let mut learner = self.learner(algorithm)?;
+        f(learner.as_mut(), rng)
+    }
+
+    /// A fresh learner of `algorithm` for one run (the kernel, which borrows its storage
+    /// for the whole run, only through [`Experiment::with_learner`]).
     pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner<D> + '_>> {
         use awfqi::weights::Estimator::{Heuristic, Mean};
         Ok(match algorithm {
-            Algorithm::Fqi => Box::new(fqi::Fqi::new(self)),
+            Algorithm::Fqi => Box::new(plain_fqi::Fqi::new(self)),
             Algorithm::Iwfqi => Box::new(iwfqi::Iwfqi::estimated(self, Mean, None)?),
             Algorithm::IwfqiHeuristic => Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None)?),
             Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),
@@ -374,7 +395,7 @@ impl<const D: usize> Experiment<D> {
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
                 Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
             }
-            Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through its kernel runner"),
+            Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through with_learner"),
         })
     }
 }

@@ -5,7 +5,7 @@
 //! the IWFQI paper's Dam and Acrobot runs ([`crate::gp_large::fixed::FixedGp`]), and the
 //! noise subtraction of the predicted standard deviations.
 
-use awfqi::weights::{NoiseSubtraction, Posterior};
+use awfqi::weights::{NoiseSubtraction, Posterior, predictive_stds};
 use rand_core::Rng;
 
 use crate::domains::{Domain, GP_INPUT, GpInput, Record};
@@ -122,7 +122,7 @@ impl GpSearch {
 
 impl GpOptions {
     /// Spec §4.2: 10 restarts, `max_gp` 4000.
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             restarts: gp_large::DEFAULT_RESTARTS,
             max_gp: gp_large::MAX_GP,
@@ -282,15 +282,13 @@ impl RecordGp {
         let mut means = vec![0.0; zs.len()];
         let mut stds = vec![0.0; zs.len()];
         self.predict_into(zs, &mut means, &mut stds);
-        let sigma2 = self.noise_variance();
-        match noise {
-            NoiseSubtraction::Reference => {
-                gp_large::subtract_noise(&mut stds, sigma2, gp_large::NoiseSubtraction::Reference);
-            }
-            NoiseSubtraction::Principled => {
-                gp_large::subtract_noise(&mut stds, sigma2, gp_large::NoiseSubtraction::Variance);
-            }
-            NoiseSubtraction::Off => {}
+        // The core's one rule (awfqi::weights::predictive_stds) on the noisy variances s².
+        // Exact: in binary floating point √(s·s) = s whenever s·s neither overflows nor
+        // underflows, and predicted stds are far from both. A batch the GP could not
+        // predict (NaN, see `predict_into`) is left as it is.
+        let mut variances: Vec<f64> = stds.iter().map(|s| s * s).collect();
+        if predictive_stds(noise, self.noise_variance(), &mut variances).is_ok() {
+            stds = variances;
         }
         means
             .into_iter()

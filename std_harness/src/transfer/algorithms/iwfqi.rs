@@ -29,13 +29,13 @@ use awfqi::weights::{Estimator, WeightParams, WeightSummary, ideal_weight};
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::fqi::Episodic;
-use crate::domains::{Domain, GpInput, IdealMeans, Record};
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::gp::{Output, RecordGp};
-use crate::puddle::protocol::{Diagnostics, Learner};
-use crate::puddle::score_tables::ScoreTableData;
-use crate::puddle::sources::SourceSet;
+use super::episodic::{Episodic, EpisodicLearner};
+use crate::domains::{Domain, GpInput, IdealMeans};
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::transfer::gp::{Output, RecordGp};
+use crate::transfer::protocol::Diagnostics;
+use crate::transfer::score_tables::ScoreTableData;
+use crate::transfer::sources::SourceSet;
 
 /// Where the weights come from.
 #[derive(Debug, Clone)]
@@ -125,7 +125,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
     fn source_weights(
         &self,
         rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<crate::puddle::gp::GpSummary>)> {
+    ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<crate::transfer::gp::GpSummary>)> {
         let (reward, transition, transition_dims) = match &self.weights {
             Weights::Ideal(w) => {
                 return Ok((w.0.clone(), w.1.clone(), None));
@@ -228,8 +228,8 @@ pub fn ideal_weights<const D: usize>(
     Ok((wr, ws))
 }
 
-impl<const D: usize> Learner<D> for Iwfqi<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+impl<const D: usize> EpisodicLearner<D> for Iwfqi<'_, D> {
+    fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.query(rng)?;
         let (wr_source, ws_source, gp) = self.source_weights(rng)?;
         let n_target = self.run.data.len();
@@ -259,12 +259,8 @@ impl<const D: usize> Learner<D> for Iwfqi<'_, D> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+    fn episodic(&self) -> &Episodic<'_, D> {
+        &self.run
     }
 }
 

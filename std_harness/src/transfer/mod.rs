@@ -1,7 +1,8 @@
 //! The transfer experiments (spec §3–§9, §11–§13) on any [`crate::domains::Domain`]: the
 //! thesis's Chapter 5 and the IWFQI paper's Puddle World, water-reservoir (Dam) and Acrobot
-//! curves, with every baseline. (The module keeps its historical name; the protocol and the
-//! algorithms are generic over the state dimension.)
+//! curves, with every baseline. The protocol and the algorithms are generic over the state
+//! dimension; the commands that run them are [`crate::commands::transfer`] and its
+//! per-domain front ends.
 //!
 //! - [`sources`]: source datasets (the published ones, a user's own in the same CSV layout,
 //!   or freshly generated as each domain's paper says);

@@ -28,7 +28,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::gp::{GpOptions, Output, SourceGps};
 use crate::domains::{Domain, Task};
-use crate::fqi::{Dataset, FqiOptions, fqi};
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
 use crate::trees::{ActionForests, TreeParams};
 
 /// One record in `f64` (Puddle World's, by default).

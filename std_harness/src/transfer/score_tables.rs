@@ -9,11 +9,13 @@
 //! A table is built once per experiment and shared by every run (§11.2 \[CHOICE\]).
 
 use awfqi::alias::{AliasEntry, AliasTable};
+use awfqi::score::{PointGrid, RowSet};
+use awfqi::{Real, Transition};
 use rand_chacha::ChaCha8Rng;
 
 use super::gp::{GpOptions, Output, SourceGps};
 use super::sources::SourceSet;
-use crate::domains::{Domain, GpInput};
+use crate::domains::{Domain, GpInput, Record};
 
 /// Which rows a table has (§11.1); the thesis's settings 1–3.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
@@ -42,28 +44,59 @@ impl Mode {
 /// Grid spacing of the thesis (`dx = dy = 0.1`).
 pub const GRID_SPACING: f64 = 0.1;
 
-/// The rows of `mode` as `(state, action)` pairs, in the order of §11.1: the domain's grid
-/// rows (at `spacing`), then the `(s, a)` of every source record in order.
+/// The grid part of a score table's rows (§11.1): a core point grid with its action count
+/// (the kernel's `f32` grid) or explicit `(state, action)` pairs (a domain's
+/// [`grid_rows`](crate::domains::Domain::grid_rows)).
+#[derive(Debug, Clone, Copy)]
+pub enum GridRows<'a, T, const D: usize> {
+    /// Every point of the grid × every action.
+    Points(PointGrid<T, D>, usize),
+    /// The pairs as given.
+    Pairs(&'a [([T; D], usize)]),
+}
+
+impl Mode {
+    /// The rows of this mode as the core's [`RowSet`], in the order of §11.1: the grid rows
+    /// (grid and both modes), then the `(s, a)` of every source record in order (source and
+    /// both modes). The one place a mode becomes rows, for the `f64` tables and the kernel.
+    ///
+    /// Errors: those of [`RowSet::new`] (no rows at all, a non-finite state).
+    pub fn row_set<'a, T: Real, const D: usize>(
+        self,
+        grid: GridRows<'a, T, D>,
+        sources: &'a [&'a [Transition<[T; D], T>]],
+    ) -> awfqi::Result<RowSet<'a, T, D>> {
+        let (points, pairs) = match (self, grid) {
+            (Mode::Source, _) => (None, &[][..]),
+            (_, GridRows::Points(grid, actions)) => (Some((grid, actions)), &[][..]),
+            (_, GridRows::Pairs(pairs)) => (None, pairs),
+        };
+        let sources = if self == Mode::Grid { &[][..] } else { sources };
+        RowSet::new(points, pairs, sources)
+    }
+}
+
+/// The rows of `mode` as `(state, action)` pairs ([`Mode::row_set`] with the domain's grid
+/// rows at `spacing`).
 pub fn rows<const D: usize>(
     domain: &Domain<D>,
     mode: Mode,
     sources: &SourceSet<D>,
     spacing: f64,
 ) -> anyhow::Result<Vec<([f64; D], usize)>> {
-    let mut rows = match mode {
+    let grid = match mode {
         Mode::Source => Vec::new(),
         Mode::Grid | Mode::Both => (domain.grid_rows)(spacing)?,
     };
-    if mode != Mode::Grid {
-        rows.extend(
-            sources
-                .sources
-                .iter()
-                .flat_map(|s| s.records.iter().map(|r| (r.state, r.action))),
-        );
-    }
-    anyhow::ensure!(!rows.is_empty(), "the score table has no rows");
-    Ok(rows)
+    let slices: Vec<&[Record<D>]> = sources
+        .sources
+        .iter()
+        .map(|s| s.records.as_slice())
+        .collect();
+    let rows = mode
+        .row_set(GridRows::Pairs(&grid), &slices)
+        .map_err(|e| anyhow::anyhow!("the score table's rows: {e}"))?;
+    Ok(rows.iter().collect())
 }
 
 /// The population variance of `values` as the core's score table computes it (shifted

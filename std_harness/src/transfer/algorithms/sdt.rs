@@ -7,10 +7,9 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::fqi::Episodic;
-use crate::domains::Record;
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Learner};
+use super::episodic::{Episodic, EpisodicLearner};
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::transfer::protocol::Diagnostics;
 
 /// SDT.
 #[derive(Debug, Clone)]
@@ -29,8 +28,8 @@ impl<'e, const D: usize> Sdt<'e, D> {
     }
 }
 
-impl<const D: usize> Learner<D> for Sdt<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+impl<const D: usize> EpisodicLearner<D> for Sdt<'_, D> {
+    fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         self.run.collect(rng)?;
         let mut union: Dataset<D> = self.run.data.iter().copied().collect();
         let n_target = union.len();
@@ -44,11 +43,7 @@ impl<const D: usize> Learner<D> for Sdt<'_, D> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+    fn episodic(&self) -> &Episodic<'_, D> {
+        &self.run
     }
 }

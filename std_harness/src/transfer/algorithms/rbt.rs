@@ -16,10 +16,10 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
-use super::fqi::Episodic;
+use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::Record;
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Learner};
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::transfer::protocol::Diagnostics;
 
 /// RBT's parameters (spec §8).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,7 +38,7 @@ pub struct RbtParams {
 
 impl RbtParams {
     /// The reference's values.
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             delta_sa: 0.1,
             delta_s: 0.1,
@@ -217,14 +217,14 @@ impl<'e, const D: usize> Rbt<'e, D> {
             run: Episodic::new(experiment),
             params: RbtParams {
                 n_total: experiment.options.rbt_total,
-                ..RbtParams::reference()
+                ..RbtParams::published()
             },
         }
     }
 }
 
-impl<const D: usize> Learner<D> for Rbt<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+impl<const D: usize> EpisodicLearner<D> for Rbt<'_, D> {
+    fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         use rayon::prelude::*;
         self.run.collect(rng)?;
         let sources = &self.experiment.sources.sources;
@@ -266,12 +266,8 @@ impl<const D: usize> Learner<D> for Rbt<'_, D> {
         })
     }
 
-    fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
-    }
-
-    fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+    fn episodic(&self) -> &Episodic<'_, D> {
+        &self.run
     }
 }
 

@@ -1,12 +1,13 @@
-//! Plain FQI on the target's episodes (spec §5, §13.1): per-action Extra-Trees on `D₀`
-//! only, unweighted, from scratch every step.
+//! The episodic behaviour every forest-based algorithm shares: `D₀`, the last Q-function,
+//! collection around it and its greedy action (spec §3.2), and the one implementation of
+//! [`Learner`] for all of them ([`EpisodicLearner`]).
 
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use crate::domains::{Domain, Record};
-use crate::fqi::{Dataset, FqiOptions, fqi};
-use crate::puddle::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
+use crate::forest_fqi::FqiOptions;
+use crate::transfer::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
 use crate::trees::ActionForests;
 
 /// The episodic part every baseline shares: the domain, `D₀` and the last Q-function.
@@ -62,38 +63,28 @@ impl<'e, const D: usize> Episodic<'e, D> {
     }
 }
 
-/// Plain FQI.
-#[derive(Debug, Clone)]
-pub struct Fqi<'e, const D: usize = 2> {
-    run: Episodic<'e, D>,
+/// An algorithm whose `D₀` and Q-function live in an [`Episodic`] run (FQI, IWFQI and its
+/// AWFQI variants, RBT, SDT): it says how a step learns, and its greedy action and target
+/// samples are the run's. [`Learner`] is implemented once for all of them, below.
+pub trait EpisodicLearner<const D: usize> {
+    /// Step `k` (1-based): add this step's target data to the run and fit its Q-function on
+    /// all of it.
+    fn learn(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics>;
+
+    /// The run.
+    fn episodic(&self) -> &Episodic<'_, D>;
 }
 
-impl<'e, const D: usize> Fqi<'e, D> {
-    /// A fresh run.
-    pub fn new(experiment: &'e Experiment<D>) -> Self {
-        Self {
-            run: Episodic::new(experiment),
-        }
-    }
-}
-
-impl<const D: usize> Learner<D> for Fqi<'_, D> {
-    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
-        self.run.collect(rng)?;
-        let data: Dataset<D> = self.run.data.iter().copied().collect();
-        let options = self.run.options(FqiOptions::plain());
-        self.run.q = Some(fqi(&data, &options, rng)?.q);
-        Ok(Diagnostics {
-            n_source_samples: Some(0),
-            ..Diagnostics::default()
-        })
+impl<const D: usize, L: EpisodicLearner<D>> Learner<D> for L {
+    fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+        self.learn(k, rng)
     }
 
     fn greedy_action(&self, state: &[f64; D]) -> usize {
-        self.run.greedy_action(state)
+        self.episodic().greedy_action(state)
     }
 
     fn target_samples(&self) -> &[Record<D>] {
-        &self.run.data
+        &self.episodic().data
     }
 }

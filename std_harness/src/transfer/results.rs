@@ -156,7 +156,7 @@ pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::puddle::protocol::Diagnostics;
+    use crate::transfer::protocol::Diagnostics;
 
     fn step(k: usize, value: f64) -> StepRecord {
         StepRecord {

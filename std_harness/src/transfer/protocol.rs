@@ -44,8 +44,8 @@ pub struct Protocol {
 }
 
 impl Protocol {
-    /// Puddle World's reference protocol for a dynamics variant, `K` steps of `B` episodes.
-    pub fn reference(dynamics: Dynamics, steps: usize, episodes_per_step: usize) -> Self {
+    /// Puddle World's published protocol for a dynamics variant, `K` steps of `B` episodes.
+    pub fn puddle_world(dynamics: Dynamics, steps: usize, episodes_per_step: usize) -> Self {
         let domain = crate::domains::puddle::domain(dynamics);
         Self {
             dynamics: Some(dynamics),
@@ -301,7 +301,7 @@ mod tests {
 
     #[test]
     fn records_count_episodes_and_samples() {
-        let protocol = Protocol::reference(Dynamics::Shared, 3, 2);
+        let protocol = Protocol::puddle_world(Dynamics::Shared, 3, 2);
         let domain = puddle::domain(Dynamics::Shared);
         let mut learner = Fixed {
             data: Vec::new(),

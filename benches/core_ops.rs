@@ -15,8 +15,8 @@ use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::gp::{HyperparameterBounds, SearchOptions, WhenFull};
 use awfqi::identify::{Belief, Criterion as Score, compute_score};
 use awfqi::score::{GpSourceModel, ScoreTable, Scores};
-use awfqi_harness::reference::gp::ReferenceGp;
-use awfqi_harness::reference::identify as ref_identify;
+use awfqi_reference::gp::ReferenceGp;
+use awfqi_reference::identify as ref_identify;
 use common::*;
 use criterion::{
     BatchSize, BenchmarkGroup, BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group,
