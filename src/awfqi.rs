@@ -47,12 +47,12 @@
 //! | part | bytes |
 //! |---|---:|
 //! | `Awfqi` itself (configuration, target model, slices) | 468 |
-//! | target GP `Gp<f32, 64, 3>` | 17 692 |
+//! | target GP `Gp<f32, 64, 3>` | 17 704 |
 //! | FQI table, 484 × `FqiEntry<f32>` (20) | 9 680 |
 //! | target samples, 150 × `Transition<[f32; 2], f32>` (28) | 4 200 |
 //! | alias table, 484 × `AliasEntry<f32>` (8) | 3 872 |
 //! | reward weights, 910 × `f32` | 3 640 |
-//! | **RAM written by the loop** (the kernel and its `AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484>` of 39 084) | **39 552** |
+//! | **RAM written by the loop** (the kernel and its `AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484>` of 39 096) | **39 564** |
 //! | source records, 910 × 28 (read-only: flash) | 25 480 |
 //! | source reward posteriors, 910 × 8 (read-only: flash) | 7 280 |
 //! | score values, 484 × 12 (set-up only, then reusable) | 5 808 |

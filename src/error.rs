@@ -36,6 +36,59 @@ pub enum Error {
     /// A kernel matrix could not be factorised even after the largest jitter was added to
     /// its diagonal.
     NotPositiveDefinite,
+    /// A kernel matrix factorises only with more diagonal jitter than the caller's
+    /// conditioning policy allows (`crate::gp::Conditioning::max_jitter_ratio`): with that
+    /// jitter the GP would answer for a different model than the one asked for.
+    JitterLimit {
+        /// The smallest jitter of the escalation ladder that factorised the matrix.
+        needed: Number,
+        /// The largest jitter the policy allowed for this noise variance.
+        allowed: Number,
+    },
+    /// A kernel matrix factorised, but its estimated condition number is beyond what the
+    /// working precision can be trusted with (`crate::gp::Conditioning::max_condition`):
+    /// predictions could be wrong in their leading digits.
+    IllConditioned {
+        /// The condition estimate of the factorised matrix.
+        condition: Number,
+        /// The largest estimate the policy accepts.
+        limit: Number,
+    },
+}
+
+/// A number carried by an [`Error`], so it can say how far off a value was.
+///
+/// Compared and hashed by its bits, so [`Error`] stays `Eq` and `Hash`; print it or read it
+/// with [`Number::value`].
+#[derive(Debug, Clone, Copy)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Number(pub f64);
+
+impl Number {
+    /// The value.
+    pub fn value(self) -> f64 {
+        self.0
+    }
+}
+
+impl PartialEq for Number {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_bits() == other.0.to_bits()
+    }
+}
+
+impl Eq for Number {}
+
+impl core::hash::Hash for Number {
+    fn hash<H: core::hash::Hasher>(&self, state: &mut H) {
+        self.0.to_bits().hash(state);
+    }
+}
+
+impl fmt::Display for Number {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:e}", self.0)
+    }
 }
 
 /// `core::result::Result` specialised to the core's [`Error`].
@@ -57,6 +110,16 @@ impl fmt::Display for Error {
             Error::EmptyData => f.write_str("empty data: at least one point is required"),
             Error::NotPositiveDefinite => f.write_str(
                 "matrix is not positive definite, even after the largest jitter was added",
+            ),
+            Error::JitterLimit { needed, allowed } => write!(
+                f,
+                "ill-conditioned kernel matrix: it needs a diagonal jitter of {needed}, the \
+                 conditioning policy allows {allowed}"
+            ),
+            Error::IllConditioned { condition, limit } => write!(
+                f,
+                "ill-conditioned kernel matrix: condition estimate {condition} exceeds {limit}, \
+                 beyond what the working precision can be trusted with"
             ),
         }
     }
@@ -113,6 +176,25 @@ mod tests {
                 .to_string()
                 .contains("positive definite")
         );
+    }
+
+    #[test]
+    fn display_names_the_jitter_and_the_condition() {
+        let e = Error::JitterLimit {
+            needed: Number(1.5e-6),
+            allowed: Number(3e-9),
+        };
+        let text = e.to_string();
+        assert!(text.contains("1.5e-6") && text.contains("3e-9"), "{text}");
+        let e = Error::IllConditioned {
+            condition: Number(2e9),
+            limit: Number(8e4),
+        };
+        let text = e.to_string();
+        assert!(text.contains("2e9") && text.contains("8e4"), "{text}");
+        assert_eq!(Number(0.5), Number(0.5));
+        assert_ne!(Number(0.5), Number(0.25));
+        assert_eq!(Number(0.25).value(), 0.25);
     }
 
     #[test]

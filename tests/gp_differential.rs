@@ -19,7 +19,8 @@
 //!   the log marginal likelihood (so an LML near zero is compared in absolute terms per
 //!   point).
 //! * **Hard cases.** A hard case must either agree within its row of the table or return
-//!   `Error::NotPositiveDefinite`. The bound of a hard row grows with the 1-norm condition
+//!   `Error::NotPositiveDefinite` or one of the conditioning policy's errors
+//!   (`Error::JitterLimit`, `Error::IllConditioned`). The bound of a hard row grows with the 1-norm condition
 //!   number `κ₁` of the matrix the core factorised (noise and jitter included):
 //!   `tol = min(cap, max(floor, per_condition · ε · κ₁))`, `ε` the machine epsilon of the
 //!   core's precision — the classical forward-error bound of a Cholesky solve — but never
@@ -30,13 +31,19 @@
 //! * **Well-conditioned cases** (distinct random inputs, noise ≥ 1e-2·c, so `κ₂ ≤ 1 + 100·N`)
 //!   must succeed: f64 to 1e-9 on every quantity, f32 to 1e-3 on mean and std for `N ≤ 64`.
 //!
+//! * **Exact hard cases** (condition 1e6–1e9, computed in 60-digit arithmetic by
+//!   `scripts/gp-exact-cases`) are compared against the model the caller asked for, with and
+//!   without the base jitter: each agrees within the table or is refused, never a wrong `Ok`.
+//!
 //! The worst measured errors per class, precision and quantity are printed (run with
 //! `cargo test --test gp_differential -- --nocapture`).
 
 use awfqi::Error;
 use awfqi::gp::BASE_JITTER;
 use awfqi::rng::{standard_normal, uniform_f64};
-use awfqi_harness::commands::gp::{Case, CaseError, Fit, Precision, fit_core, fit_reference};
+use awfqi_harness::commands::gp::{
+    Case, CaseError, Fit, Policy, Precision, fit_core, fit_core_under, fit_reference,
+};
 use awfqi_reference::gp::condition;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::SeedableRng;
@@ -385,7 +392,9 @@ fn check_case(
     summary.cases += 1;
     let core = match fit_core(case, precision) {
         Ok(fit) => fit,
-        Err(CaseError::Core(Error::NotPositiveDefinite)) if class != WellConditioned => {
+        Err(CaseError::Core(
+            Error::NotPositiveDefinite | Error::JitterLimit { .. } | Error::IllConditioned { .. },
+        )) if class != WellConditioned => {
             summary.not_positive_definite += 1;
             return Vec::new();
         }
@@ -565,4 +574,186 @@ fn generators_draw_the_intended_conditioning() {
             .fold(0.0, f64::max);
         assert!(worst > 1e6, "{class:?}: worst κ₁ only {worst:e}");
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Exactly computed hard cases (condition numbers 1e6–1e9).
+//
+// `tests/data/gp_hard_cases.json` is written by `scripts/gp-exact-cases`: three classes
+// (duplicated inputs with noise 1e-8, long length scales with tiny noise, nearly collinear
+// inputs), every number representable in f32, and the exact mean, latent std and log
+// marginal likelihood in 60-digit arithmetic (mpmath) for the model as asked (`exact`) and
+// with the base jitter 1e-10 on the diagonal (`exact_base_jitter`). Unlike the tests above,
+// the core is compared against the model the caller asked for, not against the one it
+// chose after adding jitter: an escalated jitter that moves the answer beyond the table is a
+// wrong number. Every case must agree within its row of `TOLERANCES` (κ₁ of the exact
+// matrix) or return a conditioning error — never a wrong `Ok`.
+
+/// The hard classes of the exact cases, mapped to the rows of [`TOLERANCES`] they are held to.
+fn exact_class(name: &str) -> Class {
+    match name {
+        "duplicates" => Duplicates,
+        "long_scales" => TinyNoise,
+        "near_collinear" => NearlyCollinear,
+        other => panic!("unknown class {other}"),
+    }
+}
+
+#[derive(Default)]
+struct ExactSummary {
+    cases: usize,
+    accepted: usize,
+    refused: usize,
+    worst: [f64; 3],
+    max_jitter_over_noise: f64,
+}
+
+fn exact_cases() -> Vec<serde_json::Value> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gp_hard_cases.json");
+    let text = std::fs::read_to_string(path).expect("tests/data/gp_hard_cases.json");
+    let doc: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
+    doc["cases"].as_array().expect("cases").clone()
+}
+
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
+}
+
+/// Runs every exact case in `precision` under `policy`, against `expected` ("exact" or
+/// "exact_base_jitter"); returns the summaries per class and the failures.
+fn run_exact(
+    precision: Precision,
+    policy: &Policy,
+    expected: &str,
+) -> (Vec<(String, ExactSummary)>, Vec<String>) {
+    let mut summaries: Vec<(String, ExactSummary)> = Vec::new();
+    let mut failures = Vec::new();
+    for value in exact_cases() {
+        let class_name = value["class"].as_str().expect("class").to_owned();
+        let class = exact_class(&class_name);
+        let case: Case = serde_json::from_value(value.clone()).expect("a gp case");
+        let kappa = value["condition_number"]
+            .as_f64()
+            .expect("condition_number");
+        assert!((1e6..=1e9).contains(&kappa), "{}: κ₁ {kappa:e}", case.name);
+        if !summaries.iter().any(|(c, _)| *c == class_name) {
+            summaries.push((class_name.clone(), ExactSummary::default()));
+        }
+        let summary = &mut summaries
+            .iter_mut()
+            .find(|(c, _)| *c == class_name)
+            .expect("inserted")
+            .1;
+        summary.cases += 1;
+        let fit = match fit_core_under(&case, precision, policy) {
+            Ok(fit) => fit,
+            Err(CaseError::Core(
+                Error::JitterLimit { .. }
+                | Error::IllConditioned { .. }
+                | Error::NotPositiveDefinite,
+            )) => {
+                summary.refused += 1;
+                continue;
+            }
+            Err(e) => {
+                failures.push(format!("{}: unexpected error {e}", case.name));
+                continue;
+            }
+        };
+        summary.accepted += 1;
+        let base = if policy.base_jitter { BASE_JITTER } else { 0.0 };
+        let escalated = (fit.jitter - base).max(0.0);
+        summary.max_jitter_over_noise = summary
+            .max_jitter_over_noise
+            .max(escalated / case.noise_variance);
+        let exact = &value[expected];
+        let (mean, std) = (numbers(&exact["mean"]), numbers(&exact["std"]));
+        let lml = exact["log_marginal_likelihood"].as_f64().expect("lml");
+        let y_scale = case.y.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()));
+        let std_scale = case.signal_variance.sqrt();
+        let mut errors = [0.0f64; 3];
+        for (a, b) in fit.mean.iter().zip(&mean) {
+            errors[0] = errors[0].max(relative_error(*a, *b, y_scale));
+        }
+        for (a, b) in fit.std.iter().zip(&std) {
+            errors[1] = errors[1].max(relative_error(*a, *b, std_scale));
+        }
+        errors[2] = relative_error(fit.log_marginal_likelihood, lml, case.x.len() as f64);
+        for (q, quantity) in [Mean, Std, LogMarginalLikelihood].into_iter().enumerate() {
+            summary.worst[q] = summary.worst[q].max(errors[q]);
+            let allowed = tolerance(class, precision, quantity, kappa);
+            if errors[q].is_nan() || errors[q] > allowed {
+                failures.push(format!(
+                    "{} ({precision:?}, {expected}): a wrong Ok — {quantity:?} relative error \
+                     {:.3e} > {allowed:.3e} (κ₁ {kappa:.2e}, jitter {:e})",
+                    case.name, errors[q], fit.jitter
+                ));
+            }
+        }
+    }
+    for (class, s) in &summaries {
+        eprintln!(
+            "exact {class:15} {precision:?} {expected:17}: {} cases, {} accepted, {} refused; \
+             worst accepted relative error mean {:.2e}, std {:.2e}, lml {:.2e}; max escalated \
+             jitter/σ²ₙ {:.1e}",
+            s.cases,
+            s.accepted,
+            s.refused,
+            s.worst[0],
+            s.worst[1],
+            s.worst[2],
+            s.max_jitter_over_noise
+        );
+    }
+    (summaries, failures)
+}
+
+fn assert_exact(precision: Precision, policy: Policy, expected: &str) {
+    let (summaries, failures) = run_exact(precision, &policy, expected);
+    assert!(
+        failures.is_empty(),
+        "{} wrong answers:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+    assert_eq!(summaries.len(), 3, "three hard classes");
+    assert!(summaries.iter().all(|(_, s)| s.cases >= 20));
+}
+
+const EXACT_MODEL: Policy = Policy {
+    base_jitter: false,
+    max_jitter_ratio: None,
+    max_condition: None,
+};
+
+#[test]
+fn exact_hard_cases_f64_agree_or_are_refused() {
+    assert_exact(F64, EXACT_MODEL, "exact");
+    assert_exact(F64, Policy::default(), "exact_base_jitter");
+}
+
+#[test]
+fn exact_hard_cases_f32_agree_or_are_refused() {
+    assert_exact(F32, EXACT_MODEL, "exact");
+    assert_exact(F32, Policy::default(), "exact_base_jitter");
+}
+
+/// Without the policy's limits (the core before it had one) f32 returns wrong numbers on
+/// these cases: the test above would catch it.
+#[test]
+fn without_limits_f32_gives_wrong_answers_the_policy_refuses() {
+    let unbounded = Policy {
+        base_jitter: false,
+        max_jitter_ratio: Some(f64::INFINITY),
+        max_condition: Some(f64::INFINITY),
+    };
+    let (_, failures) = run_exact(F32, &unbounded, "exact");
+    assert!(
+        !failures.is_empty(),
+        "unbounded escalation gave no wrong answer: the hard cases are not hard"
+    );
 }

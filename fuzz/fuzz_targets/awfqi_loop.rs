@@ -34,6 +34,7 @@ const ANY: &[Kind] = &[
     Kind::OutOfRange,
     Kind::Invalid,
     Kind::NotPd,
+    Kind::Conditioning,
 ];
 
 fn real<T: Real>(b: &mut Bytes) -> T {

@@ -1,5 +1,6 @@
 //! Gaussian process: construction, fit, add_point (both full-capacity policies), predict,
-//! log marginal likelihood, set_hyperparameters and the bounded hyperparameter search, on
+//! log marginal likelihood, set_hyperparameters, set_conditioning and the bounded
+//! hyperparameter search, on
 //! arbitrary points, targets, hyperparameters and bounds, in f32 and f64.
 //!
 //! Invariants: no panic; a success never returns a non-finite number (the log marginal
@@ -9,7 +10,7 @@
 #![no_main]
 
 use awfqi::Real;
-use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use awfqi::gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;
@@ -76,6 +77,12 @@ fn run<T: Real>(b: &mut Bytes) {
         if b.is_empty() {
             break;
         }
+        // The policy holds for every factor kept: its condition estimate is within the limit.
+        let kappa = gp.condition_estimate().to_f64();
+        assert!(
+            kappa <= gp.conditioning().max_condition().to_f64(),
+            "a factor beyond the condition limit was kept: {kappa}"
+        );
         let before = snapshot(&gp);
         match b.u8() % 7 {
             0 => {
@@ -98,6 +105,7 @@ fn run<T: Real>(b: &mut Bytes) {
                                 Kind::Capacity,
                                 Kind::NonFinite,
                                 Kind::NotPd,
+                                Kind::Conditioning,
                             ],
                         );
                         unchanged_after_error("fit", &gp, &before);
@@ -119,7 +127,12 @@ fn run<T: Real>(b: &mut Bytes) {
                         expect_kind(
                             "add_point",
                             &e,
-                            &[Kind::NonFinite, Kind::Capacity, Kind::NotPd],
+                            &[
+                                Kind::NonFinite,
+                                Kind::Capacity,
+                                Kind::NotPd,
+                                Kind::Conditioning,
+                            ],
                         );
                         unchanged_after_error("add_point", &gp, &before);
                     }
@@ -150,6 +163,31 @@ fn run<T: Real>(b: &mut Bytes) {
                 }
                 Err(e) => expect_kind("log_marginal_likelihood", &e, &[Kind::Empty]),
             },
+            5 if b.bool() => {
+                let mut policy = Conditioning::<T>::DEFAULT;
+                if b.bool() {
+                    policy = policy.without_base_jitter();
+                }
+                let (ratio, limit) = pair::<T>(b);
+                let policy = policy
+                    .with_max_jitter_ratio(ratio)
+                    .and_then(|p| p.with_max_condition(limit));
+                trace!("set_conditioning({policy:?})");
+                match policy {
+                    Err(e) => expect_kind("Conditioning", &e, &[Kind::Invalid]),
+                    Ok(policy) => match gp.set_conditioning(policy) {
+                        Ok(()) => assert_eq!(gp.conditioning(), &policy),
+                        Err(e) => {
+                            expect_kind(
+                                "set_conditioning",
+                                &e,
+                                &[Kind::NotPd, Kind::Conditioning],
+                            );
+                            unchanged_after_error("set_conditioning", &gp, &before);
+                        }
+                    },
+                }
+            }
             5 => match {
                 let h = hyper(b);
                 trace!("set_hyperparameters({h:?})");
@@ -160,7 +198,12 @@ fn run<T: Real>(b: &mut Bytes) {
                     expect_kind(
                         "set_hyperparameters",
                         &e,
-                        &[Kind::NonFinite, Kind::Invalid, Kind::NotPd],
+                        &[
+                            Kind::NonFinite,
+                            Kind::Invalid,
+                            Kind::NotPd,
+                            Kind::Conditioning,
+                        ],
                     );
                     unchanged_after_error("set_hyperparameters", &gp, &before);
                 }
@@ -196,6 +239,7 @@ fn run<T: Real>(b: &mut Bytes) {
                                 Kind::Capacity,
                                 Kind::Empty,
                                 Kind::NotPd,
+                                Kind::Conditioning,
                             ],
                         );
                         unchanged_after_error("optimize_hyperparameters", &gp, &before);

@@ -147,6 +147,8 @@ pub enum Kind {
     Empty,
     /// [`Error::NotPositiveDefinite`].
     NotPd,
+    /// [`Error::JitterLimit`] or [`Error::IllConditioned`]: the GP's conditioning policy.
+    Conditioning,
 }
 
 /// The kind of an error.
@@ -158,6 +160,7 @@ pub fn kind(e: &Error) -> Kind {
         Error::OutOfRange { .. } => Kind::OutOfRange,
         Error::EmptyData => Kind::Empty,
         Error::NotPositiveDefinite => Kind::NotPd,
+        Error::JitterLimit { .. } | Error::IllConditioned { .. } => Kind::Conditioning,
     }
 }
 

@@ -28,7 +28,7 @@ use rand_core::Rng;
 ///
 /// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
 /// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
-/// (39 084 bytes on a Cortex-M4F, see [`crate::awfqi`]). The builder hands out its parts as
+/// (39 096 bytes on a Cortex-M4F, see [`crate::awfqi`]). The builder hands out its parts as
 /// slices, so the kernel's code does not depend on the capacities.
 #[derive(Debug, Clone)]
 pub struct AwfqiStorage<

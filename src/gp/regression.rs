@@ -1,16 +1,11 @@
 //! The fixed-capacity Gaussian-process regressor [`Gp`].
 
 use super::cholesky;
+use super::conditioning::{self, BASE_JITTER, Conditioning};
 use super::covariance::{self, Hyperparameters};
 use super::search::{self, HyperparameterBounds, LogBox, SearchOptions};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
-
-/// Jitter always added to the training diagonal: `10⁻¹⁰`, the reference's `alpha` (spec §4.2).
-///
-/// In `f32` it is below the rounding of a diagonal near 1 and changes nothing; it matters
-/// only in `f64` or for tiny signal variances.
-pub const BASE_JITTER: f64 = 1e-10;
 
 /// How many times the jitter is escalated after a failed factorisation.
 ///
@@ -18,19 +13,20 @@ pub const BASE_JITTER: f64 = 1e-10;
 /// `c` is the signal variance and `ε` the machine epsilon of `T`. Cholesky's backward error
 /// is of order `n·ε·c`, so the steps start just above rounding level and end at
 /// `≈ 1.2·10⁻³·c` in `f32` and `10⁻⁶` (for `c ≤ 4.5·10⁵`) in `f64`. When the last one fails
-/// too, the operation returns [`Error::NotPositiveDefinite`].
+/// too, the operation returns [`Error::NotPositiveDefinite`]. Escalations beyond the GP's
+/// [`Conditioning`] limit are tried only to name the jitter that would have been needed
+/// ([`Error::JitterLimit`]).
 pub const JITTER_ESCALATIONS: usize = 4;
 
 /// `ln 2π`.
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
-/// The jitter of escalation `level` (0 = base) for signal variance `c`.
-fn jitter_at<T: Real>(level: usize, c: T) -> T {
-    let base = T::from_f64(BASE_JITTER);
+/// The jitter of escalation `level` (0 = the policy's base jitter) for signal variance `c`.
+fn jitter_at<T: Real>(level: usize, c: T, policy: &Conditioning<T>) -> T {
     if level == 0 {
-        return base;
+        return policy.base_jitter();
     }
-    let mut jitter = base.max(c * T::EPSILON);
+    let mut jitter = T::from_f64(BASE_JITTER).max(c * T::EPSILON);
     for _ in 0..level {
         jitter *= T::from_f64(10.0);
     }
@@ -49,7 +45,7 @@ struct Start {
 }
 
 /// One attempt: writes the kernel rows `start.row..n`, factorises them and solves for
-/// `z[start.solve..n]`, at the given jitter level. `false` on any breakdown.
+/// `z[start.solve..n]`, with the given jitter. `false` on any breakdown.
 #[allow(clippy::too_many_arguments)]
 fn attempt<T: Real, const D: usize>(
     hyper: &Hyperparameters<T, D>,
@@ -58,12 +54,11 @@ fn attempt<T: Real, const D: usize>(
     factor: &mut [T],
     stride: usize,
     z: &mut [T],
-    level: usize,
+    jitter: T,
     row: usize,
     solve: usize,
 ) -> bool {
     let n = xs.len();
-    let jitter = jitter_at(level, hyper.signal_variance);
     if !jitter.is_finite() || ys.len() != n {
         return false;
     }
@@ -84,10 +79,17 @@ fn attempt<T: Real, const D: usize>(
 }
 
 /// Factorises `K(xs) + (σ²ₙ + jitter) I` into `factor` and solves `z = L⁻¹ ys`, escalating
-/// the jitter after a failure (every later attempt recomputes all rows). Returns the jitter
-/// level used.
+/// the jitter after a failure (every later attempt recomputes all rows) as far as `policy`
+/// allows, and refusing a factor whose condition estimate exceeds the policy's limit. Returns
+/// the jitter level used.
+///
+/// Errors: [`Error::JitterLimit`] when only a jitter beyond the policy's limit factorises
+/// (the ladder is climbed on to name it), [`Error::IllConditioned`] when every allowed factor
+/// was beyond the condition limit, [`Error::NotPositiveDefinite`] otherwise.
+#[allow(clippy::too_many_arguments)]
 fn factorize<T: Real, const D: usize>(
     hyper: &Hyperparameters<T, D>,
+    policy: &Conditioning<T>,
     xs: &[[T; D]],
     ys: &[T],
     factor: &mut [T],
@@ -95,25 +97,59 @@ fn factorize<T: Real, const D: usize>(
     z: &mut [T],
     start: Start,
 ) -> Result<usize> {
-    if attempt(
-        hyper,
-        xs,
-        ys,
-        factor,
-        stride,
-        z,
-        start.level,
-        start.row,
-        start.solve,
-    ) {
-        return Ok(start.level);
-    }
-    for level in start.level + 1..=JITTER_ESCALATIONS {
-        if attempt(hyper, xs, ys, factor, stride, z, level, 0, 0) {
-            return Ok(level);
+    let c = hyper.signal_variance;
+    let allowed = policy.allowed_jitter(hyper.noise_variance);
+    let limit = policy.max_condition();
+    let n = xs.len();
+    let mut ill_conditioned: Option<T> = None;
+    for level in start.level..=JITTER_ESCALATIONS {
+        let jitter = jitter_at(level, c, policy);
+        let (row, solve) = if level == start.level {
+            (start.row, start.solve)
+        } else {
+            (0, 0)
+        };
+        if level > 0 && (jitter.is_nan() || jitter > allowed) {
+            // Beyond the policy: find the jitter that would have worked, to name it.
+            let needed = (level..=JITTER_ESCALATIONS).find_map(|l| {
+                let j = jitter_at(l, c, policy);
+                let (row, solve) = if l == start.level {
+                    (row, solve)
+                } else {
+                    (0, 0)
+                };
+                (attempt(hyper, xs, ys, factor, stride, z, j, row, solve)
+                    && conditioning::diagonal_condition(factor, stride, n) <= limit)
+                    .then_some(j)
+            });
+            return Err(match (needed, ill_conditioned) {
+                (Some(needed), _) => Error::JitterLimit {
+                    needed: crate::error::Number(needed.to_f64()),
+                    allowed: crate::error::Number(allowed.to_f64()),
+                },
+                (None, Some(condition)) => ill(condition, limit),
+                (None, None) => Error::NotPositiveDefinite,
+            });
+        }
+        if attempt(hyper, xs, ys, factor, stride, z, jitter, row, solve) {
+            let condition = conditioning::diagonal_condition(factor, stride, n);
+            if condition <= limit {
+                return Ok(level);
+            }
+            ill_conditioned = Some(condition);
         }
     }
-    Err(Error::NotPositiveDefinite)
+    Err(match ill_conditioned {
+        Some(condition) => ill(condition, limit),
+        None => Error::NotPositiveDefinite,
+    })
+}
+
+fn ill<T: Real>(condition: T, limit: T) -> Error {
+    Error::IllConditioned {
+        condition: crate::error::Number(condition.to_f64()),
+        limit: crate::error::Number(limit.to_f64()),
+    }
 }
 
 /// `−½ zᵀz − Σ ln L_ii − (n/2) ln 2π` for the first `n` points.
@@ -156,7 +192,7 @@ pub struct Prediction<T> {
 /// prediction costs O(n·D + n²) and the log marginal likelihood O(n).
 ///
 /// **Memory** (all inline, no heap):
-/// `size_of::<T>() · (N² + N·(D + 2) + D + 2) + 2 · size_of::<usize>()`, rounded up to the
+/// `size_of::<T>() · (N² + N·(D + 2) + D + 4) + 2 · size_of::<usize>() + 1`, rounded up to the
 /// alignment; see the table in the [module docs](super). [`Gp::predict`] also uses
 /// `N · size_of::<T>()` bytes of stack. For large `N` avoid moving a `Gp` through the stack
 /// of a microcontroller: build it in place in a `static` with [`Gp::empty`] and fill it with
@@ -178,6 +214,7 @@ pub struct Gp<T, const N: usize, const D: usize> {
     whitened: [T; N],
     len: usize,
     jitter_level: usize,
+    conditioning: Conditioning<T>,
 }
 
 impl<T: Real, const N: usize, const D: usize> Default for Gp<T, N, D> {
@@ -214,6 +251,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
             whitened: [T::ZERO; N],
             len: 0,
             jitter_level: 0,
+            conditioning: Conditioning::DEFAULT,
         }
     }
 
@@ -243,7 +281,49 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// The jitter added to the training diagonal by the current factor: [`BASE_JITTER`]
     /// unless the factorisation had to escalate (see [`JITTER_ESCALATIONS`]).
     pub fn jitter(&self) -> T {
-        jitter_at(self.jitter_level, self.hyper.signal_variance)
+        jitter_at(
+            self.jitter_level,
+            self.hyper.signal_variance,
+            &self.conditioning,
+        )
+    }
+
+    /// The conditioning policy (see [`Conditioning`]).
+    pub fn conditioning(&self) -> &Conditioning<T> {
+        &self.conditioning
+    }
+
+    /// Sets the conditioning policy and refactorises the data held (O(n³/6)).
+    ///
+    /// Errors: those of the factorisation ([`Error::JitterLimit`],
+    /// [`Error::IllConditioned`], [`Error::NotPositiveDefinite`]); on error the previous
+    /// policy is kept.
+    pub fn set_conditioning(&mut self, conditioning: Conditioning<T>) -> Result<()> {
+        let previous = self.conditioning;
+        self.conditioning = conditioning;
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        match self.factorize_stored(self.len, fresh) {
+            Ok(level) => {
+                self.jitter_level = level;
+                Ok(())
+            }
+            Err(e) => {
+                self.conditioning = previous;
+                self.restore();
+                Err(e)
+            }
+        }
+    }
+
+    /// The diagonal condition estimate `(max Lᵢᵢ / min Lᵢᵢ)²` of the current factor, a lower
+    /// bound on the spectral condition number of `K + (σ²ₙ + jitter) I` (1 without data). A
+    /// factor is kept only while it is at most [`Conditioning::max_condition`]. O(n).
+    pub fn condition_estimate(&self) -> T {
+        conditioning::diagonal_condition(self.factor.as_flattened(), N, self.len)
     }
 
     /// The inputs held, oldest first.
@@ -270,6 +350,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         factorize(
             &self.hyper,
+            &self.conditioning,
             xs,
             ys,
             self.factor.as_flattened_mut(),
@@ -321,6 +402,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         let result = factorize(
             &self.hyper,
+            &self.conditioning,
             x,
             y,
             self.factor.as_flattened_mut(),
@@ -445,10 +527,11 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
                 self.factor.as_flattened_mut(),
                 N,
                 &mut self.whitened,
-                0,
+                self.conditioning.base_jitter(),
                 N - 1,
                 0,
-            );
+            )
+            && self.condition_estimate() <= self.conditioning.max_condition();
         if updated {
             self.jitter_level = 0;
             return Ok(());
@@ -534,14 +617,18 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the
     /// search's own arrays (a simplex of at most 9 points and the box) take under 1 KiB of
     /// stack in `f64`. Each evaluation factorises in place, so the factor is rebuilt at the
-    /// end. Failed factorisations count as `−∞`. The generator is used only for the
+    /// end. Failed factorisations count as `−∞`. The evaluations may use the whole jitter
+    /// ladder (the search explores, and its path does not depend on the policy); the optimum
+    /// is then held to the GP's [`Conditioning`]. The generator is used only for the
     /// restarts: one `u64` per searched parameter per restart.
     ///
     /// Errors: those of [`HyperparameterBounds::validate`] and [`SearchOptions::validate`];
     /// [`Error::CapacityExceeded`] for an ARD search (`isotropic == false`) with
     /// `D + 2 >` [`MAX_SEARCH_PARAMETERS`](super::MAX_SEARCH_PARAMETERS);
     /// [`Error::EmptyData`] without data; [`Error::NotPositiveDefinite`] when no evaluated
-    /// point could be factorised. On error the previous hyperparameters are kept.
+    /// point could be factorised; [`Error::JitterLimit`] or [`Error::IllConditioned`] when
+    /// the optimum is beyond the conditioning policy. On error the previous hyperparameters
+    /// are kept.
     pub fn optimize_hyperparameters<R: Rng + ?Sized>(
         &mut self,
         bounds: &HyperparameterBounds<T, D>,
@@ -560,6 +647,14 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         let factor = self.factor.as_flattened_mut();
         let whitened = &mut self.whitened;
+        // The evaluations climb the whole jitter ladder (the search explores; its path does
+        // not depend on the policy), the optimum is held to the policy below.
+        let explore = if self.conditioning.base_jitter() == T::ZERO {
+            Conditioning::UNBOUNDED.without_base_jitter()
+        } else {
+            Conditioning::UNBOUNDED
+        };
+        let policy = &explore;
         let fresh = Start {
             level: 0,
             row: 0,
@@ -567,15 +662,19 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         let mut objective = |theta: &search::Theta<T>| -> T {
             let hyper = space.hyperparameters::<D>(theta);
-            match factorize(&hyper, xs, ys, factor, N, whitened, fresh) {
+            match factorize(&hyper, policy, xs, ys, factor, N, whitened, fresh) {
                 Ok(_) => log_marginal_likelihood(factor, N, whitened, n),
                 Err(_) => T::NEG_INFINITY,
             }
         };
         let (best, value) = search::maximize(&space, options, rng, &mut objective);
         let best_hyper = space.hyperparameters::<D>(&best);
-        if value.is_finite() && self.set_hyperparameters(best_hyper).is_ok() {
-            return self.log_marginal_likelihood();
+        if value.is_finite() {
+            // On error `set_hyperparameters` keeps (and refactorises) the previous ones.
+            return match self.set_hyperparameters(best_hyper) {
+                Ok(()) => self.log_marginal_likelihood(),
+                Err(e) => Err(e),
+            };
         }
         self.hyper = previous;
         self.restore();

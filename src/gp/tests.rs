@@ -6,6 +6,7 @@
 extern crate std;
 
 use super::*;
+use crate::error::Number;
 use crate::{Error, Real, Result};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -297,8 +298,10 @@ fn drop_oldest_keeps_the_last_n_points_and_equals_a_refit_on_them() {
 fn drop_oldest_with_escalated_jitter_refits() {
     // Zero noise and duplicated inputs force escalation in f32; the window must still equal
     // a refit on the points it keeps, including the jitter it reports.
+    // (Without noise every escalation is beyond the default policy: this test lifts it.)
     let hyper = Hyperparameters::isotropic(1.0f32, 1.0, 0.0);
     let mut window = Gp::<f32, 3, 1>::new(hyper).unwrap();
+    window.set_conditioning(Conditioning::UNBOUNDED).unwrap();
     let xs = [[0.0], [0.0], [1.0], [2.0], [3.0], [3.0]];
     let ys = [1.0, 1.0, 0.5, 0.0, -0.5, -0.5];
     for k in 0..xs.len() {
@@ -307,6 +310,7 @@ fn drop_oldest_with_escalated_jitter_refits() {
             .unwrap();
         let first = (k + 1).saturating_sub(3);
         let mut refit = Gp::<f32, 3, 1>::new(hyper).unwrap();
+        refit.set_conditioning(Conditioning::UNBOUNDED).unwrap();
         refit.fit(&xs[first..=k], &ys[first..=k]).unwrap();
         assert_eq!(window.jitter(), refit.jitter(), "step {k}");
         assert_same(&window, &refit, &[[0.5], [3.0]], 1e-4);
@@ -347,6 +351,7 @@ fn assert_unchanged<T: Real, const N: usize, const D: usize>(a: &Gp<T, N, D>, b:
 #[test]
 fn duplicate_inputs_without_noise_escalate_the_jitter_in_f32() {
     let mut gp = Gp::<f32, 4, 2>::new(Hyperparameters::isotropic(1.0, 1.0, 0.0)).unwrap();
+    gp.set_conditioning(Conditioning::UNBOUNDED).unwrap();
     gp.fit(&[[1.0, 2.0], [1.0, 2.0]], &[0.5, 0.5]).unwrap();
     // 1 + 1e-10 rounds to 1 in f32, so the base jitter fails. With jitter j the second pivot
     // of two duplicates is (1 + j) − 1/(1 + j) ≈ 2j, which must exceed the pivot guard
@@ -362,6 +367,110 @@ fn duplicate_inputs_without_noise_escalate_the_jitter_in_f32() {
     let mut gp = Gp::<f64, 4, 2>::new(Hyperparameters::isotropic(1.0, 1.0, 0.0)).unwrap();
     gp.fit(&[[1.0, 2.0], [1.0, 2.0]], &[0.5, 0.5]).unwrap();
     assert_eq!(gp.jitter(), 1e-10);
+}
+
+#[test]
+fn a_jitter_beyond_the_policy_is_an_error_naming_it() {
+    // The f32 case above under the default policy: without noise only the base jitter
+    // (1e-10) counts, so the allowed escalation is √ε·1e-10 and the needed ε·100 is refused.
+    let mut gp = Gp::<f32, 4, 2>::new(Hyperparameters::isotropic(1.0, 1.0, 0.0)).unwrap();
+    gp.fit(&[[0.0, 0.0]], &[0.25]).unwrap();
+    let before = gp.clone();
+    let needed = f32::EPSILON * 100.0;
+    let allowed = f32::EPSILON.sqrt() * 1e-10f32;
+    assert_eq!(
+        gp.fit(&[[1.0, 2.0], [1.0, 2.0]], &[0.5, 0.5]),
+        Err(Error::JitterLimit {
+            needed: Number(needed as f64),
+            allowed: Number(allowed as f64),
+        })
+    );
+    assert_unchanged(&gp, &before);
+    // With noise 1 the same escalation is allowed (ratio √ε = 3.5e-4 > 1.2e-5)...
+    let noisy = Hyperparameters::isotropic(1.0, 1.0, 1.0);
+    let mut gp = Gp::<f32, 4, 2>::new(noisy).unwrap();
+    gp.fit(&[[1.0, 2.0], [1.0, 2.0]], &[0.5, 0.5]).unwrap();
+    // ...but not needed: 1 + 1 is far from singular.
+    assert_eq!(gp.jitter(), 1e-10);
+    // A caller may forbid escalation altogether, or allow the whole ladder.
+    let hyper = Hyperparameters::isotropic(1.0f32, 1.0, 1e-6);
+    let mut strict = Gp::<f32, 4, 1>::new(hyper).unwrap();
+    strict
+        .set_conditioning(Conditioning::DEFAULT.with_max_jitter_ratio(0.0).unwrap())
+        .unwrap();
+    assert!(matches!(
+        strict.fit(&[[0.0], [0.0], [0.0]], &[1.0, 1.0, 1.0]),
+        Err(Error::JitterLimit { .. })
+    ));
+    strict.set_conditioning(Conditioning::UNBOUNDED).unwrap();
+    strict
+        .fit(&[[0.0], [0.0], [0.0]], &[1.0, 1.0, 1.0])
+        .unwrap();
+    assert!(strict.jitter() > 1e-6);
+}
+
+#[test]
+fn without_base_jitter_the_model_is_exactly_the_one_asked_for() {
+    // Two duplicates with noise 1e-8 in f64: K + σ²I = [[1+σ², 1], [1, 1+σ²]] is well within
+    // f64 (κ = 2e8). Its LML without jitter, by hand: det = σ²(2 + σ²), yᵀK⁻¹y with y = (1, 1)
+    // is 2/(2 + σ²).
+    let s2 = 1e-8f64;
+    let hyper = Hyperparameters::isotropic(1.0, 1.0, s2);
+    let mut gp = Gp::<f64, 4, 1>::new(hyper).unwrap();
+    gp.set_conditioning(Conditioning::DEFAULT.without_base_jitter())
+        .unwrap();
+    gp.fit(&[[0.0], [0.0]], &[1.0, 1.0]).unwrap();
+    assert_eq!(gp.jitter(), 0.0);
+    let exact =
+        -0.5 * 2.0 / (2.0 + s2) - 0.5 * (s2 * (2.0 + s2)).ln() - (2.0 * core::f64::consts::PI).ln();
+    let lml = gp.log_marginal_likelihood().unwrap();
+    assert!((lml - exact).abs() < 1e-7 * exact.abs(), "{lml} vs {exact}");
+    // With the base jitter the model's noise is 1e-8 + 1e-10: the LML moves by ½ ln(1.01).
+    let mut based = Gp::<f64, 4, 1>::new(hyper).unwrap();
+    based.fit(&[[0.0], [0.0]], &[1.0, 1.0]).unwrap();
+    let shift = based.log_marginal_likelihood().unwrap() - lml;
+    assert!((shift + 0.5 * 1.01f64.ln()).abs() < 1e-6, "{shift}");
+    // Its condition estimate is the pivot ratio: L₁₁² = 1 + σ², L₂₂² = σ²(2 + σ²)/(1 + σ²).
+    let kappa = (1.0 + s2) * (1.0 + s2) / (s2 * (2.0 + s2));
+    assert!((gp.condition_estimate() / kappa - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn a_condition_beyond_trust_is_refused_in_f32() {
+    // The f64 case above in f32, with noise 1e-4 (so that its pivots pass the pivot guard):
+    // κ̂ = (1 + σ²)² / (σ²(2 + σ²)) ≈ 5e3 is accepted by default (limit 8.4e4) and refused
+    // under a limit of 1e3; the error carries both numbers.
+    let hyper = Hyperparameters::isotropic(1.0f32, 1.0, 1e-4);
+    let mut gp = Gp::<f32, 4, 1>::new(hyper).unwrap();
+    gp.fit(&[[0.0], [0.0]], &[1.0, 1.0]).unwrap();
+    let kappa = gp.condition_estimate();
+    assert!((kappa / 5.0e3 - 1.0).abs() < 1e-2, "{kappa}");
+    // A limit no factor of two duplicates meets: refused, naming the estimate.
+    let impossible = Conditioning::DEFAULT.with_max_condition(1.5).unwrap();
+    match gp.set_conditioning(impossible) {
+        Err(Error::IllConditioned { condition, limit }) => {
+            assert_eq!(limit, Number(1.5));
+            assert!(condition.value() > 1.5, "{condition}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Under 1e3 a larger jitter would do (1.2e-3 gives κ̂ ≈ 4e2), but without escalation
+    // the GP must say which.
+    let strict = Conditioning::DEFAULT
+        .with_max_condition(1e3)
+        .unwrap()
+        .with_max_jitter_ratio(0.0)
+        .unwrap();
+    match gp.set_conditioning(strict) {
+        Err(Error::JitterLimit { needed, allowed }) => {
+            assert_eq!(allowed, Number(0.0));
+            assert!((needed.value() / (f32::EPSILON as f64 * 1e4) - 1.0).abs() < 1e-6);
+        }
+        other => panic!("{other:?}"),
+    }
+    // The GP keeps its previous policy and factor.
+    assert_eq!(gp.conditioning(), &Conditioning::DEFAULT);
+    assert_eq!(gp.condition_estimate(), kappa);
 }
 
 fn duplicates_never_give_nan<T: Real>() {
@@ -386,7 +495,15 @@ fn duplicates_never_give_nan<T: Real>() {
                 }
                 assert!(gp.jitter() > T::ZERO);
             }
-            Err(e) => assert_eq!(e, Error::NotPositiveDefinite),
+            Err(e) => assert!(
+                matches!(
+                    e,
+                    Error::NotPositiveDefinite
+                        | Error::JitterLimit { .. }
+                        | Error::IllConditioned { .. }
+                ),
+                "{e:?}"
+            ),
         }
     }
 }
@@ -404,6 +521,7 @@ fn latent_variance_is_never_negative_at_training_points() {
     let xs: Vec<[f32; 1]> = xs.iter().map(|p| [p[0] as f32]).collect();
     let ys: Vec<f32> = ys.iter().map(|&v| v as f32).collect();
     let mut gp = Gp::<f32, 32, 1>::new(Hyperparameters::isotropic(1.0, 3.0, 0.0)).unwrap();
+    gp.set_conditioning(Conditioning::UNBOUNDED).unwrap();
     gp.fit(&xs, &ys).unwrap();
     for x in &xs {
         let p = gp.predict(x).unwrap();
@@ -762,7 +880,7 @@ fn f32_agrees_with_f64_on_a_random_case() {
 
 /// The documented size formula, rounded up to the alignment.
 fn documented_size(t: usize, usize_size: usize, align: usize, n: usize, d: usize) -> usize {
-    let raw = t * (n * n + n * (d + 2) + d + 2) + 2 * usize_size;
+    let raw = t * (n * n + n * (d + 2) + d + 4) + 2 * usize_size + 1;
     raw.div_ceil(align) * align
 }
 
@@ -799,9 +917,9 @@ fn memory_matches_the_documented_formula() {
     // The table in the module docs: 32-bit Cortex-M (usize 4, f64 aligned to 8) and a
     // 64-bit host.
     let table = [
-        (16, 1_372, 1_384, 2_736, 2_744),
-        (64, 17_692, 17_704, 35_376, 35_384),
-        (128, 68_124, 68_136, 136_240, 136_248),
+        (16, 1_384, 1_392, 2_760, 2_768),
+        (64, 17_704, 17_712, 35_400, 35_408),
+        (128, 68_136, 68_144, 136_264, 136_272),
     ];
     for (n, m32, h32, m64, h64) in table {
         assert_eq!(documented_size(4, 4, 4, n, 3), m32);

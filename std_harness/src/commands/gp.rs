@@ -23,7 +23,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use awfqi::Real;
-use awfqi::gp::{Gp, Hyperparameters};
+use awfqi::gp::{Conditioning, Gp, Hyperparameters};
 use serde::{Deserialize, Serialize};
 
 use awfqi_reference::gp::{Hyperparameters as ReferenceHyperparameters, ReferenceGp};
@@ -54,6 +54,17 @@ pub struct Args {
     /// to reproduce a core fit that reported this jitter.
     #[arg(long, requires = "reference", value_name = "J")]
     pub jitter: Option<f64>,
+    /// Core: factorise K + σ²ₙI without the base jitter 1e-10 (the exact model asked for).
+    #[arg(long, conflicts_with = "reference")]
+    pub no_base_jitter: bool,
+    /// Core: the largest escalated jitter relative to σ²ₙ + base jitter (default √ε of the
+    /// precision; 0 forbids escalation, inf allows the whole ladder). A fit that needs more
+    /// is an error naming the jitter it needed.
+    #[arg(long, conflicts_with = "reference", value_name = "RATIO")]
+    pub max_jitter_ratio: Option<f64>,
+    /// Core: the largest trusted condition estimate (default 1e-2/ε of the precision).
+    #[arg(long, conflicts_with = "reference", value_name = "KAPPA")]
+    pub max_condition: Option<f64>,
     /// Write the JSON here instead of standard output.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -71,8 +82,8 @@ pub enum Precision {
 /// Who computes a case.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Engine {
-    /// The core `awfqi::gp::Gp` in the given precision.
-    Core(Precision),
+    /// The core `awfqi::gp::Gp` in the given precision, under a conditioning policy.
+    Core(Precision, Policy),
     /// The reference GP, with `extra_diagonal` added to the training diagonal.
     Reference {
         /// Added to the diagonal beyond the noise variance (≥ 0).
@@ -181,10 +192,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             extra_diagonal: args.jitter.unwrap_or(0.0),
         }
     } else {
-        Engine::Core(args.precision)
+        Engine::Core(
+            args.precision,
+            Policy {
+                base_jitter: !args.no_base_jitter,
+                max_jitter_ratio: args.max_jitter_ratio,
+                max_condition: args.max_condition,
+            },
+        )
     };
     let text = std::fs::read_to_string(&args.cases)
         .with_context(|| format!("reading {}", args.cases.display()))?;
+    check_document(&text).with_context(|| format!("{}", args.cases.display()))?;
     let output = run_json(&text, engine)?;
     let json = serde_json::to_string_pretty(&output)?;
     match &args.out {
@@ -192,6 +211,29 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", path.display()))?,
         None => println!("{json}"),
     }
+    Ok(())
+}
+
+/// Checks a case file strictly before anything is computed: every case must have every
+/// field with the right type (serde's message names the field, the line and the column).
+/// The command refuses such a file; [`run_json`] (the library) keeps turning a malformed
+/// case into an `error` entry.
+pub fn check_document(text: &str) -> anyhow::Result<()> {
+    #[derive(Deserialize)]
+    #[allow(dead_code)]
+    struct Strict {
+        cases: Vec<Case>,
+    }
+    let doc: Strict = serde_json::from_str(text).map_err(|e| {
+        anyhow::anyhow!(
+            "line {}, column {}: {e} (the input must be {{\"cases\":[{{\"name\", \"x\", \"y\", \
+             \"signal_variance\", \"length_scales\", \"noise_variance\", \"x_test\"}}, …]}})",
+            e.line(),
+            e.column()
+        )
+    })?;
+    // Shapes the core cannot take (dimension, capacity) stay per-case `error` entries.
+    drop(doc);
     Ok(())
 }
 
@@ -227,7 +269,7 @@ pub fn run_json(text: &str, engine: Engine) -> anyhow::Result<Output> {
 /// Computes one case with `engine`, turning an error into an `error` entry.
 pub fn run_case(case: &Case, engine: Engine) -> CaseOutput {
     let result = match engine {
-        Engine::Core(precision) => fit_core(case, precision),
+        Engine::Core(precision, policy) => fit_core_under(case, precision, &policy),
         Engine::Reference { extra_diagonal } => fit_reference(case, extra_diagonal),
     };
     match result {
@@ -272,11 +314,60 @@ pub fn fit_reference(case: &Case, extra_diagonal: f64) -> Result<Fit, CaseError>
 /// [`CaseError::Core`]. With `f32` the inputs are rounded to `f32` first and the outputs
 /// widened back to `f64` exactly.
 pub fn fit_core(case: &Case, precision: Precision) -> Result<Fit, CaseError> {
+    fit_core_under(case, precision, &Policy::default())
+}
+
+/// The core GP's conditioning policy for a case (`awfqi::gp::Conditioning`, in f64 so one
+/// value serves both precisions): base jitter on or off, the largest escalated jitter
+/// relative to the noise variance and the largest trusted condition estimate (`None`: the
+/// precision's default).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Policy {
+    /// Add the base jitter `1e-10` (the reference's `alpha`).
+    pub base_jitter: bool,
+    /// `Conditioning::with_max_jitter_ratio`, when set.
+    pub max_jitter_ratio: Option<f64>,
+    /// `Conditioning::with_max_condition`, when set.
+    pub max_condition: Option<f64>,
+}
+
+impl Default for Policy {
+    fn default() -> Self {
+        Self {
+            base_jitter: true,
+            max_jitter_ratio: None,
+            max_condition: None,
+        }
+    }
+}
+
+impl Policy {
+    fn conditioning<T: Real>(&self) -> awfqi::Result<Conditioning<T>> {
+        let mut c = Conditioning::DEFAULT;
+        if !self.base_jitter {
+            c = c.without_base_jitter();
+        }
+        if let Some(r) = self.max_jitter_ratio {
+            c = c.with_max_jitter_ratio(T::from_f64(r))?;
+        }
+        if let Some(k) = self.max_condition {
+            c = c.with_max_condition(T::from_f64(k))?;
+        }
+        Ok(c)
+    }
+}
+
+/// [`fit_core`] under a conditioning [`Policy`].
+pub fn fit_core_under(
+    case: &Case,
+    precision: Precision,
+    policy: &Policy,
+) -> Result<Fit, CaseError> {
     check_shape(case)?;
     let capacity = capacity_for(case.x.len())?;
     match precision {
-        Precision::F64 => dispatch_dimension::<f64>(case, capacity),
-        Precision::F32 => dispatch_dimension::<f32>(case, capacity),
+        Precision::F64 => dispatch_dimension::<f64>(case, capacity, policy),
+        Precision::F32 => dispatch_dimension::<f32>(case, capacity, policy),
     }
 }
 
@@ -321,16 +412,20 @@ fn check_shape(case: &Case) -> Result<(), CaseError> {
     Ok(())
 }
 
-fn dispatch_dimension<T: Real>(case: &Case, capacity: usize) -> Result<Fit, CaseError> {
+fn dispatch_dimension<T: Real>(
+    case: &Case,
+    capacity: usize,
+    policy: &Policy,
+) -> Result<Fit, CaseError> {
     match case.length_scales.len() {
-        1 => dispatch_capacity::<T, 1>(case, capacity),
-        2 => dispatch_capacity::<T, 2>(case, capacity),
-        3 => dispatch_capacity::<T, 3>(case, capacity),
-        4 => dispatch_capacity::<T, 4>(case, capacity),
-        5 => dispatch_capacity::<T, 5>(case, capacity),
-        6 => dispatch_capacity::<T, 6>(case, capacity),
-        7 => dispatch_capacity::<T, 7>(case, capacity),
-        8 => dispatch_capacity::<T, 8>(case, capacity),
+        1 => dispatch_capacity::<T, 1>(case, capacity, policy),
+        2 => dispatch_capacity::<T, 2>(case, capacity, policy),
+        3 => dispatch_capacity::<T, 3>(case, capacity, policy),
+        4 => dispatch_capacity::<T, 4>(case, capacity, policy),
+        5 => dispatch_capacity::<T, 5>(case, capacity, policy),
+        6 => dispatch_capacity::<T, 6>(case, capacity, policy),
+        7 => dispatch_capacity::<T, 7>(case, capacity, policy),
+        8 => dispatch_capacity::<T, 8>(case, capacity, policy),
         d => Err(CaseError::Unsupported(format!(
             "input dimension {d} is not supported (1 to {MAX_DIM})"
         ))),
@@ -340,13 +435,14 @@ fn dispatch_dimension<T: Real>(case: &Case, capacity: usize) -> Result<Fit, Case
 fn dispatch_capacity<T: Real, const D: usize>(
     case: &Case,
     capacity: usize,
+    policy: &Policy,
 ) -> Result<Fit, CaseError> {
     match capacity {
-        16 => on_large_stack::<T, 16, D>(case),
-        32 => on_large_stack::<T, 32, D>(case),
-        64 => on_large_stack::<T, 64, D>(case),
-        128 => on_large_stack::<T, 128, D>(case),
-        256 => on_large_stack::<T, 256, D>(case),
+        16 => on_large_stack::<T, 16, D>(case, policy),
+        32 => on_large_stack::<T, 32, D>(case, policy),
+        64 => on_large_stack::<T, 64, D>(case, policy),
+        128 => on_large_stack::<T, 128, D>(case, policy),
+        256 => on_large_stack::<T, 256, D>(case, policy),
         n => Err(CaseError::Unsupported(format!("no built-in capacity {n}"))),
     }
 }
@@ -361,13 +457,16 @@ const BASE_STACK_BYTES: usize = 4 << 20;
 /// unoptimised build moves it through several stack temporaries. Instead of relying on the
 /// optimiser, each case runs on its own thread with `BASE_STACK_BYTES` plus eight times
 /// the GP's size of stack, in debug and release alike.
-fn on_large_stack<T: Real, const N: usize, const D: usize>(case: &Case) -> Result<Fit, CaseError> {
+fn on_large_stack<T: Real, const N: usize, const D: usize>(
+    case: &Case,
+    policy: &Policy,
+) -> Result<Fit, CaseError> {
     let stack = BASE_STACK_BYTES + 8 * std::mem::size_of::<Gp<T, N, D>>();
     std::thread::scope(|scope| {
         let worker = std::thread::Builder::new()
             .name(format!("gp-case-{N}x{D}"))
             .stack_size(stack)
-            .spawn_scoped(scope, || fit_core_with::<T, N, D>(case))
+            .spawn_scoped(scope, || fit_core_with::<T, N, D>(case, policy))
             .map_err(|e| CaseError::Unsupported(format!("could not start a worker thread: {e}")))?;
         worker
             .join()
@@ -376,7 +475,10 @@ fn on_large_stack<T: Real, const N: usize, const D: usize>(case: &Case) -> Resul
 }
 
 /// Fits `Gp<T, N, D>` to the case and predicts at every test input.
-fn fit_core_with<T: Real, const N: usize, const D: usize>(case: &Case) -> Result<Fit, CaseError> {
+fn fit_core_with<T: Real, const N: usize, const D: usize>(
+    case: &Case,
+    policy: &Policy,
+) -> Result<Fit, CaseError> {
     let to_point = |row: &[f64]| -> [T; D] { std::array::from_fn(|d| T::from_f64(row[d])) };
     let hyper = Hyperparameters {
         signal_variance: T::from_f64(case.signal_variance),
@@ -386,6 +488,8 @@ fn fit_core_with<T: Real, const N: usize, const D: usize>(case: &Case) -> Result
     let x: Vec<[T; D]> = case.x.iter().map(|row| to_point(row)).collect();
     let y: Vec<T> = case.y.iter().map(|&v| T::from_f64(v)).collect();
     let mut gp = Gp::<T, N, D>::new(hyper).map_err(CaseError::Core)?;
+    gp.set_conditioning(policy.conditioning().map_err(CaseError::Core)?)
+        .map_err(CaseError::Core)?;
     gp.fit(&x, &y).map_err(CaseError::Core)?;
     let log_marginal_likelihood = gp.log_marginal_likelihood().map_err(CaseError::Core)?;
     let mut mean = Vec::with_capacity(case.x_test.len());

@@ -299,6 +299,21 @@ pub struct Config {
     pub threshold: f64,
 }
 
+/// The largest `--steps` accepted.
+pub const MAX_STEPS: usize = 1_000;
+/// The largest `--episodes-per-step` accepted.
+pub const MAX_EPISODES_PER_STEP: usize = 10_000;
+/// The largest `--iterations` (FQI) accepted.
+pub const MAX_ITERATIONS: usize = 100_000;
+/// The largest `--trees` accepted.
+pub const MAX_TREES: usize = 10_000;
+/// The largest `--max-gp` accepted (a dense GP of this many points needs 8·n² bytes).
+pub const MAX_GP_POINTS: usize = 100_000;
+/// The largest `--gp-restarts` accepted.
+pub const MAX_GP_RESTARTS: usize = 10_000;
+/// Run indices must be below this (seeds are derived from them).
+pub const MAX_RUN_INDEX: usize = 1 << 32;
+
 impl Config {
     /// Resolves `args` for `domain` with the command's `defaults`.
     pub fn resolve<const D: usize>(
@@ -349,10 +364,49 @@ impl Config {
             spacing: args.spacing.unwrap_or(domain.grid_spacing),
             threshold: args.threshold.unwrap_or(defaults.threshold),
         };
-        if config.steps == 0 || config.episodes_per_step == 0 {
-            bail!("--steps and --episodes-per-step must be positive");
-        }
+        config.check_ranges()?;
         Ok(config)
+    }
+
+    /// The CLI's ranges: every budget positive and below a bound that still finishes, the
+    /// run range non-empty, the score spacing and the threshold finite. Each error names
+    /// the option.
+    fn check_ranges(&self) -> anyhow::Result<()> {
+        let within = |name: &str, value: usize, low: usize, high: usize| -> anyhow::Result<()> {
+            if !(low..=high).contains(&value) {
+                bail!("--{name} {value} is out of range: it must be {low} to {high}");
+            }
+            Ok(())
+        };
+        within("steps", self.steps, 1, MAX_STEPS)?;
+        within(
+            "episodes-per-step",
+            self.episodes_per_step,
+            1,
+            MAX_EPISODES_PER_STEP,
+        )?;
+        within("iterations", self.iterations, 1, MAX_ITERATIONS)?;
+        within("trees", self.trees, 1, MAX_TREES)?;
+        within("max-gp", self.max_gp, 1, MAX_GP_POINTS)?;
+        within("rbt-total", self.rbt_total, 1, usize::MAX)?;
+        within("gp-restarts", self.args.gp_restarts, 0, MAX_GP_RESTARTS)?;
+        if self.runs.start >= self.runs.end || self.runs.end > MAX_RUN_INDEX {
+            bail!(
+                "--runs {}..{} is out of range: it must be a non-empty range of run indices below {MAX_RUN_INDEX}",
+                self.runs.start,
+                self.runs.end
+            );
+        }
+        if !(self.spacing.is_finite() && self.spacing > 0.0) {
+            bail!(
+                "--spacing {} must be a positive finite number",
+                self.spacing
+            );
+        }
+        if !self.threshold.is_finite() {
+            bail!("--threshold {} must be a finite number", self.threshold);
+        }
+        Ok(())
     }
 
     fn gp(&self) -> GpOptions {
@@ -603,6 +657,22 @@ pub fn run<const D: usize>(
     pool.install(|| run_in_pool(config, Arc::new(domain), dynamics, hooks))
 }
 
+/// Creates `out` and checks that a file can be written in it, before any run starts.
+pub fn ensure_writable(out: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("output directory {}: cannot be created", out.display()))?;
+    let probe = out.join(".awfqi-write-probe");
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("output directory {}: cannot be written", out.display()))?;
+    std::fs::remove_file(&probe).with_context(|| {
+        format!(
+            "output directory {}: cannot remove {}",
+            out.display(),
+            probe.display()
+        )
+    })
+}
+
 fn run_in_pool<const D: usize>(
     config: &Config,
     domain: Arc<Domain<D>>,
@@ -611,7 +681,7 @@ fn run_in_pool<const D: usize>(
 ) -> anyhow::Result<()> {
     let args = &config.args;
     let out = &config.out;
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    ensure_writable(out)?;
     let wall = Instant::now();
     let algorithms = config.algorithms.clone();
     if algorithms.is_empty() {

@@ -2,7 +2,9 @@
 //! faithful path of IWFQI, AWFQI and the source-data generation fits it (spec §4.2).
 //!
 //! * **Kernel**: `k(z, z′) = c·exp(−‖z − z′‖² / (2ℓ²))` (constant × isotropic RBF) plus the
-//!   white noise `σ²ₙ` and the jitter [`JITTER`] `= 10⁻¹⁰` on the training diagonal only;
+//!   white noise `σ²ₙ` and the jitter [`JITTER`] `= 10⁻¹⁰` on the training diagonal only
+//!   (never escalated; 0 or another value through [`LargeConditioning`], which also refuses
+//!   a factor whose condition estimate is beyond trust);
 //!   zero prior mean; targets used as given (not centred, not scaled).
 //! * **Fit** ([`LargeGp::fit`]): maximises the log marginal likelihood over
 //!   `θ = (ln c, ln ℓ, ln σ²ₙ)` inside the box of [`HyperparameterBox::SPEC`] with a
@@ -52,6 +54,68 @@ pub use faer::Par as Parallelism;
 
 /// Jitter added to the training diagonal: the reference's `alpha` (spec §4.2).
 pub const JITTER: f64 = 1e-10;
+
+/// The conditioning policy of a [`LargeGp`] (the core's `awfqi::gp::Conditioning` for f64):
+/// the jitter on the training diagonal and the largest trusted condition estimate.
+///
+/// The large GP never escalates its jitter: it factorises `K + (σ²ₙ + jitter) I` with
+/// exactly [`LargeConditioning::jitter`] or fails with [`Error::NotPositiveDefinite`], so the
+/// jitter never exceeds `jitter / σ²ₙ` relative to the noise (`10⁻⁸` inside the spec box,
+/// `σ²ₙ ≥ 10⁻²`). After the final factorisation of a fit the diagonal condition estimate
+/// `(max Lᵢᵢ / min Lᵢᵢ)²` (a lower bound on `κ₂`) must stay within
+/// [`LargeConditioning::max_condition`], else the fit is refused with
+/// [`Error::IllConditioned`]: in f64 the default `10⁻²/ε = 4.5·10¹³` is far above what the
+/// spec box allows (`κ₂ ≤ 1 + n·c/σ²ₙ ≤ 4·10¹⁰` at `n = 4000`), so it never changes a fit of
+/// the faithful path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LargeConditioning {
+    /// Added to the training diagonal ([`JITTER`], the reference's `alpha`; 0 for none).
+    pub jitter: f64,
+    /// The largest trusted diagonal condition estimate.
+    pub max_condition: f64,
+}
+
+impl Default for LargeConditioning {
+    fn default() -> Self {
+        Self {
+            jitter: JITTER,
+            max_condition: 1e-2 / f64::EPSILON,
+        }
+    }
+}
+
+impl LargeConditioning {
+    fn validate(&self) -> Result<()> {
+        if !(self.jitter.is_finite() && self.jitter >= 0.0) {
+            return Err(Error::InvalidParameter {
+                parameter: "jitter",
+            });
+        }
+        if self.max_condition.is_nan() || self.max_condition < 1.0 {
+            return Err(Error::InvalidParameter {
+                parameter: "max_condition",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// `(max Lᵢᵢ / min Lᵢᵢ)²` of a lower Cholesky factor.
+fn diagonal_condition(factor: &Mat<f64>) -> f64 {
+    let n = factor.nrows().min(factor.ncols());
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for i in 0..n {
+        lo = lo.min(factor[(i, i)]);
+        hi = hi.max(factor[(i, i)]);
+    }
+    if n == 0 {
+        1.0
+    } else if lo > 0.0 {
+        (hi / lo).powi(2)
+    } else {
+        f64::INFINITY
+    }
+}
 
 /// Restarts of the hyperparameter search besides the initial values (spec §4.2).
 pub const DEFAULT_RESTARTS: usize = 10;
@@ -231,6 +295,8 @@ pub struct FitOptions {
     pub parallelism: Par,
     /// How the starts are optimised ([`FitStrategy::AllStarts`], the spec's, by default).
     pub strategy: FitStrategy,
+    /// Jitter and trusted condition ([`LargeConditioning::default`]: the reference's).
+    pub conditioning: LargeConditioning,
 }
 
 impl Default for FitOptions {
@@ -243,6 +309,7 @@ impl Default for FitOptions {
             optimizer: optimizer::Options::default(),
             parallelism: Par::Seq,
             strategy: FitStrategy::AllStarts,
+            conditioning: LargeConditioning::default(),
         }
     }
 }
@@ -304,6 +371,21 @@ pub struct LargeGp<const D: usize> {
     alpha: Vec<f64>,
     lml: f64,
     par: Par,
+    jitter: f64,
+}
+
+/// [`Error::IllConditioned`] when the factor's diagonal condition estimate exceeds the
+/// policy's limit.
+fn check_condition(factor: &Mat<f64>, conditioning: &LargeConditioning) -> Result<()> {
+    let condition = diagonal_condition(factor);
+    if condition <= conditioning.max_condition {
+        Ok(())
+    } else {
+        Err(Error::IllConditioned {
+            condition: awfqi::error::Number(condition),
+            limit: awfqi::error::Number(conditioning.max_condition),
+        })
+    }
 }
 
 fn validate_data<const D: usize>(inputs: &[[f64; D]], targets: &[f64]) -> Result<()> {
@@ -515,6 +597,8 @@ pub struct LikelihoodEvaluator<'a, const D: usize> {
     memo: Vec<([f64; 3], Option<f64>)>,
     /// Cholesky factorisations done (every [`LikelihoodEvaluator::value`] call).
     factorizations: usize,
+    /// Added to the training diagonal ([`JITTER`] unless set by [`Self::with_jitter`]).
+    jitter: f64,
 }
 
 impl<'a, const D: usize> LikelihoodEvaluator<'a, D> {
@@ -549,7 +633,14 @@ impl<'a, const D: usize> LikelihoodEvaluator<'a, D> {
             last: None,
             memo: Vec::new(),
             factorizations: 0,
+            jitter: JITTER,
         })
+    }
+
+    /// The same evaluator with `jitter` on the training diagonal instead of [`JITTER`].
+    pub fn with_jitter(mut self, jitter: f64) -> Self {
+        self.jitter = jitter;
+        self
     }
 
     /// The log marginal likelihood at `θ = (ln c, ln ℓ, ln σ²ₙ)`, or `None` when the Gram
@@ -564,7 +655,7 @@ impl<'a, const D: usize> LikelihoodEvaluator<'a, D> {
         let mut p = 0;
         for j in 0..n {
             let col = self.chol.col_as_slice_mut(j);
-            col[j] = c + h.noise_variance + JITTER;
+            col[j] = c + h.noise_variance + self.jitter;
             let len = n - j - 1;
             kernel_column(
                 k,
@@ -704,11 +795,28 @@ impl<const D: usize> LargeGp<D> {
         hyper: GpHyperparameters,
         par: Par,
     ) -> Result<Self> {
+        Self::new_with(inputs, targets, hyper, par, &LargeConditioning::default())
+    }
+
+    /// [`LargeGp::new`] under a conditioning policy.
+    ///
+    /// Errors: those of [`LargeGp::new`], an invalid policy ([`Error::InvalidParameter`]),
+    /// a factor beyond the policy's condition limit ([`Error::IllConditioned`]).
+    pub fn new_with(
+        inputs: &[[f64; D]],
+        targets: &[f64],
+        hyper: GpHyperparameters,
+        par: Par,
+        conditioning: &LargeConditioning,
+    ) -> Result<Self> {
         hyper.validate()?;
-        let mut eval = LikelihoodEvaluator::new(inputs, targets, par)?;
+        conditioning.validate()?;
+        let mut eval =
+            LikelihoodEvaluator::new(inputs, targets, par)?.with_jitter(conditioning.jitter);
         let lml = eval
             .value(&hyper.to_log())
             .ok_or(Error::NotPositiveDefinite)?;
+        check_condition(&eval.chol, conditioning)?;
         eval.finish_alpha();
         Ok(Self {
             inputs: inputs.to_vec(),
@@ -717,7 +825,19 @@ impl<const D: usize> LargeGp<D> {
             factor: eval.chol,
             lml,
             par,
+            jitter: conditioning.jitter,
         })
+    }
+
+    /// The jitter on the training diagonal of this fit.
+    pub fn jitter(&self) -> f64 {
+        self.jitter
+    }
+
+    /// The diagonal condition estimate `(max Lᵢᵢ / min Lᵢᵢ)²` of the factor (see
+    /// [`LargeConditioning`]).
+    pub fn condition_estimate(&self) -> f64 {
+        diagonal_condition(&self.factor)
     }
 
     /// Fits the hyperparameters by maximising the log marginal likelihood on the last
@@ -736,6 +856,7 @@ impl<const D: usize> LargeGp<D> {
         validate_data(inputs, targets)?;
         options.initial.validate()?;
         options.bounds.validate()?;
+        options.conditioning.validate()?;
         if options.max_points == 0 {
             return Err(Error::InvalidParameter {
                 parameter: "max_points",
@@ -750,7 +871,8 @@ impl<const D: usize> LargeGp<D> {
                 lower[i] + awfqi::rng::uniform_f64(rng) * (upper[i] - lower[i])
             }));
         }
-        let mut eval = LikelihoodEvaluator::new(inputs, targets, options.parallelism)?;
+        let mut eval = LikelihoodEvaluator::new(inputs, targets, options.parallelism)?
+            .with_jitter(options.conditioning.jitter);
         let optimize = |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| {
             let factorizations = eval.factorizations;
             let m = optimizer::minimize(
@@ -784,7 +906,8 @@ impl<const D: usize> LargeGp<D> {
                 let sub_inputs: Vec<[f64; D]> = picks.iter().map(|&i| inputs[i]).collect();
                 let sub_targets: Vec<f64> = picks.iter().map(|&i| targets[i]).collect();
                 let mut sub_eval =
-                    LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?;
+                    LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?
+                        .with_jitter(options.conditioning.jitter);
                 for start in &starts {
                     let screened = optimize(&mut sub_eval, start);
                     let end = screened.theta;
@@ -829,6 +952,7 @@ impl<const D: usize> LargeGp<D> {
         let best = best.ok_or(Error::NotPositiveDefinite)?;
         let theta = runs[best].theta;
         let lml = eval.value(&theta).ok_or(Error::NotPositiveDefinite)?;
+        check_condition(&eval.chol, &options.conditioning)?;
         eval.finish_alpha();
         let gp = Self {
             inputs: inputs.to_vec(),
@@ -837,6 +961,7 @@ impl<const D: usize> LargeGp<D> {
             factor: eval.chol,
             lml,
             par: options.parallelism,
+            jitter: options.conditioning.jitter,
         };
         Ok((gp, FitReport { runs, best }))
     }

@@ -559,3 +559,77 @@ fn memoised_fit_takes_the_same_path_with_fewer_factorisations() {
         "no repeated point: the memo was not exercised"
     );
 }
+
+#[test]
+fn conditioning_policy_sets_the_jitter_and_refuses_untrusted_factors() {
+    // Two duplicated inputs with noise 1e-8: K + (σ² + j)I has pivots 1 + σ² + j and
+    // (σ² + j)(2 + σ² + j)/(1 + σ² + j), so the diagonal estimate is known in closed form.
+    let zs = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]];
+    let ys = [1.0, 1.0];
+    let hyper = GpHyperparameters {
+        signal_variance: 1.0,
+        length_scale: 1.0,
+        noise_variance: 1e-8,
+    };
+    let kappa = |s: f64| (1.0 + s) * (1.0 + s) / (s * (2.0 + s));
+    let default = LargeGp::new(&zs, &ys, hyper, Par::Seq).unwrap();
+    assert_eq!(default.jitter(), JITTER);
+    assert!((default.condition_estimate() / kappa(1e-8 + JITTER) - 1.0).abs() < 1e-6);
+    let exact = LargeConditioning {
+        jitter: 0.0,
+        ..LargeConditioning::default()
+    };
+    let none = LargeGp::new_with(&zs, &ys, hyper, Par::Seq, &exact).unwrap();
+    assert_eq!(none.jitter(), 0.0);
+    assert!((none.condition_estimate() / kappa(1e-8) - 1.0).abs() < 1e-6);
+    // LML moves by −½ ln(1 + j/σ²) from the determinant (the fit term changes by 1e-10).
+    let shift = default.log_marginal_likelihood() - none.log_marginal_likelihood();
+    assert!((shift + 0.5 * 1.01f64.ln()).abs() < 1e-6, "{shift}");
+    let strict = LargeConditioning {
+        max_condition: 1e6,
+        ..LargeConditioning::default()
+    };
+    match LargeGp::new_with(&zs, &ys, hyper, Par::Seq, &strict) {
+        Err(Error::IllConditioned { condition, limit }) => {
+            assert_eq!(limit.value(), 1e6);
+            assert!((condition.value() / kappa(1e-8 + JITTER) - 1.0).abs() < 1e-6);
+        }
+        other => panic!("{other:?}"),
+    }
+    for bad in [
+        LargeConditioning {
+            jitter: -1.0,
+            ..LargeConditioning::default()
+        },
+        LargeConditioning {
+            max_condition: f64::NAN,
+            ..LargeConditioning::default()
+        },
+    ] {
+        assert!(matches!(
+            LargeGp::new_with(&zs, &ys, hyper, Par::Seq, &bad),
+            Err(Error::InvalidParameter { .. })
+        ));
+    }
+    // A fit under a strict limit is refused, not returned with a factor beyond it.
+    let options = FitOptions {
+        restarts: 0,
+        conditioning: strict,
+        initial: hyper,
+        ..FitOptions::default()
+    };
+    let bounds_box = HyperparameterBox {
+        noise_variance: (1e-8, 1e-8),
+        ..HyperparameterBox::SPEC
+    };
+    let options = FitOptions {
+        bounds: bounds_box,
+        ..options
+    };
+    let result = LargeGp::fit(&zs, &ys, &options, &mut rng(3));
+    assert!(
+        matches!(result, Err(Error::IllConditioned { .. })),
+        "{:?}",
+        result.map(|(gp, _)| gp.hyperparameters())
+    );
+}

@@ -77,10 +77,14 @@ impl ResultFile {
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
     }
 
-    /// Writes the file (pretty JSON).
+    /// Writes the file (pretty JSON) atomically: into `<path>.partial`, then renamed, so an
+    /// interrupted or failed write never leaves a file that looks complete.
     pub fn write(&self, path: &Path) -> anyhow::Result<()> {
         let text = serde_json::to_string_pretty(self)?;
-        std::fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))
+        let partial = path.with_extension("json.partial");
+        std::fs::write(&partial, text + "\n")
+            .with_context(|| format!("writing {}", partial.display()))?;
+        std::fs::rename(&partial, path).with_context(|| format!("writing {}", path.display()))
     }
 
     /// Per-step statistics across runs (§3.4 aggregation).

@@ -55,6 +55,9 @@ pub struct SourceLayout {
     /// `Some(values)` when the `a` column holds the action's value (`values[a]`) rather
     /// than its index.
     pub action_values: Option<Vec<f64>>,
+    /// The environment's state space, `[low, high]` per coordinate, when it is a box: every
+    /// state and next state of a record must lie inside it (`None`: not checked).
+    pub state_bounds: Option<Vec<(f64, f64)>>,
 }
 
 impl SourceLayout {
@@ -69,6 +72,7 @@ impl SourceLayout {
             file_prefix: format!("{prefix}_dynamics_source_"),
             posterior_dims: 2,
             action_values: None,
+            state_bounds: Some(vec![(0.0, 10.0); 2]),
         }
     }
 
@@ -95,6 +99,7 @@ impl SourceLayout {
             file_prefix: format!("{name}_source_"),
             posterior_dims,
             action_values,
+            state_bounds: None,
         }
     }
 
@@ -163,16 +168,33 @@ impl<const D: usize> SourceDataset<D> {
     /// Parses `layout` (header line, then numeric rows) for a domain of `num_actions`
     /// actions.
     ///
-    /// Errors: a missing or different header, a row with another number of columns, a
-    /// value that is not a finite number, an action that is not one of the domain's, a std
-    /// below −[`NEGATIVE_STD_TOLERANCE`] (one within it is read as its absolute value).
+    /// Errors, each naming the line and the field: a missing or different header (the
+    /// column set), a row with another number of columns, a value that is not a finite
+    /// number, a time index that is not a non-negative integer, a state or next state outside
+    /// the layout's state space, an action that is not one of the domain's, an absorbing flag
+    /// other than 0 or 1, a std below −[`NEGATIVE_STD_TOLERANCE`] (one within it is read as
+    /// its absolute value).
     pub fn from_csv(text: &str, layout: &SourceLayout, num_actions: usize) -> anyhow::Result<Self> {
         let mut lines = text.lines();
-        let header = lines.next().context("empty source file")?;
+        let header = lines.next().context("empty source file (no header line)")?;
         let names: Vec<&str> = header.split(',').map(str::trim).collect();
         let expected: Vec<&str> = layout.header.split(',').collect();
         if names != expected {
-            bail!("unexpected header {header:?}; expected {:?}", layout.header);
+            let missing: Vec<&str> = expected
+                .iter()
+                .filter(|e| !names.contains(e))
+                .copied()
+                .collect();
+            let unknown: Vec<&str> = names
+                .iter()
+                .filter(|n| !expected.contains(n))
+                .copied()
+                .collect();
+            bail!(
+                "line 1: unexpected header {header:?} (missing columns {missing:?}, unknown \
+                 columns {unknown:?}); expected {:?}",
+                layout.header
+            );
         }
         let columns = layout.columns::<D>();
         let mut data = Self {
@@ -186,25 +208,62 @@ impl<const D: usize> SourceDataset<D> {
                 continue;
             }
             let row = i + 2;
-            let v: Vec<f64> = line
-                .split(',')
-                .map(|f| f.trim().parse::<f64>())
-                .collect::<Result<_, _>>()
-                .with_context(|| format!("line {row}: not a number"))?;
-            if v.len() != columns {
-                bail!("line {row}: {} columns instead of {columns}", v.len());
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            if cells.len() != columns {
+                bail!("line {row}: {} columns instead of {columns}", cells.len());
             }
-            if v.iter().any(|x| !x.is_finite()) {
-                bail!("line {row}: non-finite value");
+            let mut v = Vec::with_capacity(columns);
+            for (cell, name) in cells.iter().zip(&expected) {
+                let x: f64 = cell.parse().with_context(|| {
+                    format!("line {row}, field `{name}`: {cell:?} is not a number")
+                })?;
+                if !x.is_finite() {
+                    bail!("line {row}, field `{name}`: non-finite value {cell}");
+                }
+                v.push(x);
+            }
+            let field = |k: usize| expected.get(k).copied().unwrap_or("?");
+            if v[0] < 0.0 || v[0].fract() != 0.0 {
+                bail!(
+                    "line {row}, field `{}`: time index {} is not a non-negative integer",
+                    field(0),
+                    v[0]
+                );
+            }
+            if let Some(bounds) = &layout.state_bounds {
+                for (d, &(low, high)) in bounds.iter().enumerate().take(D) {
+                    for k in [1 + d, D + 3 + d] {
+                        if !(low..=high).contains(&v[k]) {
+                            bail!(
+                                "line {row}, field `{}`: {} is outside the state space [{low}, {high}]",
+                                field(k),
+                                v[k]
+                            );
+                        }
+                    }
+                }
             }
             let a = v[D + 1];
             let Some(action) = layout.action(a, num_actions) else {
-                bail!("line {row}: action {a} is not one of the domain's {num_actions} actions");
+                bail!(
+                    "line {row}, field `{}`: action {a} is not one of the domain's {num_actions} actions",
+                    field(D + 1)
+                );
             };
+            let absorbing = v[2 * D + 3];
+            if absorbing != 0.0 && absorbing != 1.0 {
+                bail!(
+                    "line {row}, field `{}`: absorbing flag {absorbing} is not 0 or 1",
+                    field(2 * D + 3)
+                );
+            }
             let mut posteriors = v[2 * D + 4..].to_vec();
-            for s in posteriors.iter_mut().skip(1).step_by(2) {
+            for (j, s) in posteriors.iter_mut().enumerate().skip(1).step_by(2) {
                 if *s < -NEGATIVE_STD_TOLERANCE {
-                    bail!("line {row}: negative posterior std");
+                    bail!(
+                        "line {row}, field `{}`: negative posterior std {s}",
+                        field(2 * D + 4 + j)
+                    );
                 }
                 // Acrobot's noise-free source GPs store stds within ±10⁻⁶ of 0 at their own
                 // training points (numerical noise, some negative). Only σ² enters the
@@ -217,7 +276,7 @@ impl<const D: usize> SourceDataset<D> {
                 action,
                 reward: v[D + 2],
                 next_state: std::array::from_fn(|d| v[D + 3 + d]),
-                absorbing: v[2 * D + 3] != 0.0,
+                absorbing: absorbing == 1.0,
             });
             data.reward
                 .push(Posterior::new(posteriors[0], posteriors[1]));
@@ -323,14 +382,19 @@ impl<const D: usize> SourceSet<D> {
         count: usize,
         num_actions: usize,
     ) -> anyhow::Result<Self> {
-        let texts = (1..=count)
+        let sources = (1..=count)
             .map(|k| {
                 let path = dir.join(layout.file_name(k));
-                std::fs::read_to_string(&path)
-                    .with_context(|| format!("reading {}", path.display()))
+                let text = std::fs::read_to_string(&path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                SourceDataset::from_csv(&text, layout, num_actions)
+                    .with_context(|| format!("{}", path.display()))
             })
             .collect::<anyhow::Result<Vec<_>>>()?;
-        Self::from_texts(&texts, layout, num_actions, &dir.display().to_string())
+        Ok(Self {
+            sources,
+            origin: dir.display().to_string(),
+        })
     }
 
     /// Writes the datasets into `dir` under `layout`'s file names.

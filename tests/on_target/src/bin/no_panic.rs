@@ -72,6 +72,14 @@ fn error_and_float<T: Real>() {
         awfqi::Error::OutOfRange { parameter: "z" },
         awfqi::Error::EmptyData,
         awfqi::Error::NotPositiveDefinite,
+        awfqi::Error::JitterLimit {
+            needed: awfqi::error::Number(opaque(1e-6)),
+            allowed: awfqi::error::Number(opaque(1e-9)),
+        },
+        awfqi::Error::IllConditioned {
+            condition: awfqi::error::Number(opaque(1e9)),
+            limit: awfqi::error::Number(opaque(8e4)),
+        },
     ];
     let e = errors
         .get(index(2))
@@ -327,6 +335,18 @@ fn gp<T: Real>(rng: &mut ChaCha8Rng) {
     keep(gp.log_marginal_likelihood());
     keep((gp.len(), gp.is_empty(), gp.hyperparameters(), gp.jitter()));
     keep((gp.inputs().len(), gp.targets().len()));
+    keep(gp.condition_estimate());
+    let policy = awfqi::gp::Conditioning::<T>::DEFAULT.without_base_jitter();
+    let policy = policy
+        .with_max_jitter_ratio(num(0.01))
+        .and_then(|p| p.with_max_condition(num(1e6)))
+        .unwrap_or(awfqi::gp::Conditioning::UNBOUNDED);
+    keep(gp.set_conditioning(policy));
+    keep((
+        gp.conditioning().base_jitter(),
+        gp.conditioning().allowed_jitter(num(0.1)),
+    ));
+    keep(gp.set_conditioning(awfqi::gp::Conditioning::DEFAULT));
     keep(gp.set_hyperparameters(Hyperparameters::isotropic(num(1.0), num(1.0), num(0.1))));
     let bounds = HyperparameterBounds::<T, 3>::spec_default();
     keep(bounds.validate());

@@ -1,0 +1,278 @@
+//! Every door of the harness refuses bad input with a clear error — naming the file, the
+//! line and the field, or the option — and a non-zero exit, before any result file is
+//! written: source CSVs (column set, numbers, states inside Puddle World's [0, 10]²,
+//! actions, absorbing flags), GP case JSON, CLI ranges and an output directory that cannot
+//! be written. The binary is run as a user would run it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const PUBLISHED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/puddle-sources");
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("awfqi-bad-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs the harness; returns (exit success, stderr).
+fn harness(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_awfqi-harness"))
+        .args(args)
+        .output()
+        .expect("the harness runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A copy of the published shared-dynamics sources in `dir`, with line `line` (1-based,
+/// the header is line 1) of source 2 changed by `edit`.
+fn sources_with(dir: &Path, line: usize, edit: impl Fn(&mut Vec<String>)) {
+    for k in 1..=3 {
+        let name = format!("shared_dynamics_source_{k}.csv");
+        let text = std::fs::read_to_string(Path::new(PUBLISHED).join(&name)).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        if k == 2 {
+            let mut cells: Vec<String> = lines[line - 1].split(',').map(str::to_owned).collect();
+            edit(&mut cells);
+            lines[line - 1] = cells.join(",");
+        }
+        std::fs::write(dir.join(&name), lines.join("\n") + "\n").unwrap();
+    }
+}
+
+/// `puddle` on `sources` with a budget that would finish in a second, into `out`.
+fn puddle_on(sources: &Path, out: &Path) -> (bool, String) {
+    harness(&[
+        "puddle",
+        "--sources",
+        sources.to_str().unwrap(),
+        "--algorithms",
+        "fqi",
+        "--steps",
+        "1",
+        "--runs",
+        "1",
+        "--iterations",
+        "1",
+        "--trees",
+        "1",
+        "--quiet",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+/// Asserts the run failed, its message names every part, and no result file was written.
+fn refused(result: (bool, String), parts: &[&str], out: &Path) {
+    let (ok, stderr) = result;
+    assert!(!ok, "accepted; stderr:\n{stderr}");
+    for part in parts {
+        assert!(stderr.contains(part), "{part:?} not named in:\n{stderr}");
+    }
+    let written: Vec<_> = std::fs::read_dir(out)
+        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.file_name()).collect())
+        .unwrap_or_default();
+    assert!(
+        written
+            .iter()
+            .all(|n| !n.to_string_lossy().ends_with(".json")
+                && !n.to_string_lossy().ends_with(".csv")),
+        "result files left behind: {written:?}"
+    );
+}
+
+#[test]
+fn a_state_outside_the_world_names_file_line_and_field() {
+    let dir = scratch("state");
+    // Line 5 of source 2: s_x = 55, outside [0, 10]².
+    sources_with(&dir, 5, |c| c[1] = "55".into());
+    let out = dir.join("out");
+    refused(
+        puddle_on(&dir, &out),
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 5",
+            "`s_x`",
+            "55",
+            "[0, 10]",
+        ],
+        &out,
+    );
+    // A next state too.
+    sources_with(&dir, 7, |c| c[6] = "-0.5".into());
+    refused(
+        puddle_on(&dir, &out),
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 7",
+            "`next_s_y`",
+            "-0.5",
+        ],
+        &out,
+    );
+}
+
+#[test]
+fn bad_actions_flags_numbers_and_columns_are_named() {
+    let dir = scratch("cells");
+    let out = dir.join("out");
+    sources_with(&dir, 3, |c| c[3] = "7".into());
+    refused(puddle_on(&dir, &out), &["line 3", "`a`", "action 7"], &out);
+    sources_with(&dir, 3, |c| c[3] = "1.5".into());
+    refused(puddle_on(&dir, &out), &["line 3", "`a`", "1.5"], &out);
+    sources_with(&dir, 4, |c| c[7] = "2".into());
+    refused(
+        puddle_on(&dir, &out),
+        &["line 4", "`absorbing`", "not 0 or 1"],
+        &out,
+    );
+    sources_with(&dir, 6, |c| c[4] = "NaN".into());
+    refused(
+        puddle_on(&dir, &out),
+        &["line 6", "`r`", "non-finite"],
+        &out,
+    );
+    sources_with(&dir, 6, |c| c[4] = "inf".into());
+    refused(
+        puddle_on(&dir, &out),
+        &["line 6", "`r`", "non-finite"],
+        &out,
+    );
+    sources_with(&dir, 6, |c| c[2] = "one".into());
+    refused(
+        puddle_on(&dir, &out),
+        &["line 6", "`s_y`", "not a number"],
+        &out,
+    );
+    sources_with(&dir, 8, |c| c[0] = "-1".into());
+    refused(
+        puddle_on(&dir, &out),
+        &["line 8", "`t`", "time index"],
+        &out,
+    );
+    sources_with(&dir, 8, |c| c[9] = "-0.5".into());
+    refused(
+        puddle_on(&dir, &out),
+        &["line 8", "`src_gp_r_std_noise_subtracted`", "negative"],
+        &out,
+    );
+    sources_with(&dir, 9, |c| {
+        c.pop();
+    });
+    refused(
+        puddle_on(&dir, &out),
+        &["line 9", "13 columns instead of 14"],
+        &out,
+    );
+    // The column set: a header without `absorbing`.
+    sources_with(&dir, 1, |c| c[7] = "done".into());
+    refused(
+        puddle_on(&dir, &out),
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 1",
+            "missing columns [\"absorbing\"]",
+            "done",
+        ],
+        &out,
+    );
+    // A missing file.
+    sources_with(&dir, 2, |_| {});
+    std::fs::remove_file(dir.join("shared_dynamics_source_3.csv")).unwrap();
+    refused(
+        puddle_on(&dir, &out),
+        &["shared_dynamics_source_3.csv"],
+        &out,
+    );
+}
+
+#[test]
+fn the_published_sources_pass_the_same_checks() {
+    let dir = scratch("published");
+    sources_with(&dir, 2, |_| {});
+    let out = dir.join("out");
+    let (ok, stderr) = puddle_on(&dir, &out);
+    assert!(ok, "{stderr}");
+    assert!(out.join("fqi.json").exists());
+    assert!(!out.join("fqi.json.partial").exists());
+}
+
+#[test]
+fn cli_ranges_are_checked_before_anything_runs() {
+    let dir = scratch("cli");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let base = [
+        "puddle",
+        "--algorithms",
+        "fqi",
+        "--quiet",
+        "--no-plots",
+        "--out",
+        out_s,
+    ];
+    for (extra, named) in [
+        (&["--steps", "0"][..], "--steps 0"),
+        (&["--steps", "100000"], "--steps 100000"),
+        (&["--episodes-per-step", "0"], "--episodes-per-step 0"),
+        (&["--runs", "0"], "empty run range 0..0"),
+        (&["--iterations", "0"], "--iterations 0"),
+        (&["--trees", "0"], "--trees 0"),
+        (&["--max-gp", "0"], "--max-gp 0"),
+        (&["--rbt-total", "0"], "--rbt-total 0"),
+        (&["--gp-restarts", "1000000"], "--gp-restarts 1000000"),
+        (&["--spacing", "0"], "--spacing 0"),
+        (&["--spacing", "NaN"], "--spacing NaN"),
+        (&["--seed", "1e3"], "--seed <SEED>"),
+        (&["--runs", "5..2"], "5..2"),
+    ] {
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        refused(harness(&args), &[named], &out);
+    }
+}
+
+#[test]
+fn an_output_directory_that_cannot_be_written_is_named() {
+    let dir = scratch("unwritable");
+    // A regular file where the output directory should be: nothing can be created under it
+    // (a permission test would not hold for root).
+    let blocker = dir.join("not-a-directory");
+    std::fs::write(&blocker, "x").unwrap();
+    let out = blocker.join("results");
+    let (ok, stderr) = harness(&[
+        "puddle",
+        "--algorithms",
+        "fqi",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("output directory") && stderr.contains("not-a-directory/results"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_malformed_gp_case_file_names_file_line_and_field() {
+    let dir = scratch("gp");
+    let file = dir.join("cases.json");
+    std::fs::write(
+        &file,
+        "{\"cases\": [\n  {\"name\": \"a\", \"x\": [[0.0]], \"y\": [1.0],\n   \"signal_variance\": 1.0, \"length_scales\": [1.0],\n   \"x_test\": [[0.5]]}\n]}\n",
+    )
+    .unwrap();
+    let (ok, stderr) = harness(&["gp", "--cases", file.to_str().unwrap()]);
+    assert!(!ok);
+    for part in ["cases.json", "line 4", "noise_variance"] {
+        assert!(stderr.contains(part), "{part:?} not in {stderr}");
+    }
+    let (ok, stderr) = harness(&["gp", "--cases", dir.join("absent.json").to_str().unwrap()]);
+    assert!(!ok && stderr.contains("absent.json"), "{stderr}");
+}
