@@ -10,7 +10,7 @@
 //! Everything outside `measured` (building inputs, fitting source GPs, cloning GPs for the
 //! add-point operations) is excluded by the toggle, so callgrind's total divided by `k` is
 //! the instruction count of one operation. The operations and their inputs are those of
-//! `benches/kernel.rs` (both use `benches/common`); `scripts/perf-tables` runs every one.
+//! `benches/core_ops.rs` (both use `benches/common`); `scripts/perf-tables` runs every one.
 
 #[path = "../benches/common/mod.rs"]
 mod common;
@@ -21,8 +21,8 @@ use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions, WhenFull};
 use awfqi::identify::{Belief, Criterion as Score, compute_score};
 use awfqi::score::{GpSourceModel, ScoreTable, Scores};
-use awfqi_harness::reference::gp::ReferenceGp;
-use awfqi_harness::reference::identify as ref_identify;
+use awfqi_reference::gp::ReferenceGp;
+use awfqi_reference::identify as ref_identify;
 use common::*;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -329,7 +329,7 @@ fn awfqi_step<T: Real>() -> Op {
 }
 
 /// Every operation: `(name, constructor)`; names are the criterion ids of
-/// `benches/kernel.rs`.
+/// `benches/core_ops.rs`.
 fn operations() -> Vec<(String, Build)> {
     let mut ops: Vec<(String, Build)> = Vec::new();
     let mut add = |name: String, f: Build| ops.push((name, f));

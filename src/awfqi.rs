@@ -14,10 +14,15 @@
 //! 4. give every source record its **reward weight** (§7.3 estimator, `v_r`, `w_max`) from
 //!    the target GP's posterior at the record's `z`, noise-subtracted over each source's
 //!    batch, and the source GP posterior stored with the source data (§6 step 3);
-//! 5. run **weighted tabular FQI** ([`TabularFqi`]) on `D₀` (weight 1) followed by the
-//!    sources in order; iteration 1 fits the reward model with the reward weights, later
-//!    iterations use transition weights, which are all 1 (the shared-dynamics
-//!    configuration of §7.6 that §12 prescribes: `weight_st = (off, off)`).
+//! 5. run **weighted FQI** — the table ([`crate::TabularFqi`]) or tile coding
+//!    ([`crate::TileFqi`]), the builder's [`crate::fqi::Approximator`] — on `D₀` (weight 1)
+//!    followed by the sources in order; iteration 1 fits the reward model with the reward
+//!    weights, later iterations use transition weights. These are all 1 by default (the
+//!    shared-dynamics configuration of §7.6 that §12 prescribes: `weight_st = (off, off)`);
+//!    with [`AwfqiBuilder::transition_weights`] each step first fits one target GP per
+//!    next-state coordinate in turn (in the same GP, before the reward GP) and weighs
+//!    every source record by the product over coordinates of the §7.3 estimator against
+//!    the stored source next-state posteriors (§7.2 step 4).
 //!
 //! The caller evaluates the greedy policy between steps ([`Awfqi::q`],
 //! [`crate::evaluation::evaluate_greedy`]) — nothing here depends on the evaluation.
@@ -62,10 +67,10 @@ pub mod builder;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 
-use crate::dataset::{GpTraining, InputDim, Output, SubsetRule, batch_transform, fit_gp, input};
 use crate::env::{GenerativeModel, Transition};
-use crate::fqi::{FqiConfig, SampleSet, TabularFqi};
+use crate::fqi::{Approximator, FqiConfig, QFunction, SampleSet};
 use crate::gp::{Gp, Hyperparameters};
+use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
 use crate::{Error, Real, Result};
@@ -108,8 +113,8 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
             weights: WeightParams::reference_reward(),
             noise_subtraction: NoiseSubtraction::Reference,
             subset: SubsetRule::Spread,
-            gp_training: GpTraining::reference(),
-            fqi: FqiConfig::reference(),
+            gp_training: GpTraining::published(),
+            fqi: FqiConfig::published(),
             sampling: ScoreColumn::Reward,
         }
     }
@@ -156,7 +161,7 @@ type Records<'a, T, const D: usize> = &'a [Transition<[T; D], T>];
 
 /// The source datasets with what §6 stores with them: the records, one slice per source,
 /// and per record the posterior `(μ^s_r, σ^s_r)` of its source's reward GP at the record's
-/// own `z` (noise-subtracted; see [`crate::dataset::predict_posteriors`]), all sources'
+/// own `z` (noise-subtracted; see [`crate::record_gp::predict_posteriors`]), all sources'
 /// posteriors in one slice, source after source.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SourceData<'a, T, const D: usize> {
@@ -271,8 +276,19 @@ pub struct Awfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     len: usize,
     weights: &'a mut [T],
     gp: &'a mut Gp<T, N, I>,
-    fqi: TabularFqi<'a, T, D>,
+    fqi: QFunction<'a, T, D>,
+    transitions: Option<TransitionWeighting<'a, T>>,
     steps: usize,
+}
+
+/// Transition weights (§7.2 step 4, every next-state dimension on): the estimator, the
+/// stored source posteriors of every next-state coordinate (record after record, `D` per
+/// record, all sources in one slice) and room for one weight per source record.
+#[derive(Debug)]
+pub(crate) struct TransitionWeighting<'a, T> {
+    pub(crate) params: WeightParams<T>,
+    pub(crate) posteriors: &'a [Posterior<T>],
+    pub(crate) weights: &'a mut [T],
 }
 
 /// The entry point of the set-up. (The model type and the GP capacity are fixed later, by
@@ -282,11 +298,11 @@ impl<'a, T: Real, const D: usize, const I: usize> Awfqi<'a, T, (), D, I, 0> {
     /// Starts the set-up of a kernel with its required parts: see [`AwfqiBuilder`].
     pub fn builder(
         config: ValidAwfqiConfig<T, I>,
-        grid: crate::fqi::CellGrid<T, D>,
+        approximator: impl Into<Approximator<T, D>>,
         sources: &'a [&'a [Transition<[T; D], T>]],
         candidates: crate::score::RowSet<'a, T, D>,
     ) -> AwfqiBuilder<'a, T, D, I> {
-        AwfqiBuilder::new(config, grid, sources, candidates)
+        AwfqiBuilder::new(config, approximator, sources, candidates)
     }
 }
 
@@ -307,7 +323,8 @@ where
         samples: &'a mut [Transition<[T; D], T>],
         weights: &'a mut [T],
         gp: &'a mut Gp<T, N, I>,
-        mut fqi: TabularFqi<'a, T, D>,
+        mut fqi: QFunction<'a, T, D>,
+        transitions: Option<TransitionWeighting<'a, T>>,
     ) -> Result<Self> {
         let () = InputDim::<D, I>::CHECK;
         gp.clear();
@@ -323,6 +340,7 @@ where
             weights,
             gp,
             fqi,
+            transitions,
             steps: 0,
         })
     }
@@ -366,8 +384,17 @@ where
     }
 
     /// The Q-function of the last step (0 before the first).
-    pub fn q(&self) -> &TabularFqi<'a, T, D> {
+    pub fn q(&self) -> &QFunction<'a, T, D> {
         &self.fqi
+    }
+
+    /// The transition weights of the last step, source by source, record by record
+    /// (empty when transition weights are off: every weight is then 1).
+    pub fn transition_weights(&self) -> &[T] {
+        match &self.transitions {
+            Some(t) => t.weights.get(..self.sources.len()).unwrap_or(&[]),
+            None => &[],
+        }
     }
 
     /// The target GP of the last step.
@@ -404,6 +431,43 @@ where
             }
         }
         let target = self.samples.get(..self.len).unwrap_or(&[]);
+        // Transition weights first (§7.2 step 4), one target GP per next-state dimension
+        // fitted in turn in the same fixed-capacity GP, so that it holds the reward GP at
+        // the end of the step.
+        let mut ws = WeightSummary::new();
+        ws.add_ones(target.len());
+        let transitions_on = self.transitions.is_some();
+        if let Some(tw) = self.transitions.as_mut() {
+            for d in 0..D {
+                fit_gp(
+                    self.gp,
+                    target,
+                    Output::NextState(d),
+                    self.config.subset,
+                    &self.config.gp_training,
+                    rng,
+                )?;
+                let mut start = 0usize;
+                for records in self.sources.records {
+                    let end = start + records.len();
+                    let out = tw
+                        .weights
+                        .get_mut(start..end)
+                        .ok_or(Error::CapacityExceeded { capacity: end })?;
+                    transition_weights_of(
+                        self.gp,
+                        records,
+                        tw.posteriors.get(start * D..end * D).unwrap_or(&[]),
+                        d,
+                        &tw.params,
+                        self.config.noise_subtraction,
+                        out,
+                    )?;
+                    start = end;
+                }
+            }
+            ws.add(tw.weights.get(..self.sources.len()).unwrap_or(&[]))?;
+        }
         // 4: target reward GP on a bounded subset of D₀.
         let lml = fit_gp(
             self.gp,
@@ -435,17 +499,18 @@ where
         }
         // 5: weighted FQI on D₀ then the sources.
         let weights: &[T] = self.weights;
+        let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
         let sets = core::iter::once(SampleSet::unweighted(target)).chain(
             self.sources.records.iter().scan(0usize, move |offset, &s| {
                 let start = *offset;
                 *offset += s.len();
                 let w = weights.get(start..*offset);
-                Some(SampleSet::weighted(s, w, None))
+                let ws = transition.and_then(|t| t.get(start..*offset));
+                Some(SampleSet::weighted(s, w, ws))
             }),
         );
         self.fqi.fit_sets(sets, &self.config.fqi)?;
         self.steps += 1;
-        let total = wr.count();
         Ok(StepReport {
             step: self.steps,
             n_target_samples: self.len,
@@ -455,8 +520,13 @@ where
             gp_hyperparameters: *self.gp.hyperparameters(),
             wr_mean: wr.mean(),
             wr_eff: wr.effective_sample_size(),
-            ws_mean: T::ONE,
-            ws_eff: total,
+            // Off: exactly 1 and the record count, as before transition weights existed.
+            ws_mean: if transitions_on { ws.mean() } else { T::ONE },
+            ws_eff: if transitions_on {
+                ws.effective_sample_size()
+            } else {
+                wr.count()
+            },
         })
     }
 }
@@ -473,13 +543,46 @@ fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     if records.is_empty() {
         return Ok(());
     }
-    let transform = batch_transform(gp, records, noise)?;
-    for ((w, r), &s) in out.iter_mut().zip(records).zip(posteriors) {
-        let p = gp.predict(&input(r.state, r.action))?;
-        let t = Posterior::new(p.mean, transform.apply(p.noisy_variance));
-        *w = params.weight(r.reward, t, s)?;
+    let mut slots = out.iter_mut().zip(posteriors);
+    visit_posteriors(gp, records, noise, |r, target| {
+        if let Some((w, &source)) = slots.next() {
+            *w = params.weight(r.reward, target, source)?;
+        }
+        Ok(())
+    })
+}
+
+/// Multiplies `out[i]` by the weight of coordinate `d` of record `i`'s next state under the
+/// target GP `gp` (fitted on that coordinate) and the stored source posteriors
+/// (`posteriors[i·D + d]`); `d == 0` sets it (§7.2 step 4, one noise-subtraction batch per
+/// source).
+fn transition_weights_of<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
+    posteriors: &[Posterior<T>],
+    d: usize,
+    params: &WeightParams<T>,
+    noise: NoiseSubtraction,
+    out: &mut [T],
+) -> Result<()> {
+    if records.is_empty() {
+        return Ok(());
     }
-    Ok(())
+    let mut slots = out.iter_mut().zip(posteriors.chunks_exact(D));
+    visit_posteriors(gp, records, noise, |r, target| {
+        let Some((w, source)) = slots.next() else {
+            return Ok(());
+        };
+        let s = source.get(d).copied().ok_or(Error::InvalidParameter {
+            parameter: "transition_posteriors",
+        })?;
+        let y = r.next_state.get(d).copied().ok_or(Error::OutOfRange {
+            parameter: "output",
+        })?;
+        let w_d = params.weight(y, target, s)?;
+        *w = if d == 0 { w_d } else { *w * w_d };
+        Ok(())
+    })
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 //! γ = 0.99).
 
 use crate::env::GenerativeModel;
-use crate::fqi::TabularFqi;
+use crate::fqi::Greedy;
 use crate::policy::Policy;
 use crate::{Error, Real, Result};
 use rand_core::Rng;
@@ -164,13 +164,14 @@ where
     })
 }
 
-/// [`evaluate`] for the greedy policy of a tabular Q-function (ties between actions as
-/// [`TabularFqi::greedy_action`] breaks them).
+/// [`evaluate`] for the greedy policy of a Q-function (a [`crate::TabularFqi`], a
+/// [`crate::TileFqi`] or the [`crate::QFunction`] of a kernel; ties between actions as its
+/// `greedy_action` breaks them).
 ///
 /// Errors: those of [`evaluate`].
-pub fn evaluate_greedy<T, G, R, const D: usize>(
+pub fn evaluate_greedy<T, G, R, Q, const D: usize>(
     model: &G,
-    q: &TabularFqi<'_, T, D>,
+    q: &Q,
     protocol: &EvaluationProtocol<T, D>,
     rng: &mut R,
 ) -> Result<Evaluation<T>>
@@ -178,8 +179,9 @@ where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + ?Sized,
     R: Rng + ?Sized,
+    Q: Greedy<T, D> + ?Sized,
 {
-    let mut greedy = |s: &[T; D]| q.greedy_action(*s);
+    let mut greedy = |s: &[T; D]| q.greedy(*s);
     evaluate(model, &mut greedy, protocol, rng)
 }
 

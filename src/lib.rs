@@ -13,7 +13,6 @@
 
 pub mod alias;
 pub mod awfqi;
-pub mod dataset;
 pub mod env;
 pub mod error;
 pub mod evaluation;
@@ -23,6 +22,7 @@ pub mod gp;
 pub mod identify;
 pub mod planning;
 pub mod policy;
+pub mod record_gp;
 pub mod rng;
 pub mod score;
 pub mod weights;
@@ -36,12 +36,15 @@ pub use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
     ValidAwfqiConfig,
 };
-pub use dataset::{GpTraining, Output, SubsetRule};
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
-pub use fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+pub use fqi::{
+    Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, QFunction, SampleSet,
+    TabularFqi, TileFqi, Tilings,
+};
 pub use gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+pub use record_gp::{GpTraining, Output, SubsetRule};
 pub use score::{
     GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
     SourceModel,

@@ -30,10 +30,10 @@
 //! when the values are large and close).
 
 use crate::alias::{AliasEntry, AliasTable};
-use crate::dataset::{GpTraining, InputDim, Output, SubsetRule, fit_gp, input};
 use crate::env::Transition;
 use crate::error::{ensure_all_finite, ensure_finite};
 use crate::gp::Gp;
+use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, input};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 

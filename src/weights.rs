@@ -108,6 +108,16 @@ impl<T: Real> WeightParams<T> {
         }
     }
 
+    /// The transition configuration of the reference experiments (§7.6): mean estimator,
+    /// `v = 0.2`, `w_max = 1000` (the published `v_s`, §14.6).
+    pub fn reference_transition() -> Self {
+        Self {
+            estimator: Estimator::Mean,
+            noise_variance: T::from_f64(0.2),
+            max_weight: T::from_f64(1000.0),
+        }
+    }
+
     /// The estimator.
     pub fn estimator(&self) -> Estimator {
         self.estimator

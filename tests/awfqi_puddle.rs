@@ -34,8 +34,8 @@ use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
 use awfqi::{
     AliasEntry, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Evaluation, FqiConfig, FqiEntry, Gp,
-    GpTraining, Posterior, RowSet, SampleSet, Scores, TabularFqi, Transition, evaluate,
-    evaluate_greedy,
+    GpTraining, Greedy, Posterior, QFunction, RowSet, SampleSet, Scores, TabularFqi, Transition,
+    evaluate, evaluate_greedy,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -97,7 +97,7 @@ fn plain_fqi_on_episodes(
                 episode(env, &mut policy, &mut data, rng);
             }
         }
-        fqi.fit(&[SampleSet::unweighted(&data)], &FqiConfig::reference())
+        fqi.fit(&[SampleSet::unweighted(&data)], &FqiConfig::published())
             .unwrap();
         after_step(step + 1, &fqi, &data);
     }
@@ -136,7 +136,7 @@ fn source_dataset(env: &PuddleWorld<T>, seed: u64) -> Vec<Record> {
 /// search budget (2 restarts, 120 likelihood evaluations) to keep the debug build fast, the
 /// measurement the reference's (10 restarts, 550 evaluations).
 fn training(reference: bool) -> GpTraining<T, 3> {
-    let mut t = GpTraining::reference();
+    let mut t = GpTraining::published();
     if !reference {
         t.search.restarts = 2;
         t.search.max_evaluations = 120;
@@ -182,7 +182,7 @@ impl Setup {
         &self,
         oracle: bool,
         seeds: &[u64],
-        mut after_step: impl FnMut(u64, usize, &TabularFqi<'_, T, 2>, &[Record]),
+        mut after_step: impl FnMut(u64, usize, &QFunction<'_, T, 2>, &[Record]),
     ) {
         let slices: Vec<&[Record]> = self.records.iter().map(Vec::as_slice).collect();
         let rows = RowSet::grid(PuddleWorld::score_grid(SCORE_SPACING as T).unwrap(), 4).unwrap();
@@ -236,7 +236,7 @@ fn uniform_return(n: usize, seed: u64) -> T {
     .mean_return
 }
 
-fn evaluate_q(q: &TabularFqi<'_, T, 2>, seed: u64) -> Evaluation<T> {
+fn evaluate_q(q: &impl Greedy<T, 2>, seed: u64) -> Evaluation<T> {
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
     let protocol = target.evaluation_protocol();
     evaluate_greedy(&target, q, &protocol, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap()

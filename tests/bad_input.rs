@@ -5,14 +5,19 @@
 //! were. Run in `f32` (the microcontroller's precision) and `f64` where the code is generic.
 
 use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::dataset::{GpTraining, Output, SubsetRule, batch_transform, fit_gp, predict_posteriors};
 use awfqi::env::{
     Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld, Transition,
 };
 use awfqi::evaluation::{EvaluationProtocol, evaluate};
-use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+use awfqi::fqi::{
+    Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi, TileFqi,
+    Tilings,
+};
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi::record_gp::{
+    GpTraining, Output, SubsetRule, batch_transform, fit_gp, predict_posteriors,
+};
 use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans, SourceModel};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
@@ -732,7 +737,7 @@ fn record<T: Real>(i: usize) -> Transition<[T; 2], T> {
 
 fn dataset_calls<T: Real>() {
     let mut gp3 = Gp::<T, 8, 3>::empty();
-    let training = GpTraining::<T, 3>::reference();
+    let training = GpTraining::<T, 3>::published();
     let mut r = rng();
     assert_eq!(
         err(fit_gp(
@@ -828,7 +833,7 @@ fn fqi_calls<T: Real>() {
             nf("empty_cells")
         );
         assert_eq!(
-            err(FqiConfig::<T>::reference().with_min_weight(x)),
+            err(FqiConfig::<T>::published().with_min_weight(x)),
             nf("min_weight")
         );
     }
@@ -863,7 +868,7 @@ fn fqi_calls<T: Real>() {
         inv("iterations")
     );
     assert_eq!(
-        err(FqiConfig::<T>::reference().with_min_weight(t(-1.0))),
+        err(FqiConfig::<T>::published().with_min_weight(t(-1.0))),
         inv("min_weight")
     );
 
@@ -953,6 +958,90 @@ fn fqi_calls<T: Real>() {
     assert_eq!(err(fqi.value([t(1.0), t(1.0)], 4)), oor("action"));
     assert_eq!(grid.coordinates(9), None);
     assert_eq!(grid.center(usize::MAX), None);
+}
+
+fn tile_calls<T: Real>() {
+    for x in non_finite::<T>() {
+        assert_eq!(err(Tilings::<T, 2>::cube(x, t(1.0), 3, 2)), nf("lower"));
+        assert_eq!(err(Tilings::<T, 2>::cube(t(0.0), x, 3, 2)), nf("upper"));
+    }
+    assert_eq!(
+        err(Tilings::<T, 2>::cube(t(1.0), t(0.0), 3, 2)),
+        inv("upper")
+    );
+    assert_eq!(
+        err(Tilings::<T, 2>::cube(t(0.0), t(1.0), 0, 2)),
+        inv("tiles")
+    );
+    assert_eq!(
+        err(Tilings::<T, 2>::cube(t(0.0), t(1.0), 3, 0)),
+        inv("count")
+    );
+    assert!(matches!(
+        err(Tilings::<T, 3>::cube(t(0.0), t(1.0), 1 << 12, 2)),
+        Error::CapacityExceeded { .. }
+    ));
+    // (3 + 1)² tiles × 4 actions × 2 tilings = 128 entries.
+    let tilings = Tilings::cube(t::<T>(0.0), t(10.0), 3, 2).unwrap();
+    let mut storage = vec![FqiEntry::<T>::EMPTY; 128];
+    assert_eq!(err(TileFqi::new(tilings, 0, &mut storage)), inv("actions"));
+    assert_eq!(
+        err(TileFqi::new(tilings, 4, &mut storage[..127])),
+        Error::CapacityExceeded { capacity: 127 }
+    );
+    let approximator: Approximator<T, 2> = tilings.into();
+    assert_eq!(approximator.required_entries(4), Some(128));
+    assert_eq!(
+        err(approximator.build(4, &mut storage[..100])),
+        Error::CapacityExceeded { capacity: 100 }
+    );
+    let mut fqi = TileFqi::new(tilings, 4, &mut storage).unwrap();
+    let config = FqiConfig::new(t::<T>(0.9), 5, EmptyCells::CappedNearest).unwrap();
+    let good: Vec<_> = (0..8).map(record::<T>).collect();
+    fqi.fit(&[SampleSet::unweighted(&good)], &config).unwrap();
+    let before: Vec<FqiEntry<T>> = fqi.entries().to_vec();
+    assert_eq!(fqi.fit(&[], &config), Err(Error::EmptyData));
+    let mut bad = good.clone();
+    bad[3].action = 4;
+    assert_eq!(
+        fqi.fit(&[SampleSet::unweighted(&bad)], &config),
+        Err(oor("action"))
+    );
+    for x in non_finite::<T>() {
+        let mut bad = good.clone();
+        bad[2].next_state[0] = x;
+        assert_eq!(
+            fqi.fit(&[SampleSet::unweighted(&bad)], &config),
+            Err(nf("next_state"))
+        );
+        let w = [t(1.0), t(1.0), x, t(1.0), t(1.0), t(1.0), t(1.0), t(1.0)];
+        assert_eq!(
+            fqi.fit(&[SampleSet::weighted(&good, None, Some(&w))], &config),
+            Err(nf("transition_weights"))
+        );
+        assert_eq!(err(fqi.value([x, t(1.0)], 0)), nf("state"));
+        assert_eq!(err(fqi.max_value([t(1.0), x])), nf("state"));
+        assert_eq!(err(fqi.greedy_action([x, x])), nf("state"));
+    }
+    let negative = [t::<T>(-1.0); 8];
+    assert_eq!(
+        fqi.fit(
+            &[SampleSet::weighted(&good, Some(&negative), None)],
+            &config
+        ),
+        Err(inv("reward_weights"))
+    );
+    assert!(
+        fqi.entries() == &before[..],
+        "a rejected fit changed the tiles"
+    );
+    assert_eq!(err(fqi.value([t(1.0), t(1.0)], 4)), oor("action"));
+}
+
+#[test]
+fn tile_coding_rejects_bad_tilings_and_samples_and_keeps_its_values() {
+    tile_calls::<f32>();
+    tile_calls::<f64>();
 }
 
 #[test]

@@ -205,7 +205,7 @@ fn awfqi_recovers_the_closed_form_policy_at_four_dimensions() {
 
     // The greedy policy is π* in every cell whose centre is clearly on one side.
     let q = kernel.q();
-    let grid = *q.grid();
+    let grid = *q.as_tabular().unwrap().grid();
     let mut checked = 0;
     for cell in 0..grid.len() {
         let centre = grid.center(cell).unwrap();
@@ -251,7 +251,71 @@ fn awfqi_recovers_the_closed_form_policy_at_four_dimensions() {
 
 /// The greedy policy of a Q-function as a [`Policy`].
 fn greedy<'q, T: Real, const D: usize>(
-    q: &'q awfqi::TabularFqi<'_, T, D>,
+    q: &'q awfqi::QFunction<'_, T, D>,
 ) -> impl Policy<[T; D]> + 'q {
     move |s: &[T; D]| q.greedy_action(*s)
+}
+
+/// The same loop with tile coding instead of the table (3 tiles of width 2/3 per axis, 4
+/// offset tilings: 4 · 4⁴ · 2 = 2 048 entries), in buffers sized at run time: the greedy
+/// policy is π* at the lattice points clearly on one side of the set-point. (With this
+/// test's generator seeds 0–9 instead of its seed, all 132 checked points were right in
+/// every run, measured while writing the test.)
+#[test]
+fn awfqi_with_tile_coding_recovers_the_closed_form_policy_at_four_dimensions() {
+    use awfqi::{AwfqiBuffers, FqiEntry, Gp, Tilings};
+    let mut rng = ChaCha8Rng::seed_from_u64(2026);
+    let sources = [SumPlant { c: 0.0 }, SumPlant { c: 1.0 }];
+    let data: Vec<Vec<Record>> = sources.iter().map(|p| records(p, &mut rng)).collect();
+    let slices: Vec<&[Record]> = data.iter().map(Vec::as_slice).collect();
+    let mut posteriors = vec![Posterior::default(); 2 * PER_SOURCE];
+    let mut scores = vec![Scores::ZERO; ROWS];
+    let mut config = AwfqiConfig::thesis(BUDGET);
+    config.gp_training.search.max_evaluations = 120;
+    config.gp_training.search.restarts = 2;
+    config.fqi = FqiConfig::new(0.8, 30, EmptyCells::CappedNearest)
+        .unwrap()
+        .with_min_weight(0.05)
+        .unwrap();
+    let tilings = Tilings::cube(-1.0, 1.0, 3, 4).unwrap();
+    let mut gp = Box::new(Gp::<T, GP_POINTS, 5>::empty());
+    let mut samples = vec![Transition::EMPTY; STEPS * BUDGET];
+    let mut weights = vec![0.0; 2 * PER_SOURCE];
+    let mut alias = vec![awfqi::AliasEntry::EMPTY; ROWS];
+    let mut fqi = vec![FqiEntry::EMPTY; 4 * 256 * 2];
+    let buffers = AwfqiBuffers {
+        gp: &mut gp,
+        samples: &mut samples,
+        weights: &mut weights,
+        alias: &mut alias,
+        fqi: &mut fqi,
+    };
+    let mut kernel = Awfqi::builder(
+        config.validate().unwrap(),
+        tilings,
+        &slices,
+        RowSet::grid(lattice(), 2).unwrap(),
+    )
+    .fit_posteriors(&mut posteriors)
+    .realistic_scores(&mut scores)
+    .build(SumPlant { c: 0.0 }, buffers, &mut rng)
+    .unwrap();
+    for _ in 0..STEPS {
+        kernel.step(&mut rng).unwrap();
+    }
+    let q = kernel.q();
+    let lattice = lattice();
+    let (mut checked, mut wrong) = (0, 0);
+    for p in 0..lattice.len() {
+        let point = lattice.point(p).unwrap();
+        if let Some(best) = optimal_action(&point) {
+            checked += 1;
+            if q.greedy_action(point).unwrap() != best {
+                wrong += 1;
+                eprintln!("miss at {point:?}");
+            }
+        }
+    }
+    assert!(checked >= 100, "only {checked} points checked");
+    assert_eq!(wrong, 0);
 }

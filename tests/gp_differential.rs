@@ -1,6 +1,6 @@
 //! Differential test of the core GP (`awfqi::gp::Gp`, through the harness's capacity
 //! dispatch `awfqi_harness::commands::gp::fit_core`) against the harness's independent
-//! reference GP (`awfqi_harness::reference::gp`, f64, plain Cholesky).
+//! reference GP (`awfqi_reference::gp`, f64, plain Cholesky).
 //!
 //! Seeded generators draw random well-conditioned cases and four classes of hard cases
 //! (duplicate inputs, nearly collinear inputs, noise 1e-6, outputs offset by 1e4), with `N`
@@ -37,7 +37,7 @@ use awfqi::Error;
 use awfqi::gp::BASE_JITTER;
 use awfqi::rng::{standard_normal, uniform_f64};
 use awfqi_harness::commands::gp::{Case, CaseError, Fit, Precision, fit_core, fit_reference};
-use awfqi_harness::reference::gp::condition;
+use awfqi_reference::gp::condition;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::SeedableRng;
 

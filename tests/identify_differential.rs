@@ -17,8 +17,8 @@ use awfqi::env::{FiniteMdp, GenerativeModel, GridWorld, Transition};
 use awfqi::identify::{Belief, Criterion, MiConfig, belief_weighted_policy, compute_score};
 use awfqi::planning::{StoppingRule, evaluate_policy, greedy_policy, value_iteration};
 use awfqi::{Error, Real, Result};
-use awfqi_harness::reference::identify as reference;
-use awfqi_harness::reference::identify::{Observation, TabularMdp};
+use awfqi_reference::identify as reference;
+use awfqi_reference::identify::{Observation, TabularMdp};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 

@@ -9,7 +9,7 @@
 #[path = "on_target/src/golden.rs"]
 mod golden;
 
-use awfqi_harness::reference::gp::{Hyperparameters, ReferenceGp};
+use awfqi_reference::gp::{Hyperparameters, ReferenceGp};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 

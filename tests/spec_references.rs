@@ -271,7 +271,7 @@ fn every_section_reference_names_a_section_of_the_algorithm_reference() {
     for expected in [
         "README.md",
         "src/awfqi.rs",
-        "std_harness/src/fqi.rs",
+        "std_harness/src/forest_fqi.rs",
         REFERENCE,
     ] {
         assert!(

@@ -1,4 +1,4 @@
-//! Inputs shared by the criterion suite (`benches/kernel.rs`) and the instruction-count
+//! Inputs shared by the criterion suite (`benches/core_ops.rs`) and the instruction-count
 //! driver (`examples/perf_ops.rs`), so both measure the same operations on the same data.
 //!
 //! Everything is generated from fixed seeds in f64; the f32 variants are the same numbers
@@ -6,18 +6,18 @@
 
 #![allow(dead_code)]
 
-use awfqi::dataset::{Output, fit_gp, predict_posteriors};
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::identify::MiConfig;
+use awfqi::record_gp::{Output, fit_gp, predict_posteriors};
 use awfqi::rng::uniform_f64;
 use awfqi::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiConfig, FqiEntry, GenerativeModel, Gp,
     GpTraining, Hyperparameters, Real, Result, RowSet, SampleSet, Scores, SubsetRule, TabularFqi,
     Transition,
 };
-use awfqi_harness::fqi as forest_fqi;
+use awfqi_harness::forest_fqi;
 use awfqi_harness::gp_large::{FitOptions, GpHyperparameters, LargeGp, Parallelism};
-use awfqi_harness::reference::gp as reference;
+use awfqi_reference::gp as reference;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -225,9 +225,9 @@ impl<T: Real> FqiCase<T> {
         let config = FqiConfig::new(
             T::from_f64(0.99),
             iterations,
-            FqiConfig::<T>::reference().empty_cells(),
+            FqiConfig::<T>::published().empty_cells(),
         )?
-        .with_min_weight(FqiConfig::<T>::reference().min_weight())?;
+        .with_min_weight(FqiConfig::<T>::published().min_weight())?;
         let set = SampleSet::weighted(
             &self.samples,
             Some(&self.reward_weights),
@@ -306,7 +306,7 @@ impl<T: Real> Sources<T> {
                 &r,
                 Output::Reward,
                 SubsetRule::Spread,
-                &GpTraining::reference(),
+                &GpTraining::published(),
                 &mut rng,
             )
             .expect("source GP fit");

@@ -4,7 +4,8 @@
 //! its `validate`, source records and posteriors from the fuzzer (NaN, ±∞ and huge values
 //! included), candidate rows (grid, pairs or source rows), every posterior and score stage
 //! (stored, fitted, oracle, realistic), buffers of every size (one short of what is needed
-//! too), then steps and `reset`.
+//! too), then steps and `reset`; with bits 2–3 of the first byte, tile coding instead of
+//! the table and transition weights (stored next-state posteriors from the fuzzer).
 //!
 //! Invariants: no panic; errors only of the documented kinds; a built kernel's step reports
 //! finite diagnostics, its Q-values stay finite, and a failed step leaves the step count
@@ -13,9 +14,9 @@
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
-    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells, Error, FqiConfig, FqiEntry,
-    GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real, RowSet, ScoreColumn, Scores,
-    SourceMeans, SourceModel, SubsetRule, Transition,
+    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells, Error,
+    FqiConfig, FqiEntry, GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real, RowSet,
+    ScoreColumn, Scores, SourceMeans, SourceModel, SubsetRule, Tilings, Transition, WeightParams,
 };
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, kind, trace};
 use libfuzzer_sys::fuzz_target;
@@ -116,8 +117,20 @@ fn size(b: &mut Bytes, needed: usize) -> usize {
     }
 }
 
-fn run<T: Real, G, const D: usize, const I: usize>(b: &mut Bytes, plant: Plant<G, D>)
-where
+/// Options chosen by bits 2–3 of the first byte (so the seeds written before them, whose
+/// first byte is below 4, keep their meaning): tile coding instead of the table, and
+/// transition weights.
+#[derive(Debug, Clone, Copy)]
+struct Options {
+    tiles: bool,
+    transitions: bool,
+}
+
+fn run<T: Real, G, const D: usize, const I: usize>(
+    b: &mut Bytes,
+    plant: Plant<G, D>,
+    options: Options,
+) where
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy + core::fmt::Debug,
 {
     // Configuration.
@@ -232,7 +245,42 @@ where
         })
         .collect();
     let mut computed = vec![Scores::<T, D>::ZERO; size(b, rows.len())];
-    let builder = Awfqi::builder(config, cells, &slices, rows);
+    let approximator: Approximator<T, D> = if options.tiles {
+        match Tilings::cube(T::from_f64(low), T::from_f64(high), b.index(4), b.index(5)) {
+            Ok(t) => t.into(),
+            Err(e) => {
+                expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
+                return;
+            }
+        }
+    } else {
+        cells.into()
+    };
+    let transition_posteriors: Vec<Posterior<T>> = if options.transitions {
+        (0..size(b, total * D))
+            .map(|_| Posterior::new(real(b), real(b)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut transition_weights = vec![
+        T::ZERO;
+        if options.transitions {
+            size(b, total)
+        } else {
+            0
+        }
+    ];
+    let builder = Awfqi::builder(config, approximator, &slices, rows);
+    let builder = if options.transitions {
+        builder.transition_weights(
+            WeightParams::reference_transition(),
+            &transition_posteriors,
+            &mut transition_weights,
+        )
+    } else {
+        builder
+    };
     let builder = match b.u8() % 3 {
         0 => builder.stored_posteriors(&stored),
         1 => builder.fit_posteriors(&mut fitted),
@@ -267,7 +315,10 @@ where
     let mut samples = vec![Transition::EMPTY; size(b, steps * config.budget)];
     let mut weights = vec![T::ZERO; size(b, total)];
     let mut alias = vec![AliasEntry::EMPTY; size(b, rows.len())];
-    let needed = cells.len() * actions;
+    let needed = approximator
+        .required_entries(actions)
+        .unwrap_or(usize::MAX)
+        .min(1 << 16);
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
     let buffers = AwfqiBuffers {
         gp: &mut gp,
@@ -328,7 +379,7 @@ where
     }
 }
 
-fn puddle<T: Real>(b: &mut Bytes) {
+fn puddle<T: Real>(b: &mut Bytes, options: Options) {
     let dynamics = if b.bool() {
         Dynamics::PuddleBased
     } else {
@@ -340,25 +391,30 @@ fn puddle<T: Real>(b: &mut Bytes) {
         low: 0.0,
         high: 10.0,
     };
-    run::<T, _, 2, 3>(b, plant);
+    run::<T, _, 2, 3>(b, plant, options);
 }
 
-fn toy<T: Real>(b: &mut Bytes) {
+fn toy<T: Real>(b: &mut Bytes, options: Options) {
     let plant = Plant {
         target: Toy { c: T::ZERO },
         sources: [0.0, 1.0, -1.0].map(|c| Toy { c: T::from_f64(c) }),
         low: -1.0,
         high: 1.0,
     };
-    run::<T, _, 4, 5>(b, plant);
+    run::<T, _, 4, 5>(b, plant, options);
 }
 
 fuzz_target!(|data: &[u8]| {
     let mut b = Bytes::new(data);
-    match b.u8() % 4 {
-        0 => puddle::<f32>(&mut b),
-        1 => puddle::<f64>(&mut b),
-        2 => toy::<f32>(&mut b),
-        _ => toy::<f64>(&mut b),
+    let first = b.u8();
+    let options = Options {
+        tiles: first & 4 != 0,
+        transitions: first & 8 != 0,
+    };
+    match first % 4 {
+        0 => puddle::<f32>(&mut b, options),
+        1 => puddle::<f64>(&mut b, options),
+        2 => toy::<f32>(&mut b, options),
+        _ => toy::<f64>(&mut b, options),
     }
 });

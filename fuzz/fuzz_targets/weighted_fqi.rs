@@ -1,7 +1,9 @@
 //! Weighted tabular FQI on arbitrary grids, samples, weights and settings (f32 and f64; state
 //! dimension 2, 1 or 3 from bits 1–2 of the first byte, so the seeds written for 2-D stay
 //! 2-D): `CellGrid::new`/`cube`, `FqiConfig::new`/`with_min_weight`,
-//! `TabularFqi::new`/`fit`/`value`/`max_value`/`greedy_action`.
+//! `TabularFqi::new`/`fit`/`value`/`max_value`/`greedy_action`; with bit 3 of the first
+//! byte, tile coding over the grid's box instead (`Tilings::new`, `TileFqi` through
+//! `Approximator::build` and `QFunction`).
 //!
 //! Invariants: no panic; a successful fit leaves every Q-value, reward model and weight
 //! finite; a failed fit leaves the table exactly as it was (documented: everything is
@@ -10,7 +12,7 @@
 
 use awfqi::Real;
 use awfqi::env::Transition;
-use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+use awfqi::fqi::{Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, Tilings};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 
@@ -18,7 +20,7 @@ fn real<T: Real>(b: &mut Bytes) -> T {
     T::from_f64(b.num())
 }
 
-fn run<T: Real, const D: usize>(b: &mut Bytes) {
+fn run<T: Real, const D: usize>(b: &mut Bytes, tiles: bool) {
     let grid = if b.bool() {
         let lower: [T; D] = core::array::from_fn(|_| real(b));
         let upper: [T; D] = core::array::from_fn(|_| real(b));
@@ -39,11 +41,23 @@ fn run<T: Real, const D: usize>(b: &mut Bytes) {
         CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(6)).expect("a valid grid")
     };
     let actions = b.index(5);
-    let mut storage = vec![FqiEntry::<T>::EMPTY; 6usize.pow(D as u32) * 4];
-    let mut fqi = match TabularFqi::new(grid, actions, &mut storage) {
+    let (approximator, entries): (Approximator<T, D>, usize) = if tiles {
+        let count = 1 + b.index(4);
+        match Tilings::new(grid.lower(), grid.upper(), grid.cells()[0], count) {
+            Ok(t) => (t.into(), 7usize.pow(D as u32) * 4 * count),
+            Err(e) => {
+                expect_kind("Tilings::new", &e, &[Kind::Invalid, Kind::NonFinite]);
+                return;
+            }
+        }
+    } else {
+        (grid.into(), 6usize.pow(D as u32) * 4)
+    };
+    let mut storage = vec![FqiEntry::<T>::EMPTY; entries];
+    let mut fqi = match approximator.build(actions, &mut storage) {
         Ok(f) => f,
         Err(e) => {
-            expect_kind("TabularFqi::new", &e, &[Kind::Invalid, Kind::Capacity]);
+            expect_kind("Approximator::build", &e, &[Kind::Invalid, Kind::Capacity]);
             return;
         }
     };
@@ -158,12 +172,13 @@ fn run<T: Real, const D: usize>(b: &mut Bytes) {
 fuzz_target!(|data: &[u8]| {
     let mut b = Bytes::new(data);
     let first = b.u8();
-    match (first & 1 == 1, (first >> 1) % 3) {
-        (true, 0) => run::<f32, 2>(&mut b),
-        (false, 0) => run::<f64, 2>(&mut b),
-        (true, 1) => run::<f32, 1>(&mut b),
-        (false, 1) => run::<f64, 1>(&mut b),
-        (true, _) => run::<f32, 3>(&mut b),
-        (false, _) => run::<f64, 3>(&mut b),
+    let tiles = first & 8 != 0;
+    match (first & 1 == 1, ((first >> 1) & 3) % 3) {
+        (true, 0) => run::<f32, 2>(&mut b, tiles),
+        (false, 0) => run::<f64, 2>(&mut b, tiles),
+        (true, 1) => run::<f32, 1>(&mut b, tiles),
+        (false, 1) => run::<f64, 1>(&mut b, tiles),
+        (true, _) => run::<f32, 3>(&mut b, tiles),
+        (false, _) => run::<f64, 3>(&mut b, tiles),
     }
 });

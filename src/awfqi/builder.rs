@@ -10,14 +10,14 @@
 //!
 //! The [crate docs](crate) show the whole loop on a plant of their own.
 
-use super::{Awfqi, SourceData, ValidAwfqiConfig};
+use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
-use crate::dataset::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::env::{GenerativeModel, Transition};
-use crate::fqi::{CellGrid, FqiEntry, TabularFqi};
+use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
+use crate::record_gp::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
-use crate::weights::Posterior;
+use crate::weights::{Posterior, WeightParams};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
@@ -171,31 +171,59 @@ enum ScoreValues<'a, T, const D: usize> {
 #[derive(Debug)]
 pub struct AwfqiBuilder<'a, T, const D: usize, const I: usize> {
     config: ValidAwfqiConfig<T, I>,
-    grid: CellGrid<T, D>,
+    approximator: Approximator<T, D>,
     sources: &'a [&'a [Transition<[T; D], T>]],
     candidates: RowSet<'a, T, D>,
     posteriors: Posteriors<'a, T>,
     scores: ScoreValues<'a, T, D>,
+    transitions: Option<TransitionWeighting<'a, T>>,
 }
 
 impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
-    /// FQI grid over the state space, the source records and the candidate rows.
+    /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
+    /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.
     pub fn new(
         config: ValidAwfqiConfig<T, I>,
-        grid: CellGrid<T, D>,
+        approximator: impl Into<Approximator<T, D>>,
         sources: &'a [&'a [Transition<[T; D], T>]],
         candidates: RowSet<'a, T, D>,
     ) -> Self {
         let () = InputDim::<D, I>::CHECK;
         Self {
             config,
-            grid,
+            approximator: approximator.into(),
             sources,
             candidates,
             posteriors: Posteriors::Missing,
             scores: ScoreValues::Missing,
+            transitions: None,
         }
+    }
+
+    /// Turns transition weights on (§7.2 step 4 with every next-state dimension on; off
+    /// by default, every `w_s = 1`, the shared-dynamics configuration of §7.6): every step
+    /// fits one target GP per next-state coordinate in turn (in the kernel's GP, before
+    /// the reward GP), weighs each source record's coordinate by `params` against the
+    /// stored source posterior, and FQI uses the product over coordinates from its second
+    /// iteration on.
+    ///
+    /// `posteriors` holds the source next-state GPs' posteriors at the records' own `z`
+    /// (§6, noise-subtracted), `D` per record (`posteriors[i·D + d]` for record `i`, all
+    /// sources in one slice, source after source); `weights` has room for one weight per
+    /// source record. Both are checked by [`build`](Self::build).
+    pub fn transition_weights(
+        mut self,
+        params: WeightParams<T>,
+        posteriors: &'a [Posterior<T>],
+        weights: &'a mut [T],
+    ) -> Self {
+        self.transitions = Some(TransitionWeighting {
+            params,
+            posteriors,
+            weights,
+        });
+        self
     }
 
     /// The source posteriors computed earlier, all sources in one slice, source after
@@ -251,7 +279,12 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
     /// ([`Error::InvalidParameter`] / [`Error::OutOfRange`] `actions`); `samples` unable to
     /// hold one step, `weights` or the posterior storage shorter than the source records,
     /// `alias` or the score storage shorter than the candidate rows, `fqi` shorter than
-    /// cells × actions ([`Error::CapacityExceeded`] with the short length); then those of
+    /// the approximator's entries ([`Error::CapacityExceeded`] with the short length); with
+    /// transition weights, a weight buffer shorter than the source records
+    /// ([`Error::CapacityExceeded`]), a posterior count other than `D` per record
+    /// ([`Error::InvalidParameter`] `transition_posteriors`), a non-finite posterior or a
+    /// negative std ([`Error::NonFinite`] / [`Error::InvalidParameter`]
+    /// `transition_posteriors`); then those of
     /// the GP fits, of [`ScoreTable::from_parts`], of [`SourceData::new`].
     pub fn build<G, R, const N: usize>(
         self,
@@ -291,7 +324,25 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
                 parameter: "actions",
             });
         }
-        let fqi = TabularFqi::new(self.grid, actions, fqi)?;
+        let fqi = self.approximator.build(actions, fqi)?;
+        let transitions = match self.transitions {
+            None => None,
+            Some(t) => {
+                short(t.weights.len(), source_records)?;
+                check_transition_posteriors::<T, D>(t.posteriors, source_records)?;
+                let weights =
+                    t.weights
+                        .get_mut(..source_records)
+                        .ok_or(Error::CapacityExceeded {
+                            capacity: source_records,
+                        })?;
+                Some(TransitionWeighting {
+                    params: t.params,
+                    posteriors: t.posteriors,
+                    weights,
+                })
+            }
+        };
         short(samples.len(), config.budget)?;
         short(weights.len(), source_records)?;
         short(alias.len(), rows)?;
@@ -377,8 +428,37 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
         };
         let sampler = table.sampler(config.sampling, alias)?;
         let sources = SourceData::new(records, posteriors)?;
-        Awfqi::assemble(config, target, sampler, sources, samples, weights, gp, fqi)
+        Awfqi::assemble(
+            config,
+            target,
+            sampler,
+            sources,
+            samples,
+            weights,
+            gp,
+            fqi,
+            transitions,
+        )
     }
+}
+
+/// Checks the stored transition posteriors: `D` per source record, finite, `std ≥ 0`.
+fn check_transition_posteriors<T: Real, const D: usize>(
+    posteriors: &[Posterior<T>],
+    records: usize,
+) -> Result<()> {
+    let parameter = "transition_posteriors";
+    if records.checked_mul(D) != Some(posteriors.len()) {
+        return Err(Error::InvalidParameter { parameter });
+    }
+    for p in posteriors {
+        crate::error::ensure_finite(p.mean, parameter)?;
+        crate::error::ensure_finite(p.std, parameter)?;
+        if p.std < T::ZERO {
+            return Err(Error::InvalidParameter { parameter });
+        }
+    }
+    Ok(())
 }
 
 /// `Err(CapacityExceeded { capacity: have })` when `have < need`.

@@ -1,10 +1,11 @@
 extern crate std;
 use super::*;
+use crate::TabularFqi;
 use crate::alias::AliasEntry;
-use crate::dataset::{SubsetRule, predict_posteriors};
 use crate::env::{Dynamics, PuddleWorld};
 use crate::fqi::{CellGrid, FqiEntry};
 use crate::gp::SearchOptions;
+use crate::record_gp::{SubsetRule, predict_posteriors};
 use crate::score::{GpSourceModel, RowSet, ScoreTable, Scores};
 use crate::weights::effective_sample_size;
 use rand_chacha::ChaCha8Rng;
@@ -154,7 +155,7 @@ fn a_step_queries_weighs_and_fits_as_specified() {
     let d0 = kernel.target_samples().to_vec();
     let want: Vec<[f64; 3]> = SubsetRule::Spread
         .indices(budget, 16)
-        .map(|i| crate::dataset::input(d0[i].state, d0[i].action))
+        .map(|i| crate::record_gp::input(d0[i].state, d0[i].action))
         .collect();
     assert_eq!(kernel.gp().inputs(), &want[..]);
 
@@ -283,10 +284,10 @@ fn the_builder_fits_each_source_gp_once_for_posteriors_and_realistic_scores() {
     let mut want_posteriors = Vec::new();
     for records in &slices {
         let mut gp = Gp::<f64, 8, 3>::empty();
-        crate::dataset::fit_gp(
+        crate::record_gp::fit_gp(
             &mut gp,
             records,
-            crate::dataset::Output::Reward,
+            crate::record_gp::Output::Reward,
             config.subset,
             &config.gp_training,
             &mut rng,

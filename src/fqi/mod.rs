@@ -25,7 +25,7 @@
 //!   action — nearest in cell-index units (Euclidean, `Σ_k Δi_k²`), ties broken by the
 //!   smallest cell index. This mimics the reference's trees, which extend a leaf's value
 //!   over the region around its samples.
-//! - [`EmptyCells::CappedNearest`] (the default, [`FqiConfig::reference`]): the same, but
+//! - [`EmptyCells::CappedNearest`] (the default, [`FqiConfig::published`]): the same, but
 //!   never more than the lowest value of the actions that have data in the same cell.
 //!   Plain nearest filling is optimistic for actions never tried where the data lie: with
 //!   the narrow paths of source data and AWFQI's scattered queries, a greedy policy would
@@ -35,7 +35,7 @@
 //! - [`EmptyCells::Value`]: a fixed value.
 //!
 //! **Near-zero weights.** A pair "has data" when the total weight of its samples reaches
-//! [`FqiConfig::with_min_weight`] (0.5 in [`FqiConfig::reference`], i.e. half a target
+//! [`FqiConfig::with_min_weight`] (0.5 in [`FqiConfig::published`], i.e. half a target
 //! sample's worth). A weighted mean over samples whose weights are all tiny is still their
 //! plain mean, so without this threshold a cell holding only source records that the
 //! weights all but discard (e.g. weight 10⁻²⁰ where the target has a puddle) would keep
@@ -52,8 +52,12 @@
 //! `f64`. A 21 × 21 grid with 4 actions needs 1 764 entries = 35 280 bytes in `f32`.
 
 mod grid;
+mod q_function;
+mod tiles;
 
 pub use grid::CellGrid;
+pub use q_function::{Approximator, Greedy, QFunction};
+pub use tiles::{TileFqi, Tilings};
 
 use crate::env::Transition;
 use crate::error::ensure_finite;
@@ -183,10 +187,10 @@ impl<T: Real> FqiConfig<T> {
         Ok(Self { min_weight, ..self })
     }
 
-    /// The reference settings (§5, §13): γ = 0.99, 60 iterations, and for pairs without
+    /// The published settings (§5, §13): γ = 0.99, 60 iterations, and for pairs without
     /// data [`EmptyCells::CappedNearest`] with a minimum total weight of 0.5
     /// (**\[CHOICE\]**: half a target sample's worth; unweighted data are unaffected).
-    pub fn reference() -> Self {
+    pub fn published() -> Self {
         Self {
             discount: T::from_f64(0.99),
             iterations: 60,

@@ -75,7 +75,7 @@ fn deterministic_chain_in_f32() {
             absorbing: s.absorbing,
         })
         .collect();
-    fqi.fit(&[SampleSet::unweighted(&samples)], &FqiConfig::reference())
+    fqi.fit(&[SampleSet::unweighted(&samples)], &FqiConfig::published())
         .unwrap();
     for c in 0..4usize {
         let want = -(1.0 - 0.99f64.powi(4 - c as i32)) / 0.01;
@@ -262,7 +262,7 @@ fn empty_cells_fixed_value_and_actions_without_data() {
     assert_eq!(fqi.greedy_action(at(0)).unwrap(), 1);
     // Capped: in cell 0, the untried action 1 is capped at the tried action's −1; in the
     // unvisited cells 1 and 2 nothing caps it.
-    fqi.fit(&[SampleSet::unweighted(&samples)], &FqiConfig::reference())
+    fqi.fit(&[SampleSet::unweighted(&samples)], &FqiConfig::published())
         .unwrap();
     assert_eq!(fqi.value(at(0), 1).unwrap(), -1.0);
     assert_eq!(fqi.value(at(1), 1).unwrap(), 0.0);
@@ -270,7 +270,7 @@ fn empty_cells_fixed_value_and_actions_without_data() {
     // A tie between a filled value and a fitted one goes to the fitted one, whatever the
     // index: only action 1 was tried, action 0 is capped at its value.
     let only_1 = vec![sample(at(0), 1, -1.0, at(0), true)];
-    fqi.fit(&[SampleSet::unweighted(&only_1)], &FqiConfig::reference())
+    fqi.fit(&[SampleSet::unweighted(&only_1)], &FqiConfig::published())
         .unwrap();
     assert_eq!(fqi.value(at(0), 0).unwrap(), -1.0);
     assert!(fqi.entries()[1].has_data() && !fqi.entries()[0].has_data());
@@ -279,7 +279,7 @@ fn empty_cells_fixed_value_and_actions_without_data() {
         sample(at(0), 0, -1.0, at(0), true),
         sample(at(0), 1, -1.0, at(0), true),
     ];
-    fqi.fit(&[SampleSet::unweighted(&tie)], &FqiConfig::reference())
+    fqi.fit(&[SampleSet::unweighted(&tie)], &FqiConfig::published())
         .unwrap();
     assert_eq!(fqi.greedy_action(at(0)).unwrap(), 0);
 }

@@ -8,7 +8,7 @@
 //! hyperparameters inside box bounds with a fixed budget of evaluations
 //! ([`Gp::optimize_hyperparameters`]).
 //!
-//! The numerical work lives in slice-based functions (`cholesky`, `kernel`), so the code is
+//! The numerical work lives in slice-based functions (`cholesky`, `covariance`), so the code is
 //! generated once per scalar type and dimension, not once per capacity `N`.
 //!
 //! # Memory
@@ -52,11 +52,11 @@
 //! ```
 
 mod cholesky;
-mod kernel;
+mod covariance;
 mod regression;
 pub mod search;
 
-pub use kernel::Hyperparameters;
+pub use covariance::Hyperparameters;
 pub use regression::{BASE_JITTER, Gp, JITTER_ESCALATIONS, Prediction, WhenFull};
 pub use search::{HyperparameterBounds, MAX_SEARCH_PARAMETERS, SearchOptions};
 

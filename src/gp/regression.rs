@@ -1,7 +1,7 @@
 //! The fixed-capacity Gaussian-process regressor [`Gp`].
 
 use super::cholesky;
-use super::kernel::{self, Hyperparameters};
+use super::covariance::{self, Hyperparameters};
 use super::search::{self, HyperparameterBounds, LogBox, SearchOptions};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
@@ -67,7 +67,7 @@ fn attempt<T: Real, const D: usize>(
     if !jitter.is_finite() || ys.len() != n {
         return false;
     }
-    if !(kernel::fill_rows(hyper, xs, jitter, factor, stride, row, n)
+    if !(covariance::fill_rows(hyper, xs, jitter, factor, stride, row, n)
         && cholesky::factor_rows(factor, stride, row, n))
     {
         return false;

@@ -10,7 +10,7 @@
 //! equal share of what is left, and a start that converges early passes its unused
 //! evaluations on to the next one.
 
-use crate::gp::kernel::Hyperparameters;
+use crate::gp::covariance::Hyperparameters;
 use crate::rng::uniform;
 use crate::{Error, Real, Result};
 use rand_core::Rng;

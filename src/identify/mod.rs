@@ -3,7 +3,7 @@
 //!
 //! The pieces, each in its own module:
 //! - [`Belief`]: the posterior over the candidates, in log space (fixed capacity `K`).
-//! - [`score`](mod@score): where to query — the uniform, inter-MDP-variance and
+//! - [`query_score`](mod@query_score): where to query — the uniform, inter-MDP-variance and
 //!   mutual-information scores of §10.3, written into caller storage, one weight per
 //!   state-action pair at index `s·|𝒜| + a`.
 //! - [`draw_pair`] / [`draw_pairs`]: i.i.d. state-action pairs from a score.
@@ -49,13 +49,13 @@ mod belief;
 mod draw;
 mod policy;
 mod procedure;
-pub mod score;
+pub mod query_score;
 
 pub use belief::{Belief, log_likelihood};
 pub use draw::{StateAction, draw_pair, draw_pairs};
 pub use policy::{belief_weighted_policy, belief_weighted_q};
 pub use procedure::{Scoring, run_queries};
-pub use score::{Criterion, MAX_BINS, MiConfig, RewardEntropy, compute_score};
+pub use query_score::{Criterion, MAX_BINS, MiConfig, RewardEntropy, compute_score};
 
 use crate::env::FiniteMdp;
 use crate::{Error, Real, Result};

@@ -97,7 +97,7 @@ mod tests {
                 let mut rng = ChaCha8Rng::seed_from_u64(10 + truth as u64);
                 let mut belief = Belief::<f64, 4>::uniform(4).unwrap();
                 let mut score = [0.0; 400];
-                crate::identify::score::variance_score(&c, &[0.25; 4], &mut score).unwrap();
+                crate::identify::query_score::variance_score(&c, &[0.25; 4], &mut score).unwrap();
                 let mut entropies = [0.0; 40];
                 run_queries(
                     &c,

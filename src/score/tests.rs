@@ -186,8 +186,8 @@ fn compute_reports_bad_storage_sources_and_states() {
 
 #[test]
 fn realistic_table_uses_the_gp_posterior_means() {
-    use crate::dataset::input;
     use crate::gp::Hyperparameters;
+    use crate::record_gp::input;
     let hyper = Hyperparameters::isotropic(4.0, 2.0, 0.01);
     let mut gp_a = Gp::<f64, 8, 3>::new(hyper).unwrap();
     let mut gp_b = Gp::<f64, 8, 3>::new(hyper).unwrap();
@@ -244,8 +244,8 @@ fn a_table_can_be_rebuilt_from_stored_scores() {
 
 #[test]
 fn realistic_table_one_gp_at_a_time_equals_the_table_of_all_gps_bit_for_bit() {
-    use crate::dataset::{GpTraining, Output, SubsetRule, fit_gp};
     use crate::gp::SearchOptions;
+    use crate::record_gp::{GpTraining, Output, SubsetRule, fit_gp};
     // Three sources' records from the Puddle World sources, uniformly drawn.
     let worlds = PuddleWorld::<f64>::sources(Dynamics::Shared);
     let mut rng = ChaCha8Rng::seed_from_u64(3);
@@ -270,7 +270,7 @@ fn realistic_table_one_gp_at_a_time_equals_the_table_of_all_gps_bit_for_bit() {
             restarts: 1,
             isotropic: true,
         },
-        ..GpTraining::reference()
+        ..GpTraining::published()
     };
     let rows = RowSet::both(PuddleWorld::score_grid(2.5).unwrap(), 4, &slices).unwrap();
     // All GPs at once, from the same stream.

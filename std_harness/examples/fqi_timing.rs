@@ -18,8 +18,8 @@ use std::time::Instant;
 
 use awfqi::env::{Dynamics, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi_harness::fqi::{Dataset, FqiOptions, fqi};
-use awfqi_harness::puddle::sources::SourceSet;
+use awfqi_harness::forest_fqi::{Dataset, FqiOptions, fqi};
+use awfqi_harness::transfer::sources::SourceSet;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 

@@ -1,15 +1,17 @@
-//! The std side of awfqi: subcommands of the `awfqi-harness` binary and an independent
-//! reference implementation (f64, heap, written for clarity) that the core is tested against.
+//! The std side of awfqi: subcommands of the `awfqi-harness` binary, the faithful `f64`
+//! algorithms of the experiments, plots. (The independent reference implementations the
+//! core is tested against are the `awfqi-reference` crate.)
 //!
 //! Section numbers in these docs ("spec §7.3", "§12") are sections of the algorithm
 //! reference, `docs/algorithms.md` at the repository root.
 
 pub mod commands;
 pub mod domains;
-pub mod fqi;
+pub mod forest_fqi;
 pub mod gp_large;
+pub mod identification;
 pub mod plot;
-pub mod puddle;
-pub mod reference;
+pub mod run_range;
 pub mod seeding;
+pub mod transfer;
 pub mod trees;

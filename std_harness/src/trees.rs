@@ -49,7 +49,7 @@
 //! the growth time. Measured on the reference machine (one core): 50 trees on 450 records
 //! in ≈ 1.6 ms (3.4 ms before), prediction ≈ 12 ns per query and tree
 //! (`examples/tree_timing.rs`). FQI orders its queries along a Z-order curve so the lanes
-//! of a batch end at similar depths ([`crate::fqi`]).
+//! of a batch end at similar depths ([`crate::forest_fqi`]).
 
 use awfqi::{Error, Result};
 use rand_chacha::ChaCha8Rng;
@@ -652,17 +652,16 @@ impl Tree<'_> {
     }
 }
 
-/// Draws the candidate splits of a node and returns the best valid one, if any.
-#[inline(never)]
-fn best_split<const D: usize>(
-    records: &[Record<D>],
+/// Draws the random trial order of the features and the candidate threshold of every
+/// non-constant one (§4.1): uniform in `[lo, hi)`. A feature that is not a candidate keeps
+/// τ = −∞, which sends everything right, so its sums are computed but never valid. `None`
+/// when every feature is constant. Both split searches draw through here.
+#[inline]
+fn candidate_thresholds<const D: usize>(
     st: &NodeStats<D>,
     rng: &mut ChaCha8Rng,
-) -> Option<(usize, f64)> {
+) -> Option<([usize; D], [f64; D], [bool; D])> {
     let order = feature_order::<D>(rng);
-    // The threshold of each feature that is a candidate (drawn in the random trial order);
-    // a feature that is not keeps τ = −∞, which sends everything right, so its sums are
-    // computed but never valid.
     let mut thresholds = [f64::NEG_INFINITY; D];
     let mut is_candidate = [false; D];
     for &f in &order {
@@ -678,9 +677,19 @@ fn best_split<const D: usize>(
         thresholds[f] = tau;
         is_candidate[f] = true;
     }
-    if !is_candidate.contains(&true) {
-        return None;
-    }
+    is_candidate
+        .contains(&true)
+        .then_some((order, thresholds, is_candidate))
+}
+
+/// Draws the candidate splits of a node and returns the best valid one, if any.
+#[inline(never)]
+fn best_split<const D: usize>(
+    records: &[Record<D>],
+    st: &NodeStats<D>,
+    rng: &mut ChaCha8Rng,
+) -> Option<(usize, f64)> {
+    let (order, thresholds, is_candidate) = candidate_thresholds(st, rng)?;
     // One pass accumulates both children of every feature's candidate, indexed by feature
     // (a fixed index per lane, so the compiler keeps the sums in vector registers). Each
     // side is summed on its own (never as total − other side), so a child of zero weight
@@ -727,24 +736,7 @@ fn best_split_counted<const D: usize>(
     min_leaf: usize,
     rng: &mut ChaCha8Rng,
 ) -> Option<(usize, f64)> {
-    let order = feature_order::<D>(rng);
-    let mut thresholds = [f64::NEG_INFINITY; D];
-    let mut is_candidate = [false; D];
-    for &f in &order {
-        let (lo, hi) = (st.lo[f], st.hi[f]);
-        if hi <= lo + CONSTANT_FEATURE_TOLERANCE {
-            continue;
-        }
-        let mut tau = lo + awfqi::rng::uniform_f64(rng) * (hi - lo);
-        if tau >= hi {
-            tau = lo;
-        }
-        thresholds[f] = tau;
-        is_candidate[f] = true;
-    }
-    if !is_candidate.contains(&true) {
-        return None;
-    }
+    let (order, thresholds, is_candidate) = candidate_thresholds(st, rng)?;
     let (mut wl, mut sl, mut wr, mut sr) = ([0.0f64; D], [0.0f64; D], [0.0f64; D], [0.0f64; D]);
     let mut nl = [0usize; D];
     for r in records {

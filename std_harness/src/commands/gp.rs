@@ -1,6 +1,6 @@
 //! The `gp` subcommand: Gaussian-process regression cases from a JSON file, computed by the
 //! core (`awfqi::gp::Gp`, f64 or f32) or by the harness's reference GP
-//! ([`crate::reference::gp`]).
+//! ([`awfqi_reference::gp`]).
 //!
 //! Input: `{"cases":[{"name":…, "x":[[…D],…N], "y":[…N], "signal_variance":c,
 //! "length_scales":[…D], "noise_variance":s2, "x_test":[[…D],…M]}]}` with
@@ -26,7 +26,7 @@ use awfqi::Real;
 use awfqi::gp::{Gp, Hyperparameters};
 use serde::{Deserialize, Serialize};
 
-use crate::reference::gp::{Hyperparameters as ReferenceHyperparameters, ReferenceGp};
+use awfqi_reference::gp::{Hyperparameters as ReferenceHyperparameters, ReferenceGp};
 
 /// The capacities (training points) the command can run the core with; a case uses the
 /// smallest one that holds it.

@@ -6,10 +6,8 @@
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::puddle;
-use crate::puddle::algorithms::{Experiment, kernel};
-use crate::puddle::protocol::StepRecord;
-use crate::puddle::score_tables::Mode;
-use crate::puddle::sources::{Record, SourceSet};
+use crate::transfer::algorithms::awfqi_kernel::{self, KernelConfig, KernelSetup};
+use crate::transfer::sources::SourceSet;
 
 pub use super::transfer::{Args, DynamicsArg, NoiseArg};
 use super::transfer::{Config, Defaults, KernelHooks};
@@ -24,19 +22,10 @@ pub const DEFAULTS: Defaults = Defaults {
 
 fn kernel_setup(
     sources: &SourceSet<2>,
-    mode: Mode,
-    spacing: f64,
+    config: KernelConfig,
     rng: &mut ChaCha8Rng,
-) -> anyhow::Result<kernel::KernelSetup> {
-    kernel::KernelSetup::new(sources, mode, spacing, rng)
-}
-
-fn kernel_run(
-    experiment: &Experiment<2>,
-    rng: &mut ChaCha8Rng,
-    after_step: &mut dyn FnMut(&StepRecord),
-) -> anyhow::Result<(Vec<StepRecord>, Vec<Record<2>>)> {
-    kernel::run(experiment, rng, after_step)
+) -> anyhow::Result<KernelSetup> {
+    KernelSetup::new(sources, config, rng)
 }
 
 /// Runs the experiment and writes every output.
@@ -46,7 +35,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let config = Config::resolve(args, &domain, &DEFAULTS, true)?;
     let hooks = KernelHooks {
         setup: kernel_setup,
-        run: kernel_run,
+        learner: awfqi_kernel::with_learner,
     };
     super::transfer::run(&config, domain, Some(dynamics), Some(hooks))
 }

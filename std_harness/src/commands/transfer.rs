@@ -23,18 +23,19 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use crate::commands::identify::RunRange;
 use crate::domains::{Domain, IdealMeans};
-use crate::puddle::algorithms::{
-    Algorithm, Experiment, KernelRunner, TransferOptions, Variances, kernel,
+use crate::run_range::RunRange;
+use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, KernelSetup};
+use crate::transfer::algorithms::{
+    Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
-use crate::puddle::gp::{GpOptions, GpSearch};
-use crate::puddle::metrics::{TransferMetrics, markdown_table, transfer_metrics};
-use crate::puddle::protocol::{self, Protocol};
-use crate::puddle::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
-use crate::puddle::score_tables::{self, Mode, ScoreTableData};
-use crate::puddle::sources::SourceSet;
-use crate::puddle::{IDEAL_WEIGHTS, RUN, SCORE_TABLE, figures, stream};
+use crate::transfer::gp::{GpOptions, GpSearch};
+use crate::transfer::metrics::{TransferMetrics, markdown_table, transfer_metrics};
+use crate::transfer::protocol::{self, Protocol};
+use crate::transfer::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
+use crate::transfer::score_tables::{self, Mode, ScoreTableData};
+use crate::transfer::sources::SourceSet;
+use crate::transfer::{IDEAL_WEIGHTS, RUN, SCORE_TABLE, figures, stream};
 
 /// Puddle World's dynamics variants on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -62,6 +63,16 @@ pub enum NoiseArg {
     Reference,
     /// `√max(v − σ²ₙ, 0)`.
     Principled,
+}
+
+/// The Q-function approximator of `awfqi-kernel`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KernelQ {
+    /// One table of `--kernel-resolution` cells per axis (spec §5.1).
+    Tabular,
+    /// Tile coding: `--kernel-tilings` offset tilings of `--kernel-resolution` tiles per
+    /// axis, averaged (the core's `TileFqi`).
+    Tiles,
 }
 
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
@@ -136,7 +147,8 @@ pub struct Args {
     pub noise: NoiseArg,
     /// Transition weights of IWFQI on (every state coordinate) or off (default: the
     /// published configuration: off for shared, on for puddle dynamics, spec §7.6; the
-    /// Dam's storage; Acrobot's four coordinates).
+    /// Dam's storage; Acrobot's four coordinates). awfqi-kernel weighs transitions only
+    /// with `true` (spec §12.1).
     #[arg(long)]
     pub transition_weights: Option<bool>,
     /// How IWFQI-ideal gets the models' mean next states (default: the published way:
@@ -155,6 +167,17 @@ pub struct Args {
     /// World −25, Dam −1000, Acrobot −50.
     #[arg(long, allow_hyphen_values = true)]
     pub threshold: Option<f64>,
+    /// Q-function approximator of awfqi-kernel's FQI (`tabular`: the 11 × 11 table of
+    /// spec §12.1 before tile coding became the default, measured worse).
+    #[arg(long, value_enum, default_value = "tiles")]
+    pub kernel_q: KernelQ,
+    /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
+    /// the table, 6 for tiles.
+    #[arg(long)]
+    pub kernel_resolution: Option<usize>,
+    /// Offset tilings of `--kernel-q tiles`.
+    #[arg(long, default_value_t = 4)]
+    pub kernel_tilings: usize,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -179,14 +202,14 @@ pub struct Defaults {
     pub threshold: f64,
 }
 
-/// The core kernel's hooks on a domain: its set-up and its run (Puddle World only until
-/// the kernel is generic over the state dimension).
+/// The core kernel's hooks on a domain: its set-up and its learner (Puddle World only
+/// until the kernel is generic over the state dimension).
 #[derive(Debug, Clone, Copy)]
 pub struct KernelHooks<const D: usize> {
-    /// Builds the kernel's set-up from the sources, the setting, the spacing and a stream.
-    pub setup: fn(&SourceSet<D>, Mode, f64, &mut ChaCha8Rng) -> anyhow::Result<kernel::KernelSetup>,
-    /// Runs it.
-    pub run: KernelRunner<D>,
+    /// Builds the kernel's set-up from the sources, its configuration and a stream.
+    pub setup: fn(&SourceSet<D>, KernelConfig, &mut ChaCha8Rng) -> anyhow::Result<KernelSetup>,
+    /// Hands one run's learner to the protocol.
+    pub learner: ScopedLearner<D>,
 }
 
 /// The options resolved against the domain's defaults.
@@ -316,7 +339,7 @@ fn load_sources<const D: usize>(
             eprintln!("generating source data ({generation:?})…");
             let start = Instant::now();
             let set =
-                crate::puddle::sources::generate(domain, &generation, &config.gp(), args.seed)?;
+                crate::transfer::sources::generate(domain, &generation, &config.gp(), args.seed)?;
             let dir = config.out.join("sources");
             set.write_dir(&dir, &domain.source_layout)?;
             eprintln!(
@@ -389,12 +412,14 @@ pub fn build_experiment<const D: usize>(
     let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            Some(Arc::new((h.setup)(
-                &sources,
-                config.setting,
-                config.spacing,
-                &mut rng,
-            )?))
+            let kernel = KernelConfig::new(config.setting, config.spacing).with_q(
+                KernelQFunction::from_args(
+                    args.kernel_q,
+                    args.kernel_resolution,
+                    args.kernel_tilings,
+                )?,
+            );
+            Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }
         _ => None,
     };
@@ -414,12 +439,12 @@ pub fn build_experiment<const D: usize>(
         realistic_table,
         ideal_weights: None,
         kernel,
-        kernel_runner: hooks.map(|h| h.run),
+        kernel_learner: hooks.map(|h| h.learner),
     };
     experiment.variances()?;
     if wants(Algorithm::IwfqiIdeal) {
         let mut rng = stream(args.seed, &[IDEAL_WEIGHTS]);
-        let weights = crate::puddle::algorithms::iwfqi::ideal_weights(
+        let weights = crate::transfer::algorithms::iwfqi::ideal_weights(
             &experiment.domain,
             &experiment.sources,
             experiment.domain.published.ideal_variances,
@@ -441,25 +466,19 @@ pub fn run_one<const D: usize>(
 ) -> anyhow::Result<RunRecord> {
     let start = Instant::now();
     let mut rng = stream(seed, &[RUN, algorithm.id(), run as u64]);
-    let (steps, samples) = if algorithm == Algorithm::AwfqiKernel {
-        let runner = experiment.kernel_runner.ok_or_else(|| {
-            anyhow!(
-                "awfqi-kernel is not available on {}",
-                experiment.domain.name
-            )
-        })?;
-        runner(experiment, &mut rng, &mut |_| on_step())?
-    } else {
-        let mut learner = experiment.learner(algorithm)?;
+    let mut outcome = None;
+    experiment.with_learner(algorithm, &mut rng, &mut |learner, rng| {
         let steps = protocol::run(
             &experiment.domain,
             &experiment.protocol,
-            learner.as_mut(),
-            &mut rng,
+            learner,
+            rng,
             |_| on_step(),
         )?;
-        (steps, learner.target_samples().to_vec())
-    };
+        outcome = Some((steps, learner.target_samples().to_vec()));
+        Ok(())
+    })?;
+    let (steps, samples) = outcome.ok_or_else(|| anyhow!("{} did not run", algorithm.name()))?;
     let samples = if run < SAMPLE_RUNS {
         samples
             .iter()

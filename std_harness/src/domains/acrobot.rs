@@ -18,8 +18,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
 use crate::gp_large::fixed::FixedKernel;
-use crate::puddle::gp::GpSpec;
-use crate::puddle::sources::{Generation, SourceLayout, SourceSet};
+use crate::transfer::gp::GpSpec;
+use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
 use crate::trees::TreeParams;
 
 impl Task<4> for Acrobot<f64> {
@@ -197,7 +197,7 @@ mod tests {
             assert_eq!(s.next_state.len(), 4);
             // The records are the model's steps (noise-free dynamics).
             for r in s.records.iter().step_by(53) {
-                let mut rng = crate::puddle::stream(0, &[]);
+                let mut rng = crate::transfer::stream(0, &[]);
                 let t = model.step(r.state, r.action, &mut rng).unwrap();
                 assert!((t.reward - r.reward).abs() < 1e-12);
                 for d in 0..4 {

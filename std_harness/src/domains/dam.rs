@@ -20,8 +20,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
 use crate::gp_large::fixed::{FixedKernel, RbfTerm};
-use crate::puddle::gp::GpSpec;
-use crate::puddle::sources::{Generation, SourceLayout, SourceSet};
+use crate::transfer::gp::GpSpec;
+use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
 use crate::trees::TreeParams;
 
 impl Task<2> for Dam<f64> {

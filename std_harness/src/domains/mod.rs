@@ -2,7 +2,7 @@
 //! target and its source MDPs ([`Task`]s, in `f64`), the action set, the horizon and
 //! discount, the evaluation start states, and the configuration the published experiments
 //! used ([`Published`]). The protocol, the algorithms and the result files
-//! (`crate::puddle`) are written once over `Domain<D>`, `D` the state dimension.
+//! (`crate::transfer`) are written once over `Domain<D>`, `D` the state dimension.
 //!
 //! - [`puddle`]: the continuous Puddle World (spec §2), both dynamics variants, D = 2;
 //! - [`dam`]: the IWFQI paper's water reservoir, D = 2;
@@ -23,8 +23,8 @@ use awfqi::env::Transition;
 use awfqi::policy::Policy;
 use rand_chacha::ChaCha8Rng;
 
-use crate::puddle::gp::GpSpec;
-use crate::puddle::sources::{Generation, SourceLayout, SourceSet};
+use crate::transfer::gp::GpSpec;
+use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
 use crate::trees::TreeParams;
 
 /// One transition record `(s, a, r, s′, ω)` in `f64`.

@@ -11,8 +11,8 @@ use awfqi::env::{
 use rand_chacha::ChaCha8Rng;
 
 use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
-use crate::puddle::gp::GpSpec;
-use crate::puddle::sources::{Generation, SourceLayout, SourceSet};
+use crate::transfer::gp::GpSpec;
+use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
 use crate::trees::TreeParams;
 
 impl Task<2> for PuddleWorld<f64> {
@@ -91,7 +91,7 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
         },
         generation: Generation::puddle(),
         grid_rows,
-        grid_spacing: crate::puddle::score_tables::GRID_SPACING,
+        grid_spacing: crate::transfer::score_tables::GRID_SPACING,
     }
 }
 

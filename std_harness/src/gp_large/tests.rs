@@ -74,7 +74,7 @@ fn matches_the_core_gp_for_fixed_hyperparameters() {
 
 #[test]
 fn matches_the_harness_reference_gp() {
-    // The textbook reference of `crate::reference::gp`, on more points than the core holds,
+    // The textbook reference of `awfqi_reference::gp`, on more points than the core holds,
     // with the jitter 10⁻¹⁰ passed as its extra diagonal.
     let (zs, ys) = data(150, 20);
     let rows: Vec<Vec<f64>> = zs.iter().map(|z| z.to_vec()).collect();
@@ -85,10 +85,10 @@ fn matches_the_harness_reference_gp() {
             noise_variance: s2,
         };
         let gp = LargeGp::new(&zs, &ys, hyper, Par::Seq).unwrap();
-        let reference = crate::reference::gp::ReferenceGp::fit_with_diagonal(
+        let reference = awfqi_reference::gp::ReferenceGp::fit_with_diagonal(
             &rows,
             &ys,
-            &crate::reference::gp::Hyperparameters {
+            &awfqi_reference::gp::Hyperparameters {
                 signal_variance: c,
                 length_scales: vec![l; 3],
                 noise_variance: s2,
@@ -218,45 +218,6 @@ fn max_points_keeps_the_last_samples() {
     assert_eq!(
         direct.log_marginal_likelihood(),
         gp.log_marginal_likelihood()
-    );
-}
-
-#[test]
-fn noise_subtraction_follows_the_reference_rule() {
-    // σ̂ = 0.1 ≤ min std 0.25: subtract σ̂.
-    let mut stds = [0.5, 0.25, 1.0];
-    assert_eq!(
-        subtract_noise(&mut stds, 0.01, NoiseSubtraction::Reference),
-        NoiseBranch::Noise
-    );
-    for (s, e) in stds.iter().zip([0.4, 0.15, 0.9]) {
-        assert!((s - e).abs() < 1e-15);
-    }
-    // σ̂ = 0.3 > min std 0.25: subtract the minimum, which becomes exactly 0.
-    let mut stds = [0.5, 0.25, 1.0];
-    assert_eq!(
-        subtract_noise(&mut stds, 0.09, NoiseSubtraction::Reference),
-        NoiseBranch::MinimumStd
-    );
-    assert_eq!(stds, [0.25, 0.0, 0.75]);
-    // Equality takes the noise branch (σ̂ ≤ m).
-    let mut stds = [0.5, 0.5];
-    assert_eq!(
-        subtract_noise(&mut stds, 0.25, NoiseSubtraction::Reference),
-        NoiseBranch::Noise
-    );
-    assert_eq!(stds, [0.0, 0.0]);
-    // The principled version subtracts variances: √(0.5² − 0.09) = 0.4, √max(0.25² − 0.09, 0) = 0.
-    let mut stds = [0.5, 0.25];
-    assert_eq!(
-        subtract_noise(&mut stds, 0.09, NoiseSubtraction::Variance),
-        NoiseBranch::Variance
-    );
-    assert!((stds[0] - 0.4).abs() < 1e-15);
-    assert_eq!(stds[1], 0.0);
-    assert_eq!(
-        subtract_noise(&mut [], 0.09, NoiseSubtraction::Reference),
-        NoiseBranch::Empty
     );
 }
 
@@ -445,16 +406,11 @@ fn check_source_gp(
     let mut means = vec![0.0; zs.len()];
     let mut stds = vec![0.0; zs.len()];
     gp.predict_into(&zs, &mut means, &mut stds).unwrap();
-    let branch = subtract_noise(
-        &mut stds,
-        gp.hyperparameters().noise_variance,
-        NoiseSubtraction::Reference,
-    );
-    assert_eq!(
-        branch,
-        NoiseBranch::Noise,
-        "spec §6: σ̂ ≤ min std for source GPs"
-    );
+    // Spec §6: σ̂ ≤ min std for source GPs, so the published rule subtracts σ̂ itself.
+    let noise_std = gp.hyperparameters().noise_variance.sqrt();
+    let min_std = stds.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(noise_std <= min_std, "σ̂ = {noise_std} > min std {min_std}");
+    stds.iter_mut().for_each(|s| *s -= noise_std);
     let (mut worst_mean, mut worst_std) = (0.0f64, 0.0f64);
     for ((r, m), s) in rows.iter().zip(&means).zip(&stds) {
         worst_mean = worst_mean.max((m - r[mean_col]).abs());

@@ -1,6 +1,6 @@
 //! Expected values for the on-target suite, computed on the host in `f64` by code that does
 //! not share the core's implementation: the harness's reference GP
-//! (`awfqi_harness::reference::gp`) and spec §2.3/§2.7's formulas written out directly.
+//! (`awfqi_reference::gp`) and spec §2.3/§2.7's formulas written out directly.
 //! The host test `tests/on_target_golden.rs` of the core recomputes every value here and
 //! fails if one is off by more than 1e-12 (relative), so this table cannot drift.
 //!

@@ -5,6 +5,8 @@
 
 pub mod golden;
 pub mod probe;
+#[rustfmt::skip]
+pub mod puddle_tables;
 pub mod workloads;
 
 /// The body of a footprint image: paints the stack, runs `$work` (an expression giving

@@ -49,8 +49,9 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EpsilonGreedyPolicy, Evaluation, Posterior, RowSet,
-    Scores, StepReport, Transition, evaluate_greedy,
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
+    FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
+    StepReport, Transition, evaluate_greedy,
 };
 
 /// A transition record in `f32`.
@@ -183,6 +184,188 @@ pub fn awfqi_puddle<
     let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
     inspect(kernel.target_samples());
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
+}
+
+/// The recommended Puddle World configuration in 32 KiB of RAM (issue 12 item 7): the
+/// kernel's whole memory, `AwfqiStorage<f32, 2, 3, 24, 300, 1033, 324, 484>` = 27 616 B on
+/// this target — a 24-point target GP, 6 steps × 50 target records, one weight per
+/// published source record (1033), the sampler over the 324 rows of the spacing-1.25
+/// puddle grid, 11 × 11 × 4 FQI entries. The source records, their posteriors and the
+/// score values are [`crate::puddle_tables`], in flash.
+pub type Storage32k = AwfqiStorage<f32, 2, 3, 24, 300, 1033, 324, 484>;
+
+/// The main job's AWFQI on the device in the 32 KiB configuration: the builder over the
+/// flash tables, 6 steps of 50 queries (thesis configuration, §4.2 search), the greedy
+/// policy's evaluation. `std_harness/examples/kernel_capacity.rs` (`24 11 1.25`) measures
+/// the return of this configuration on the host.
+pub fn awfqi_puddle_32k(
+    storage: &mut Storage32k,
+    seed: u64,
+) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
+    use crate::puddle_tables as t;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
+    let rows = RowSet::grid(PuddleWorld::score_grid(1.25)?, PUDDLE_ACTIONS)?;
+    let mut kernel = Awfqi::builder(
+        AwfqiConfig::thesis(50).validate()?,
+        CellGrid::cube(0.0, 10.0, 11)?,
+        &sources,
+        rows,
+    )
+    .stored_posteriors(&t::SOURCE_POSTERIORS)
+    .stored_scores(&t::SCORES)
+    .build(PuddleWorld::target(Dynamics::Shared), storage, &mut rng)?;
+    let mut report = None;
+    for _ in 0..6 {
+        report = Some(kernel.step(&mut rng)?);
+    }
+    let target = kernel.target();
+    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
+}
+
+/// A 4-D toy plant (the one of `tests/generic_plant.rs`, in `f32`): states in `[−1, 1]⁴`,
+/// action 0 moves every coordinate by −0.5, action 1 by +0.5 (clipped, plus noise
+/// 𝒩(0, 0.05²)), reward `−(Σ s̄′ − c)²/4` at the mean next state (+ noise).
+#[derive(Clone, Copy)]
+pub struct SumPlant {
+    /// Set-point of the sum of the coordinates.
+    pub c: f32,
+}
+
+impl SourceModel<f32, 4> for SumPlant {
+    fn predict(&self, state: [f32; 4], action: usize) -> Result<SourceMeans<f32, 4>> {
+        if action > 1 {
+            return Err(awfqi::Error::OutOfRange {
+                parameter: "action",
+            });
+        }
+        let step = if action == 0 { -0.5 } else { 0.5 };
+        let next_state = state.map(|x| (x + step).clamp(-1.0, 1.0));
+        let sum: f32 = next_state.iter().sum();
+        Ok(SourceMeans {
+            reward: -(sum - self.c) * (sum - self.c) / 4.0,
+            next_state,
+        })
+    }
+}
+
+impl GenerativeModel<f32> for SumPlant {
+    type State = [f32; 4];
+
+    fn num_actions(&self) -> usize {
+        2
+    }
+
+    fn query<R: rand_core::Rng + ?Sized>(
+        &self,
+        state: [f32; 4],
+        action: usize,
+        rng: &mut R,
+    ) -> Result<Transition<[f32; 4], f32>> {
+        let mean = self.predict(state, action)?;
+        let mut next_state = mean.next_state;
+        for x in &mut next_state {
+            *x = (*x + normal(rng, 0.0, 0.05)?).clamp(-1.0, 1.0);
+        }
+        Ok(Transition {
+            state,
+            action,
+            reward: mean.reward + normal(rng, 0.0, 0.05)?,
+            next_state,
+            absorbing: false,
+        })
+    }
+}
+
+/// Memory of [`awfqi_4d`]: two sources' records (512 each: every point of the 4⁴ lattice
+/// of cell centres with both actions), their posteriors, the score values of the 512
+/// candidate rows, and the kernel's `AwfqiStorage` (64-point GP over (s, a) ∈ ℝ⁵, 3 steps
+/// × 40 target records, 1024 weights, 512 alias entries, 4⁴ cells × 2 actions).
+pub struct Storage4d {
+    /// Source records, source after source.
+    pub records: [Transition<[f32; 4], f32>; 1024],
+    /// Their stored reward posteriors.
+    pub posteriors: [Posterior<f32>; 1024],
+    /// Score values (set-up only).
+    pub scores: [Scores<f32, 4>; 512],
+    /// The kernel's memory.
+    pub kernel: AwfqiStorage<f32, 4, 5, 64, 120, 1024, 512, 512>,
+}
+
+impl Storage4d {
+    /// All-zero storage, for a `static` in `.bss`.
+    pub const fn new() -> Self {
+        Self {
+            records: [Transition::EMPTY; 1024],
+            posteriors: [Posterior {
+                mean: 0.0,
+                std: 0.0,
+            }; 1024],
+            scores: [Scores::ZERO; 512],
+            kernel: AwfqiStorage::new(),
+        }
+    }
+}
+
+/// The AWFQI loop at four state dimensions on the device, as `tests/generic_plant.rs` runs
+/// it on the host (one record per lattice pair instead of two): sources with set-points 0
+/// (the target's twin) and 1 logged on the device, the builder (source GPs fitted, their
+/// posteriors stored, the realistic score table), 3 steps of 40 queries, then the greedy
+/// policy against the closed-form optimum `π*(s) = 0 if Σ s ≥ 1, 1 if Σ s ≤ −1`. Returns
+/// the cells checked and the cells where the greedy action is π*'s.
+pub fn awfqi_4d(storage: &mut Storage4d, seed: u64) -> Result<(usize, usize)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let Storage4d {
+        records,
+        posteriors,
+        scores,
+        kernel,
+    } = storage;
+    let lattice = PointGrid::new([-0.75f32; 4], [0.5; 4], [4; 4])?;
+    let plants = [SumPlant { c: 0.0 }, SumPlant { c: 1.0 }];
+    for (k, slot) in records.iter_mut().enumerate() {
+        let plant = plants.get(k / 512).copied().unwrap_or(plants[0]);
+        let point = lattice
+            .point((k % 512) / 2)
+            .ok_or(awfqi::Error::EmptyData)?;
+        *slot = plant.query(point, k % 2, &mut rng)?;
+    }
+    let (first, second) = records.split_at(512);
+    let sources: [&[Transition<[f32; 4], f32>]; 2] = [first, second];
+    let mut config = AwfqiConfig::thesis(40);
+    config.gp_training.search.max_evaluations = 120;
+    config.gp_training.search.restarts = 2;
+    config.fqi = FqiConfig::new(0.8, 30, EmptyCells::CappedNearest)?.with_min_weight(0.05)?;
+    let grid = CellGrid::cube(-1.0, 1.0, 4)?;
+    let mut kernel = Awfqi::builder(
+        config.validate()?,
+        grid,
+        &sources,
+        RowSet::grid(lattice, 2)?,
+    )
+    .fit_posteriors(posteriors)
+    .realistic_scores(scores)
+    .build(SumPlant { c: 0.0 }, kernel, &mut rng)?;
+    for _ in 0..3 {
+        kernel.step(&mut rng)?;
+    }
+    let q = kernel.q();
+    let (mut checked, mut optimal) = (0, 0);
+    for cell in 0..grid.len() {
+        let centre = grid.center(cell).ok_or(awfqi::Error::EmptyData)?;
+        let sum: f32 = centre.iter().sum();
+        let best = if sum >= 1.0 {
+            0
+        } else if sum <= -1.0 {
+            1
+        } else {
+            continue;
+        };
+        checked += 1;
+        optimal += usize::from(q.greedy_action(centre)? == best);
+    }
+    Ok((checked, optimal))
 }
 
 use awfqi::env::GridWorld;

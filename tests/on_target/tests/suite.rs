@@ -75,6 +75,52 @@ fn check_predictions(gp: &Gp<f32, 16, 3>, expected: &[(f64, f64); 3]) {
     }
 }
 
+/// A 1-D plant for the transition-weight test: `x ∈ [0, 10]`, action 0 moves right by
+/// `shift`, action 1 left (clipped), next-state noise of std 0.1; reward `−|x − 5|/5` from
+/// the state alone, so sources differ from the target only in their dynamics.
+#[derive(Clone, Copy)]
+struct Shift(f32);
+
+impl Shift {
+    fn mean_next(&self, x: f32, action: usize) -> f32 {
+        let step = if action == 0 { self.0 } else { -self.0 };
+        (x + step).clamp(0.0, 10.0)
+    }
+}
+
+impl awfqi::SourceModel<f32, 1> for Shift {
+    fn predict(&self, s: [f32; 1], a: usize) -> awfqi::Result<awfqi::SourceMeans<f32, 1>> {
+        Ok(awfqi::SourceMeans {
+            reward: -libm::fabsf(s[0] - 5.0) / 5.0,
+            next_state: [self.mean_next(s[0], a)],
+        })
+    }
+}
+
+impl awfqi::GenerativeModel<f32> for Shift {
+    type State = [f32; 1];
+
+    fn num_actions(&self) -> usize {
+        2
+    }
+
+    fn query<R: rand_core::Rng + ?Sized>(
+        &self,
+        s: [f32; 1],
+        a: usize,
+        rng: &mut R,
+    ) -> awfqi::Result<awfqi::Transition<[f32; 1], f32>> {
+        let next = self.mean_next(s[0], a) + awfqi::rng::normal(rng, 0.0, 0.1)?;
+        Ok(awfqi::Transition {
+            state: s,
+            action: a,
+            reward: -libm::fabsf(s[0] - 5.0) / 5.0 + awfqi::rng::normal(rng, 0.0, 0.1)?,
+            next_state: [next.clamp(0.0, 10.0)],
+            absorbing: false,
+        })
+    }
+}
+
 #[defmt_test::tests]
 mod tests {
     use super::{check_predictions, gp_hyper, gp_point, instance};
@@ -524,6 +570,40 @@ mod tests {
         );
     }
 
+    /// The 32 KiB configuration's workload on the target: the builder over the flash
+    /// tables (1033 published records, 324 score rows), 6 steps of 50 queries, a 24-point
+    /// GP, and a finite, bounded evaluation.
+    #[test]
+    fn awfqi_puddle_32k_runs() {
+        use awfqi_on_target::workloads::{Storage32k, awfqi_puddle_32k};
+        static mut STORAGE: Storage32k = Storage32k::new();
+        // SAFETY: the only reference.
+        let storage = unsafe { &mut *core::ptr::addr_of_mut!(STORAGE) };
+        let (report, evaluation) = awfqi_puddle_32k(storage, 5).unwrap();
+        assert!(report.step == 6 && report.n_target_samples == 300);
+        assert!(report.n_source_samples == 1033 && report.gp_points == 24);
+        assert!(report.wr_eff > 0.0 && report.wr_eff <= 1333.0 * 1.0001);
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
+    }
+
+    /// The 4-D loop on the target: the greedy policy is the closed-form optimum in more
+    /// than half of the cells where that is known (110 of 132 measured).
+    #[test]
+    fn awfqi_4d_runs() {
+        use awfqi_on_target::workloads::{Storage4d, awfqi_4d};
+        static mut STORAGE: Storage4d = Storage4d::new();
+        // SAFETY: the only reference.
+        let storage = unsafe { &mut *core::ptr::addr_of_mut!(STORAGE) };
+        let (checked, optimal) = awfqi_4d(storage, 2026).unwrap();
+        assert!(
+            checked > 100 && 2 * optimal > checked,
+            "{} of {}",
+            optimal,
+            checked
+        );
+    }
+
     /// Spec §7.3's golden weights (both estimators), the ESS example and §7.7's ideal weight,
     /// in f32.
     #[test]
@@ -784,5 +864,125 @@ mod tests {
             found.initial_value,
             v
         );
+    }
+    /// Tile coding on a deterministic chain (5 unit cells, right −1 per move, the last move
+    /// absorbing; left clipped at 0): two tilings shifted by half a tile hold one chain
+    /// state per tile, so Q is the closed-form Q* at the states and, halfway between two
+    /// states, the mean of their values.
+    #[test]
+    fn tile_coding_on_a_chain() {
+        use awfqi::{EmptyCells, FqiConfig, FqiEntry, SampleSet, TileFqi, Tilings, Transition};
+        let at = |c: usize| [c as f32 + 0.5];
+        let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 8];
+        for c in 0..4 {
+            samples[2 * c] = Transition {
+                state: at(c),
+                action: 0,
+                reward: -1.0,
+                next_state: at(c + 1),
+                absorbing: c == 3,
+            };
+            samples[2 * c + 1] = Transition {
+                state: at(c),
+                action: 1,
+                reward: -1.0,
+                next_state: at(c.saturating_sub(1)),
+                absorbing: false,
+            };
+        }
+        let tilings = Tilings::<f32, 1>::cube(0.0, 5.0, 5, 2).unwrap();
+        let mut storage = [FqiEntry::<f32>::EMPTY; 24];
+        let mut fqi = TileFqi::new(tilings, 2, &mut storage).unwrap();
+        let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
+        fqi.fit(&[SampleSet::unweighted(&samples)], &config)
+            .unwrap();
+        let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
+        for c in 0..4 {
+            let right = fqi.value(at(c), 0).unwrap();
+            assert!(
+                close(right as f64, v(c), 1e-5, 1e-5),
+                "Q({}, right) {}",
+                c,
+                right
+            );
+            assert!(fqi.greedy_action(at(c)) == Ok(0));
+        }
+        for c in 0..3 {
+            let mid = fqi.value([c as f32 + 1.0], 0).unwrap() as f64;
+            assert!(close(mid, (v(c) + v(c + 1)) / 2.0, 1e-5, 1e-5), "mid {}", c);
+        }
+        assert!(fqi.value([f32::NAN], 0).is_err());
+    }
+
+    /// Transition weights in the loop, on a 1-D plant whose two sources share the target's
+    /// reward: the twin (same dynamics) keeps far more weight than the source whose moves
+    /// are 2.5 instead of 1, the report's `ws_mean` is theirs, and FQI used them (an
+    /// independent fit with the same weights gives the same table).
+    #[test]
+    fn transition_weights_in_the_loop() {
+        use crate::Shift;
+        use awfqi::{
+            Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiEntry, GenerativeModel, PointGrid,
+            Posterior, RowSet, SampleSet, Scores, SourceModel, TabularFqi, Transition,
+            WeightParams,
+        };
+        use rand_chacha::ChaCha8Rng;
+        use rand_core::{Rng, SeedableRng};
+        const PER: usize = 24;
+        static mut STORAGE: AwfqiStorage<f32, 1, 2, 24, 24, 48, 20, 20> = AwfqiStorage::new();
+        // SAFETY: the only reference.
+        let storage = unsafe { &mut *core::ptr::addr_of_mut!(STORAGE) };
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let models = [Shift(1.0), Shift(2.5)];
+        let mut data = [[Transition::<[f32; 1], f32>::EMPTY; PER]; 2];
+        let mut reward = [Posterior::<f32>::default(); 2 * PER];
+        let mut transition = [Posterior::<f32>::default(); 2 * PER];
+        for (j, m) in models.iter().enumerate() {
+            for i in 0..PER {
+                let x = (rng.next_u32() >> 8) as f32 / (1u32 << 24) as f32 * 10.0;
+                let r = m.query([x], i % 2, &mut rng).unwrap();
+                let mean = m.predict(r.state, r.action).unwrap();
+                reward[j * PER + i] = Posterior::new(mean.reward, 0.0);
+                transition[j * PER + i] = Posterior::new(mean.next_state[0], 0.0);
+                data[j][i] = r;
+            }
+        }
+        let slices: [&[Transition<[f32; 1], f32>]; 2] = [&data[0], &data[1]];
+        let mut config = AwfqiConfig::thesis(24);
+        config.gp_training.search.max_evaluations = 80;
+        config.gp_training.search.restarts = 1;
+        let config = config.validate().unwrap();
+        let lattice = PointGrid::new([0.25f32], [0.5], [10]).unwrap();
+        let mut scores = [Scores::<f32, 1>::ZERO; 20];
+        let mut ws = [0.0f32; 2 * PER];
+        let grid = CellGrid::cube(0.0f32, 10.0, 10).unwrap();
+        let mut kernel = Awfqi::builder(config, grid, &slices, RowSet::grid(lattice, 2).unwrap())
+            .stored_posteriors(&reward)
+            .scores_from(&models, &mut scores)
+            .unwrap()
+            .transition_weights(WeightParams::reference_transition(), &transition, &mut ws)
+            .build(Shift(1.0), storage, &mut rng)
+            .unwrap();
+        let report = kernel.step(&mut rng).unwrap();
+        let w = kernel.transition_weights();
+        let twin: f32 = w[..PER].iter().sum();
+        let other: f32 = w[PER..].iter().sum();
+        assert!(twin > 5.0 * other, "twin {} other {}", twin, other);
+        let mean = (24.0 + twin + other) / (24 + 2 * PER) as f32;
+        assert!(
+            close(report.ws_mean as f64, mean as f64, 1e-4, 1e-6),
+            "ws_mean {}",
+            report.ws_mean
+        );
+        let wr = kernel.reward_weights();
+        let sets = [
+            SampleSet::unweighted(kernel.target_samples()),
+            SampleSet::weighted(&data[0], Some(&wr[..PER]), Some(&w[..PER])),
+            SampleSet::weighted(&data[1], Some(&wr[PER..]), Some(&w[PER..])),
+        ];
+        let mut entries = [FqiEntry::<f32>::EMPTY; 20];
+        let mut table = TabularFqi::new(grid, 2, &mut entries).unwrap();
+        table.fit(&sets, &config.fqi).unwrap();
+        assert!(kernel.q().entries() == table.entries());
     }
 }

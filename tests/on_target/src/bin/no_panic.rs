@@ -12,12 +12,12 @@
 use core::hint::black_box as opaque;
 
 use awfqi::alias::AliasTable;
-use awfqi::dataset::{batch_transform, fit_gp, input, predict_posteriors};
+use awfqi::record_gp::{batch_transform, fit_gp, input, predict_posteriors};
 use awfqi::env::{
     Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
     Puddle, PuddleWorld,
 };
-use awfqi::identify::score::{mutual_information_score, uniform_score, variance_score};
+use awfqi::identify::query_score::{mutual_information_score, uniform_score, variance_score};
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, StateAction, belief_weighted_policy,
     belief_weighted_q, compute_score, draw_pair, draw_pairs, log_likelihood, run_queries,
@@ -33,11 +33,11 @@ use awfqi::weights::{
     effective_sample_size, ideal_weight, predictive_stds,
 };
 use awfqi::{
-    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells,
-    EvaluationProtocol, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, HyperparameterBounds,
-    Hyperparameters, Output, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores,
-    SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule, TabularFqi, Transition,
-    WhenFull, evaluate, evaluate_greedy, rollout,
+    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells,
+    EvaluationProtocol, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy,
+    HyperparameterBounds, Hyperparameters, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
+    ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
+    TabularFqi, TileFqi, Tilings, Transition, WhenFull, evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -532,7 +532,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         SubsetRule::Last
     };
     keep(rule.indices(index(12), index(5)).fold(0, |a, i| a + i));
-    let mut training = GpTraining::<T, I>::reference();
+    let mut training = GpTraining::<T, I>::published();
     training.search.max_evaluations = index(20);
     training.search.restarts = index(1);
     keep(training.validate());
@@ -575,7 +575,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
             };
             let config = FqiConfig::new(num::<T>(0.9), index(5), empty)
                 .and_then(|c| c.with_min_weight(num(0.5)))
-                .unwrap_or_else(|_| FqiConfig::reference());
+                .unwrap_or_else(|_| FqiConfig::published());
             keep((
                 config.discount(),
                 config.iterations(),
@@ -617,6 +617,60 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
                 rng,
             ));
             fqi.clear();
+        }
+    }
+
+    // fqi: tile coding, and either approximator behind QFunction
+    let tilings = Tilings::<T, D>::new([num(0.0); D], [high; D], index(2), index(3))
+        .or_else(|_| Tilings::cube(num(0.0), high, index(2), index(2)));
+    if let Ok(tilings) = tilings {
+        keep((tilings.tiles(), tilings.count(), tilings.tiles_per_tiling()));
+        keep(TileFqi::<T, D>::required_entries(&tilings, index(4)));
+        let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
+            .unwrap_or_else(|_| FqiConfig::published());
+        let w = [num::<T>(0.5); 12];
+        let sets = [
+            SampleSet::unweighted(&records[..6]),
+            SampleSet::weighted(&records[6..], Some(&w[6..]), Some(&w[..6])),
+        ];
+        let mut storage = [FqiEntry::<T>::EMPTY; 400];
+        if let Ok(mut fqi) = TileFqi::new(tilings, actions, &mut storage) {
+            keep(fqi.fit(&sets, &config));
+            keep(fqi.fit_sets(sets.iter().copied(), &config));
+            keep((fqi.tilings().count(), fqi.actions(), fqi.entries().len()));
+            let s = [num::<T>(0.2); D];
+            keep((
+                fqi.value(s, index(1)),
+                fqi.max_value(s),
+                fqi.greedy_action(s),
+            ));
+            keep(fqi.greedy(s));
+            fqi.clear();
+        }
+        let approximator: Approximator<T, D> = if opaque(true) {
+            tilings.into()
+        } else {
+            match CellGrid::cube(num(0.0), high, index(3)) {
+                Ok(g) => g.into(),
+                Err(_) => tilings.into(),
+            }
+        };
+        keep(approximator.required_entries(actions));
+        let mut storage = [FqiEntry::<T>::EMPTY; 400];
+        if let Ok(mut q) = approximator.build(actions, &mut storage) {
+            keep(q.fit(&sets, &config));
+            let s = [num::<T>(0.7); D];
+            keep((
+                q.value(s, 0),
+                q.max_value(s),
+                q.greedy_action(s),
+                q.actions(),
+            ));
+            keep((q.entries().len(), q.as_tabular().is_some()));
+            if let QFunction::Tiles(t) = &q {
+                keep(t.tilings().tiles());
+            }
+            q.clear();
         }
     }
 
@@ -755,10 +809,29 @@ fn kernel<T, G, const D: usize, const I: usize>(
     let Ok(grid) = CellGrid::cube(num::<T>(0.0), high, index(3)) else {
         return;
     };
+    let approximator: Approximator<T, D> = if opaque(true) {
+        grid.into()
+    } else {
+        match Tilings::cube(num::<T>(0.0), high, index(2), index(2)) {
+            Ok(t) => t.into(),
+            Err(_) => grid.into(),
+        }
+    };
     let mut storage = AwfqiStorage::<T, D, I, 8, 8, 12, 200, 400>::new();
     let mut fitted = [Posterior::<T>::default(); 12];
     let mut computed = [Scores::<T, D>::ZERO; 200];
-    let builder = Awfqi::builder(config, grid, &sources, rows);
+    let mut transition_weights = [num::<T>(0.0); 12];
+    let transition_posteriors = [Posterior::new(num::<T>(0.5), num(0.1)); 48];
+    let builder = Awfqi::builder(config, approximator, &sources, rows);
+    let builder = if opaque(true) {
+        builder.transition_weights(
+            WeightParams::reference_transition(),
+            transition_posteriors.get(..12 * D).unwrap_or(&[]),
+            &mut transition_weights,
+        )
+    } else {
+        builder
+    };
     let builder = if opaque(true) {
         builder.stored_posteriors(posteriors)
     } else {
@@ -777,6 +850,7 @@ fn kernel<T, G, const D: usize, const I: usize>(
             kernel.steps(),
             kernel.target_samples().len(),
             kernel.reward_weights().len(),
+            kernel.transition_weights().len(),
         ));
         keep((
             kernel.q().actions(),

@@ -1,0 +1,136 @@
+//! The controller itself: sizes, settings and the AWFQI run over the flash tables, with no
+//! I/O, so the same file also runs on the host (`examples/firmware_host.rs` of the
+//! repository) to check a configuration before it is flashed.
+
+use awfqi::env::{DAM_ACTIONS, DAM_DISCOUNT, DAM_EVALUATION_STATE, DAM_HORIZON, Dam};
+use awfqi::{
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, Estimator, Evaluation,
+    EvaluationProtocol, FqiConfig, HyperparameterBounds, Hyperparameters, PointGrid, RowSet,
+    StepReport, WeightParams, evaluate, evaluate_greedy,
+};
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+use crate::tables;
+
+// ---- Sizes: every buffer is fixed at compile time. ----
+
+/// Generative-model queries per AWFQI step.
+pub const BUDGET: usize = 50;
+/// AWFQI steps (the target records of all steps are kept: `STEPS × BUDGET` of them).
+pub const STEPS: usize = 4;
+/// Capacity of the target's reward GP (its memory grows as `N²`: 32 points ≈ 4.8 KB).
+pub const GP_POINTS: usize = 32;
+/// FQI cells along the storage axis (0–500, 55.6 units each). The day gets one cell: the
+/// costs do not depend on the day, and a table over days would need far more data.
+///
+/// Check the resolution on the host before you flash (the same code runs there): a
+/// release changes the storage by a few units a day, so in a coarse table most steps stay
+/// in their cell, and whether "release 20" looks as good as "release 10" can hinge on the
+/// cell borders. Measured on the host with seeds 100–119
+/// (`cargo run --release --example firmware_host -- 100 120`): 9 cells beat the baseline
+/// in 17 of 20 runs (mean −1494 against −1769); with this constant set to 10 they lost
+/// 20 of 20 (releasing 20 between storage 100 and 150, they ran dry); 8 cells won 16.
+pub const STORAGE_CELLS: usize = 9;
+/// The Q-table: one entry per (cell, action).
+pub const FQI_ENTRIES: usize = STORAGE_CELLS * DAM_ACTIONS;
+/// Source records in flash (all sources).
+pub const SOURCE_RECORDS: usize = tables::SOURCES * tables::RECORDS_PER_SOURCE;
+/// The action of the baseline: release the demand (10 units) every day.
+pub const RELEASE_DEMAND: usize = 4;
+
+/// All the RAM the loop writes, in one block: `f32`, state dimension 2, GP input dimension
+/// 3 (state + action), then the capacities: GP points, target records, one weight per
+/// source record, one alias entry per candidate row, the Q-table: 18 428 bytes.
+pub type Storage = AwfqiStorage<
+    f32,
+    2,
+    3,
+    GP_POINTS,
+    { STEPS * BUDGET },
+    SOURCE_RECORDS,
+    { tables::SCORE_ROWS },
+    FQI_ENTRIES,
+>;
+
+/// The returns of the learned greedy policy and of the baseline over the same inflows.
+pub struct Outcome {
+    /// The greedy policy of the learned Q-table.
+    pub learned: Evaluation<f32>,
+    /// Release the demand every day.
+    pub baseline: Evaluation<f32>,
+}
+
+/// Sets AWFQI up over the flash tables, runs its steps (`on_step` sees each step's
+/// report) and evaluates the learned policy and the baseline.
+pub fn learn_and_compare(
+    storage: &mut Storage,
+    seed: u64,
+    mut on_step: impl FnMut(&StepReport<f32, 3>),
+) -> awfqi::Result<Outcome> {
+    // All randomness comes from the caller's seeded generator: same seed, same run.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+
+    // 1. Settings: the thesis's (§12 of docs/algorithms.md) with the GP and FQI set to this
+    //    plant. The GP input is (storage, day, action), in the plant's own units, so the
+    //    hyperparameter search starts and stays in ranges of those units, with one length
+    //    scale per input. (The host fitted the source GPs with the same training.)
+    let mut config = AwfqiConfig::thesis(BUDGET);
+    config.weights = WeightParams::new(Estimator::Mean, 0.25, 1000.0)?;
+    config.gp_training.initial = Hyperparameters {
+        signal_variance: 400.0,
+        length_scales: [100.0, 1000.0, 0.5],
+        noise_variance: 0.1,
+    };
+    config.gp_training.bounds = HyperparameterBounds {
+        signal_variance: (1.0, 1e4),
+        length_scales: [(10.0, 1e3), (10.0, 1e4), (0.1, 10.0)],
+        noise_variance: (1e-2, 1.0),
+    };
+    config.gp_training.search.isotropic = false;
+    config.gp_training.search.restarts = 2;
+    config.gp_training.search.max_evaluations = 120;
+    // The plant's discount; 200 sweeps of FQI so values look months ahead.
+    config.fqi = FqiConfig::new(DAM_DISCOUNT as f32, 200, EmptyCells::CappedNearest)?;
+
+    // 2. What the builder needs: the source records (one slice per source, in flash), the
+    //    candidate state-action pairs the score table covers, the FQI grid over the state
+    //    space — and, from flash, the stored posteriors and score values.
+    let sources = tables::SOURCE_RECORDS
+        .each_ref()
+        .map(|source| source.as_slice());
+    let candidates = RowSet::grid(
+        PointGrid::new(
+            tables::GRID_LOWER,
+            tables::GRID_SPACING,
+            tables::GRID_POINTS,
+        )?,
+        DAM_ACTIONS,
+    )?;
+    let grid = CellGrid::new([0.0, 1.0], [500.0, 360.0], [STORAGE_CELLS, 1])?;
+    let plant = Dam::<f32>::target();
+    let mut kernel = Awfqi::builder(config.validate()?, grid, &sources, candidates)
+        .stored_posteriors(&tables::SOURCE_POSTERIORS)
+        .stored_scores(&tables::SCORES)
+        .build(plant, storage, &mut rng)?;
+
+    // 3. The active loop. A step that fails leaves the previous Q-table in place.
+    for _ in 0..STEPS {
+        on_step(&kernel.step(&mut rng)?);
+    }
+
+    // 4. One year from storage 200 on day 1, ten times, for the learned greedy policy and
+    //    for the baseline. Both start from the same generator state, and neither policy
+    //    draws random numbers, so both face exactly the same inflows.
+    let protocol = EvaluationProtocol {
+        start: DAM_EVALUATION_STATE.map(|x| x as f32),
+        rollouts: 10,
+        horizon: DAM_HORIZON,
+        discount: DAM_DISCOUNT as f32,
+    };
+    let mut inflows = rng.clone();
+    let learned = evaluate_greedy(&plant, kernel.q(), &protocol, &mut rng)?;
+    let mut release_demand = |_: &[f32; 2]| Ok(RELEASE_DEMAND);
+    let baseline = evaluate(&plant, &mut release_demand, &protocol, &mut inflows)?;
+    Ok(Outcome { learned, baseline })
+}

@@ -1,0 +1,364 @@
+//! The common experiment protocol of spec §3, for every domain: episodic data collection,
+//! greedy evaluation and the per-step records every algorithm writes.
+//!
+//! A run resets the algorithm, then for step `k = 1..K`: collect (episodes, or generative
+//! queries for the active algorithms), learn from scratch on all data, evaluate the greedy
+//! policy with one rollout from each of the domain's evaluation start states on the noisy
+//! target (`perf_disc_greedy`, §3.3), and append a [`StepRecord`].
+
+use std::time::Instant;
+
+use awfqi::env::Dynamics;
+use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::domains::{Domain, Record};
+use crate::trees::TreeParams;
+
+/// The protocol's parameters (spec §3.2, §13).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Protocol {
+    /// Puddle World's dynamics variant (absent for the other domains).
+    #[serde(
+        default,
+        with = "dynamics_name",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub dynamics: Option<Dynamics>,
+    /// Steps `K`.
+    pub steps: usize,
+    /// Episodes per step `B` (the batch size).
+    pub episodes_per_step: usize,
+    /// ε of the ε-greedy collection policy after the first step (0.3).
+    pub epsilon: f64,
+    /// Greedy evaluation rollouts per step (5).
+    pub rollouts: usize,
+    /// FQI iterations (60).
+    pub iterations: usize,
+    /// Trees per forest (50).
+    pub trees: usize,
+    /// Growth limits of the trees (absent when fully grown, spec §4.1).
+    #[serde(default, skip_serializing_if = "TreeParams::is_fully_grown")]
+    pub tree: TreeParams,
+}
+
+impl Protocol {
+    /// Puddle World's published protocol for a dynamics variant, `K` steps of `B` episodes.
+    pub fn puddle_world(dynamics: Dynamics, steps: usize, episodes_per_step: usize) -> Self {
+        let domain = crate::domains::puddle::domain(dynamics);
+        Self {
+            dynamics: Some(dynamics),
+            ..Self::published(&domain, steps, episodes_per_step)
+        }
+    }
+
+    /// A domain's published protocol with `K` steps of `B` episodes.
+    pub fn published<const D: usize>(domain: &Domain<D>, steps: usize, episodes: usize) -> Self {
+        let p = &domain.published;
+        Self {
+            dynamics: None,
+            steps,
+            episodes_per_step: episodes,
+            epsilon: p.epsilon,
+            rollouts: domain.evaluation_starts.len(),
+            iterations: p.iterations,
+            trees: p.trees,
+            tree: p.tree,
+        }
+    }
+}
+
+/// Serde of an optional [`Dynamics`] as `"shared"` / `"puddle"`.
+pub mod dynamics_name {
+    use awfqi::env::Dynamics;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    /// The name of a variant.
+    pub fn name(d: Dynamics) -> &'static str {
+        match d {
+            Dynamics::Shared => "shared",
+            Dynamics::PuddleBased => "puddle",
+        }
+    }
+
+    /// Serializes a variant as its name.
+    pub fn serialize<S: Serializer>(d: &Option<Dynamics>, s: S) -> Result<S::Ok, S::Error> {
+        match d {
+            Some(d) => s.serialize_str(name(*d)),
+            None => s.serialize_none(),
+        }
+    }
+
+    /// Parses a variant's name.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Dynamics>, D::Error> {
+        match Option::<String>::deserialize(d)?.as_deref() {
+            None => Ok(None),
+            Some("shared") => Ok(Some(Dynamics::Shared)),
+            Some("puddle") => Ok(Some(Dynamics::PuddleBased)),
+            Some(other) => Err(serde::de::Error::custom(format!(
+                "unknown dynamics {other}"
+            ))),
+        }
+    }
+}
+
+/// Algorithm diagnostics of one step (§3.4); absent fields do not apply.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Diagnostics {
+    /// Source records in the learning set (all for IWFQI/SDT, the resampled ones for RBT).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_source_samples: Option<usize>,
+    /// Mean reward weight over all records (IWFQI, AWFQI).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wr_mean: Option<f64>,
+    /// Effective sample size of the reward weights.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wr_eff: Option<f64>,
+    /// Mean transition weight over all records.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ws_mean: Option<f64>,
+    /// Effective sample size of the transition weights.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ws_eff: Option<f64>,
+    /// Normalized task compliances (RBT).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compliances: Option<Vec<f64>>,
+    /// Size of the learning set (RBT, SDT).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_eff: Option<usize>,
+    /// The target reward GP of the step (IWFQI, AWFQI).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reward_gp: Option<super::gp::GpSummary>,
+}
+
+/// One step's record (§3.3, §3.4), with the reference's field names.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StepRecord {
+    /// Step `k` (1-based).
+    pub step: usize,
+    /// `k·B` (equivalent episodes for the active algorithms).
+    pub n_episodes: usize,
+    /// `|D₀|`, the target records collected so far.
+    pub n_target_samples: usize,
+    /// Mean discounted return of the greedy rollouts.
+    pub perf_disc_greedy_mean: f64,
+    /// Population std of the returns / √rollouts (a standard error, §14.14).
+    pub perf_disc_greedy_std: f64,
+    /// Mean rollout length.
+    pub perf_disc_greedy_steps: f64,
+    /// Rollouts that reached the goal.
+    pub perf_disc_greedy_goals: usize,
+    /// Mean over the rollouts of the average reward per step (the Dam's second criterion,
+    /// `perf_avg_greedy`; from the same rollouts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perf_avg_greedy_mean: Option<f64>,
+    /// Its standard error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perf_avg_greedy_std: Option<f64>,
+    /// Wall time of the step (collection, learning, evaluation), seconds. Not written to
+    /// the result files (they are identical for identical seeds); see `timing.csv`.
+    #[serde(skip)]
+    pub seconds: f64,
+    /// Algorithm diagnostics.
+    #[serde(flatten)]
+    pub diagnostics: Diagnostics,
+}
+
+/// Something the protocol can run: it collects and learns one step at a time and acts
+/// greedily on what it learned.
+pub trait Learner<const D: usize = 2> {
+    /// Step `k` (1-based): collect this step's target data and learn from scratch on all of
+    /// it.
+    fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics>;
+
+    /// The greedy action in `state` (ties to the smallest index).
+    fn greedy_action(&self, state: &[f64; D]) -> usize;
+
+    /// The target records collected so far (`D₀`).
+    fn target_samples(&self) -> &[Record<D>];
+}
+
+/// Runs `K` steps of `learner` and evaluates after each; `after_step` sees each record.
+pub fn run<const D: usize>(
+    domain: &Domain<D>,
+    protocol: &Protocol,
+    learner: &mut dyn Learner<D>,
+    rng: &mut ChaCha8Rng,
+    mut after_step: impl FnMut(&StepRecord),
+) -> anyhow::Result<Vec<StepRecord>> {
+    let mut steps = Vec::with_capacity(protocol.steps);
+    for k in 1..=protocol.steps {
+        let start = Instant::now();
+        let diagnostics = learner.step(k, rng)?;
+        let greedy = |s: &[f64; D]| learner.greedy_action(s);
+        let n_target = learner.target_samples().len();
+        let record = evaluate_step(
+            domain,
+            protocol,
+            k,
+            &greedy,
+            n_target,
+            diagnostics,
+            start,
+            rng,
+        )?;
+        after_step(&record);
+        steps.push(record);
+    }
+    Ok(steps)
+}
+
+/// Evaluates the greedy policy `greedy` after step `k` (§3.3) and builds the step's record;
+/// `start` is when the step began.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_step<const D: usize>(
+    domain: &Domain<D>,
+    protocol: &Protocol,
+    k: usize,
+    greedy: &dyn Fn(&[f64; D]) -> usize,
+    n_target_samples: usize,
+    diagnostics: Diagnostics,
+    start: Instant,
+    rng: &mut ChaCha8Rng,
+) -> anyhow::Result<StepRecord> {
+    let eval = domain.evaluate(greedy, rng)?;
+    Ok(StepRecord {
+        step: k,
+        n_episodes: k * protocol.episodes_per_step,
+        n_target_samples,
+        perf_disc_greedy_mean: eval.mean_return,
+        perf_disc_greedy_std: eval.standard_error,
+        perf_disc_greedy_steps: eval.mean_steps,
+        perf_disc_greedy_goals: eval.reached_goal,
+        perf_avg_greedy_mean: eval.average_reward.map(|a| a.0),
+        perf_avg_greedy_std: eval.average_reward.map(|a| a.1),
+        seconds: start.elapsed().as_secs_f64(),
+        diagnostics,
+    })
+}
+
+/// A greedy policy: the action in a state.
+pub type Greedy<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
+
+/// Appends `B` episodes on the target to `data` (§3.2): uniform at step 1 (`greedy` is
+/// `None`), ε-greedy around `greedy` afterwards.
+pub fn collect_episodes<const D: usize>(
+    domain: &Domain<D>,
+    protocol: &Protocol,
+    greedy: Option<Greedy<'_, D>>,
+    rng: &mut ChaCha8Rng,
+    data: &mut Vec<Record<D>>,
+) -> anyhow::Result<()> {
+    let n = domain.num_actions();
+    for _ in 0..protocol.episodes_per_step {
+        let visit = |_t: usize, r: Record<D>| {
+            data.push(r);
+            Ok(())
+        };
+        match greedy {
+            None => {
+                let mut uniform = UniformPolicy::new(n)?;
+                domain.run_episode(&*domain.target, &mut uniform, rng, visit)?;
+            }
+            Some(g) => {
+                let inner = |s: &[f64; D]| Ok(g(s));
+                let mut policy = EpsilonGreedyPolicy::new(inner, protocol.epsilon, n)?;
+                domain.run_episode(&*domain.target, &mut policy, rng, visit)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::domains::puddle;
+    use rand_core::SeedableRng;
+
+    /// A learner that always goes right then up, to exercise the loop.
+    struct Fixed {
+        data: Vec<Record<2>>,
+        protocol: Protocol,
+        domain: Domain<2>,
+    }
+
+    impl Learner for Fixed {
+        fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+            let g = |s: &[f64; 2]| if s[0] < 4.5 { 0 } else { 2 };
+            let greedy: Option<Greedy<'_>> = if k == 1 { None } else { Some(&g) };
+            collect_episodes(&self.domain, &self.protocol, greedy, rng, &mut self.data)?;
+            Ok(Diagnostics::default())
+        }
+        fn greedy_action(&self, s: &[f64; 2]) -> usize {
+            if s[0] < 4.5 { 0 } else { 2 }
+        }
+        fn target_samples(&self) -> &[Record<2>] {
+            &self.data
+        }
+    }
+
+    #[test]
+    fn records_count_episodes_and_samples() {
+        let protocol = Protocol::puddle_world(Dynamics::Shared, 3, 2);
+        let domain = puddle::domain(Dynamics::Shared);
+        let mut learner = Fixed {
+            data: Vec::new(),
+            protocol,
+            domain: domain.clone(),
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut seen = 0;
+        let steps = run(&domain, &protocol, &mut learner, &mut rng, |_| seen += 1).unwrap();
+        assert_eq!(seen, 3);
+        for (i, s) in steps.iter().enumerate() {
+            assert_eq!(s.step, i + 1);
+            assert_eq!(s.n_episodes, 2 * (i + 1));
+            // Every episode starts at (0, 0): count them in the data.
+            let starts = learner.data[..s.n_target_samples]
+                .iter()
+                .filter(|r| r.state == [0.0, 0.0])
+                .count();
+            assert!(starts >= 2 * (i + 1));
+            // The fixed policy reaches the goal in every rollout, after at least 12 steps of
+            // reward ≤ −1 (return below −(1 − 0.99¹²)/0.01 = −11.4).
+            assert_eq!(s.perf_disc_greedy_goals, 5);
+            assert!(s.perf_disc_greedy_mean < -11.4);
+            assert!(s.perf_disc_greedy_steps >= 12.0 && s.perf_disc_greedy_steps <= 25.0);
+            assert_eq!(s.perf_avg_greedy_mean, None);
+        }
+        let last = steps.last().unwrap().n_target_samples;
+        assert_eq!(last, learner.data.len());
+        // The same seed gives the same records.
+        let mut again = Fixed {
+            data: Vec::new(),
+            protocol,
+            domain: domain.clone(),
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let steps2 = run(&domain, &protocol, &mut again, &mut rng, |_| ()).unwrap();
+        for (a, b) in steps.iter().zip(&steps2) {
+            assert_eq!(a.perf_disc_greedy_mean, b.perf_disc_greedy_mean);
+        }
+    }
+
+    /// The harness's evaluation replays the core's Puddle World evaluation draw for draw.
+    #[test]
+    fn puddle_evaluation_is_the_cores() {
+        let domain = puddle::domain(Dynamics::PuddleBased);
+        let greedy = |s: &[f64; 2]| if s[1] < 9.0 { 2 } else { 0 };
+        let mut a = ChaCha8Rng::seed_from_u64(4);
+        let ours = domain.evaluate(&greedy, &mut a).unwrap();
+        let target = awfqi::env::PuddleWorld::<f64>::target(Dynamics::PuddleBased);
+        let mut b = ChaCha8Rng::seed_from_u64(4);
+        let mut policy = |s: &[f64; 2]| Ok(greedy(s));
+        let protocol = target.evaluation_protocol();
+        let core = awfqi::evaluation::evaluate(&target, &mut policy, &protocol, &mut b).unwrap();
+        assert_eq!(ours.mean_return.to_bits(), core.mean_return.to_bits());
+        assert_eq!(ours.standard_error.to_bits(), core.standard_error.to_bits());
+        assert_eq!(ours.mean_steps, core.mean_steps);
+        assert_eq!(ours.reached_goal, core.absorbed);
+        assert_eq!(a, b);
+    }
+}
