@@ -587,7 +587,7 @@ fn run_in_pool<const D: usize>(
             if args.check_gp_search {
                 // The fits checked so far (this run's and, with several threads, some of
                 // the runs still going), kept even if the invocation is interrupted.
-                write_search_checks(out, &crate::puddle::gp::search_checks())?;
+                write_search_checks(out, &crate::transfer::gp::search_checks())?;
             }
             done.push((algorithm, record));
             Ok(())
@@ -599,7 +599,7 @@ fn run_in_pool<const D: usize>(
     let finished = finished.into_inner().map_err(|_| anyhow!("poisoned"))?;
     let timing = timing_report(out, &finished, compute_seconds)?;
     if args.check_gp_search {
-        write_search_checks(out, &crate::puddle::gp::search_checks())?;
+        write_search_checks(out, &crate::transfer::gp::search_checks())?;
         summarise_search_checks(out)?;
     }
 
@@ -863,7 +863,7 @@ fn report_markdown<const D: usize>(
 /// Appends one row per checked fit to `gp_search_check.tsv` (header when it is new).
 fn write_search_checks(
     out: &std::path::Path,
-    checks: &[crate::puddle::gp::SearchCheck],
+    checks: &[crate::transfer::gp::SearchCheck],
 ) -> anyhow::Result<()> {
     use std::fmt::Write as _;
     use std::io::Write as _;

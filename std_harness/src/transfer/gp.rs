@@ -217,14 +217,14 @@ impl RecordGp {
         let model = match &spec.kernel {
             KernelSpec::Fitted => {
                 let (gp, report) = LargeGp::fit(inputs, targets, &options.fit_options(), rng)?;
-                if let Some(comparison) = report.comparison {
-                    if let Ok(mut checks) = SEARCH_CHECKS.lock() {
-                        checks.push(SearchCheck {
-                            search: options.search,
-                            points: gp.len(),
-                            comparison,
-                        });
-                    }
+                if let Some(comparison) = report.comparison
+                    && let Ok(mut checks) = SEARCH_CHECKS.lock()
+                {
+                    checks.push(SearchCheck {
+                        search: options.search,
+                        points: gp.len(),
+                        comparison,
+                    });
                 }
                 Model::Fitted(gp)
             }
