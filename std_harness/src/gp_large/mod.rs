@@ -16,7 +16,7 @@
 //!   published source GP and on the target GPs measured, 10–20 times faster at
 //!   `n ≥ 1000`, but it is not the spec's procedure.
 //! * **Prediction**: mean `k*ᵀK⁻¹y` and std `√max(c + σ²ₙ − k*ᵀK⁻¹k*, 0)`, which
-//!   **includes** the noise; [`subtract_noise`] applies the reference's noise-subtraction
+//!   **includes** the noise; [`awfqi::weights::StdTransform`] applies the reference's noise-subtraction
 //!   rule (or the principled variance version, spec §14.7).
 //!
 //! # Cost
