@@ -134,6 +134,11 @@ pub struct Args {
     /// procedure: starts screened on a 300-point subsample, then refined on all data).
     #[arg(long, value_enum, default_value = "spec")]
     pub gp_search: GpSearch,
+    /// Also run the other GP search (spec ↔ screened) on every fitted GP, on the same data
+    /// and starts, keep `--gp-search`'s GP (results unchanged) and write both optima to
+    /// `gp_search_check.tsv` in the output directory, with a summary on stderr.
+    #[arg(long)]
+    pub check_gp_search: bool,
     /// IWFQI/AWFQI estimator variances: `published` or (Puddle World only) `corrected`
     /// (0.01, 0.04), spec §14.6.
     #[arg(long, value_enum, default_value = "published")]
@@ -414,6 +419,7 @@ impl Config {
             restarts: self.args.gp_restarts,
             max_gp: self.max_gp,
             search: self.args.gp_search,
+            check: self.args.check_gp_search,
         }
     }
 }
@@ -732,6 +738,11 @@ fn run_in_pool<const D: usize>(
             // invocation keeps every finished run.
             let mut done = finished.lock().map_err(|_| anyhow!("poisoned"))?;
             save_run(out, &json, algorithm, record.clone())?;
+            if args.check_gp_search {
+                // The fits checked so far (this run's and, with several threads, some of
+                // the runs still going), kept even if the invocation is interrupted.
+                write_search_checks(out, &crate::transfer::gp::search_checks())?;
+            }
             done.push((algorithm, record));
             Ok(())
         })?;
@@ -741,6 +752,10 @@ fn run_in_pool<const D: usize>(
     let compute_seconds = wall.elapsed().as_secs_f64();
     let finished = finished.into_inner().map_err(|_| anyhow!("poisoned"))?;
     let timing = timing_report(out, &finished, compute_seconds)?;
+    if args.check_gp_search {
+        write_search_checks(out, &crate::transfer::gp::search_checks())?;
+        summarise_search_checks(out)?;
+    }
 
     // Summarise every run of this configuration in --out (this invocation's and earlier
     // ones').
@@ -998,4 +1013,67 @@ fn report_markdown<const D: usize>(
     );
     out.push_str(&markdown_table(metrics, config.threshold));
     out
+}
+
+/// Appends one row per checked fit to `gp_search_check.tsv` (header when it is new).
+fn write_search_checks(
+    out: &std::path::Path,
+    checks: &[crate::transfer::gp::SearchCheck],
+) -> anyhow::Result<()> {
+    use std::fmt::Write as _;
+    use std::io::Write as _;
+    let path = out.join("gp_search_check.tsv");
+    let mut tsv = String::new();
+    if !path.exists() {
+        tsv.push_str("kept\tpoints\tlml_kept\tlml_other\trelative_difference\tfactorizations_kept\tfactorizations_other\tseconds_kept\tseconds_other\n");
+    }
+    for c in checks {
+        let m = &c.comparison;
+        let _ = writeln!(
+            tsv,
+            "{:?}\t{}\t{:.12e}\t{:.12e}\t{:.3e}\t{}\t{}\t{:.3}\t{:.3}",
+            c.search,
+            c.points,
+            m.log_marginal_likelihood,
+            m.other_log_marginal_likelihood,
+            m.relative_difference(),
+            m.factorizations,
+            m.other_factorizations,
+            m.seconds,
+            m.other_seconds
+        );
+    }
+    std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)?
+        .write_all(tsv.as_bytes())?;
+    Ok(())
+}
+
+/// Prints the largest relative log-marginal-likelihood difference of `gp_search_check.tsv`
+/// and the factorisation and time totals of both searches.
+fn summarise_search_checks(out: &std::path::Path) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(out.join("gp_search_check.tsv"))?;
+    let (mut fits, mut worst) = (0usize, 0.0f64);
+    let mut totals = [0.0f64; 4];
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split('\t').collect();
+        let num = |i: usize| {
+            f.get(i)
+                .and_then(|v| v.parse::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
+        fits += 1;
+        worst = worst.max(num(4));
+        for (t, i) in totals.iter_mut().zip(5..9) {
+            *t += num(i);
+        }
+    }
+    eprintln!(
+        "GP search check: {fits} fits, largest relative LML difference {worst:.3e}; \
+         factorisations kept {} / other {}; seconds kept {:.1} / other {:.1}",
+        totals[0], totals[1], totals[2], totals[3]
+    );
+    Ok(())
 }

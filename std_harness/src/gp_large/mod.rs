@@ -297,6 +297,9 @@ pub struct FitOptions {
     pub strategy: FitStrategy,
     /// Jitter and trusted condition ([`LargeConditioning::default`]: the reference's).
     pub conditioning: LargeConditioning,
+    /// Also run this search on the same data and starts, and report its optimum in
+    /// [`FitReport::comparison`] (the kept GP is `strategy`'s; no extra random draws).
+    pub compare: Option<FitStrategy>,
 }
 
 impl Default for FitOptions {
@@ -310,6 +313,7 @@ impl Default for FitOptions {
             parallelism: Par::Seq,
             strategy: FitStrategy::AllStarts,
             conditioning: LargeConditioning::default(),
+            compare: None,
         }
     }
 }
@@ -347,6 +351,36 @@ pub struct FitReport {
     pub runs: Vec<OptimizationRun>,
     /// Index in `runs` of the kept optimum (the first of the highest likelihood).
     pub best: usize,
+    /// [`FitOptions::compare`]: the other search's result next to the kept one.
+    pub comparison: Option<SearchComparison>,
+}
+
+/// The kept search against the one of [`FitOptions::compare`], run on the same data and the
+/// same starts (the checker of a fast search against the spec's, or the other way round).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchComparison {
+    /// Log marginal likelihood of the kept search's optimum.
+    pub log_marginal_likelihood: f64,
+    /// Log marginal likelihood of the other search's optimum.
+    pub other_log_marginal_likelihood: f64,
+    /// Cholesky factorisations of the kept search (all data; the final conditioning not
+    /// counted).
+    pub factorizations: usize,
+    /// Cholesky factorisations of the other search (all data; a screening subsample's not
+    /// counted).
+    pub other_factorizations: usize,
+    /// Seconds the kept search took (thread CPU is not separated: wall time of the call).
+    pub seconds: f64,
+    /// Seconds the other search took.
+    pub other_seconds: f64,
+}
+
+impl SearchComparison {
+    /// `|other − kept| / max(|kept|, 1)`.
+    pub fn relative_difference(&self) -> f64 {
+        (self.other_log_marginal_likelihood - self.log_marginal_likelihood).abs()
+            / self.log_marginal_likelihood.abs().max(1.0)
+    }
 }
 
 /// A prediction: mean and standard deviation (the std includes the noise).
@@ -782,6 +816,98 @@ impl<const D: usize> optimizer::Objective<3> for NegativeLml<'_, '_, D> {
     }
 }
 
+/// The index of the first of the highest likelihood among the finished optimisations.
+fn best_run(runs: &[OptimizationRun]) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for (i, run) in runs.iter().enumerate() {
+        if run.merged_into.is_none()
+            && run.log_marginal_likelihood.is_finite()
+            && best.is_none_or(|b| run.log_marginal_likelihood > runs[b].log_marginal_likelihood)
+        {
+            best = Some(i);
+        }
+    }
+    best
+}
+
+/// Optimises `starts` on `eval`'s data as `strategy` says (the first start is the initial
+/// values, the others the restarts).
+fn search<const D: usize>(
+    strategy: FitStrategy,
+    (inputs, targets): (&[[f64; D]], &[f64]),
+    eval: &mut LikelihoodEvaluator<'_, D>,
+    starts: &[[f64; 3]],
+    options: &FitOptions,
+) -> Result<Vec<OptimizationRun>> {
+    let (lower, upper) = options.bounds.log_bounds();
+    let optimize = |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| {
+        let factorizations = eval.factorizations;
+        let m = optimizer::minimize(
+            &mut NegativeLml { eval, stale: None },
+            start,
+            &lower,
+            &upper,
+            &options.optimizer,
+        );
+        OptimizationRun {
+            start: *start,
+            theta: m.x,
+            log_marginal_likelihood: -m.f,
+            evaluations: m.evaluations,
+            factorizations: eval.factorizations - factorizations,
+            gradients: m.gradients,
+            stop: m.stop,
+            screening: None,
+            merged_into: None,
+        }
+    };
+    let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
+    match strategy {
+        FitStrategy::Screened {
+            subsample,
+            merge_radius,
+        } if inputs.len() > subsample.max(1) => {
+            let n = inputs.len();
+            let m = subsample.max(1);
+            let picks: Vec<usize> = (0..m).map(|i| i * n / m).collect();
+            let sub_inputs: Vec<[f64; D]> = picks.iter().map(|&i| inputs[i]).collect();
+            let sub_targets: Vec<f64> = picks.iter().map(|&i| targets[i]).collect();
+            let mut sub_eval =
+                LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?
+                    .with_jitter(options.conditioning.jitter);
+            for start in starts {
+                let screened = optimize(&mut sub_eval, start);
+                let end = screened.theta;
+                let shared = runs.iter().position(|r| {
+                    r.merged_into.is_none()
+                        && r.screening.is_some_and(|(e, _)| {
+                            e.iter()
+                                .zip(&end)
+                                .all(|(a, b)| (a - b).abs() <= merge_radius)
+                        })
+                });
+                let mut run = match shared {
+                    Some(j) => OptimizationRun {
+                        merged_into: Some(j),
+                        ..runs[j]
+                    },
+                    None => optimize(eval, &end),
+                };
+                run.start = *start;
+                run.screening = Some((end, screened.evaluations));
+                runs.push(run);
+            }
+        }
+        _ => {
+            for start in starts {
+                let run = optimize(eval, start);
+                runs.push(run);
+            }
+        }
+    }
+    Ok(runs)
+}
+
 impl<const D: usize> LargeGp<D> {
     /// Conditions a GP with fixed hyperparameters on `(inputs, targets)` (all of them, no
     /// `max_points` cap).
@@ -871,89 +997,54 @@ impl<const D: usize> LargeGp<D> {
                 lower[i] + awfqi::rng::uniform_f64(rng) * (upper[i] - lower[i])
             }));
         }
+        // The comparison search first, on its own evaluator, dropped before the kept search
+        // allocates its buffers (both are `3n²` f64).
+        let comparison = match options.compare {
+            Some(other) => {
+                let clock = std::time::Instant::now();
+                let mut other_eval =
+                    LikelihoodEvaluator::new(inputs, targets, options.parallelism)?
+                        .with_jitter(options.conditioning.jitter);
+                let runs = search(other, (inputs, targets), &mut other_eval, &starts, options)?;
+                let lml =
+                    best_run(&runs).map_or(f64::NEG_INFINITY, |b| runs[b].log_marginal_likelihood);
+                Some((
+                    lml,
+                    other_eval.factorizations,
+                    clock.elapsed().as_secs_f64(),
+                ))
+            }
+            None => None,
+        };
+        let clock = std::time::Instant::now();
         let mut eval = LikelihoodEvaluator::new(inputs, targets, options.parallelism)?
             .with_jitter(options.conditioning.jitter);
-        let optimize = |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| {
-            let factorizations = eval.factorizations;
-            let m = optimizer::minimize(
-                &mut NegativeLml { eval, stale: None },
-                start,
-                &lower,
-                &upper,
-                &options.optimizer,
-            );
-            OptimizationRun {
-                start: *start,
-                theta: m.x,
-                log_marginal_likelihood: -m.f,
-                evaluations: m.evaluations,
-                factorizations: eval.factorizations - factorizations,
-                gradients: m.gradients,
-                stop: m.stop,
-                screening: None,
-                merged_into: None,
-            }
-        };
-        let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
-        match options.strategy {
-            FitStrategy::Screened {
-                subsample,
-                merge_radius,
-            } if inputs.len() > subsample.max(1) => {
-                let n = inputs.len();
-                let m = subsample.max(1);
-                let picks: Vec<usize> = (0..m).map(|i| i * n / m).collect();
-                let sub_inputs: Vec<[f64; D]> = picks.iter().map(|&i| inputs[i]).collect();
-                let sub_targets: Vec<f64> = picks.iter().map(|&i| targets[i]).collect();
-                let mut sub_eval =
-                    LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?
-                        .with_jitter(options.conditioning.jitter);
-                for start in &starts {
-                    let screened = optimize(&mut sub_eval, start);
-                    let end = screened.theta;
-                    let shared = runs.iter().position(|r| {
-                        r.merged_into.is_none()
-                            && r.screening.is_some_and(|(e, _)| {
-                                e.iter()
-                                    .zip(&end)
-                                    .all(|(a, b)| (a - b).abs() <= merge_radius)
-                            })
-                    });
-                    let mut run = match shared {
-                        Some(j) => OptimizationRun {
-                            merged_into: Some(j),
-                            ..runs[j]
-                        },
-                        None => optimize(&mut eval, &end),
-                    };
-                    run.start = *start;
-                    run.screening = Some((end, screened.evaluations));
-                    runs.push(run);
-                }
-            }
-            _ => {
-                for start in &starts {
-                    let run = optimize(&mut eval, start);
-                    runs.push(run);
-                }
-            }
-        }
-        // The first of the highest likelihood among the finished optimisations.
-        let mut best: Option<usize> = None;
-        for (i, run) in runs.iter().enumerate() {
-            if run.merged_into.is_none()
-                && run.log_marginal_likelihood.is_finite()
-                && best
-                    .is_none_or(|b| run.log_marginal_likelihood > runs[b].log_marginal_likelihood)
-            {
-                best = Some(i);
-            }
-        }
+        let runs = search(
+            options.strategy,
+            (inputs, targets),
+            &mut eval,
+            &starts,
+            options,
+        )?;
+        let best = best_run(&runs);
         let best = best.ok_or(Error::NotPositiveDefinite)?;
         let theta = runs[best].theta;
+        let factorizations = eval.factorizations;
+        let seconds = clock.elapsed().as_secs_f64();
         let lml = eval.value(&theta).ok_or(Error::NotPositiveDefinite)?;
         check_condition(&eval.chol, &options.conditioning)?;
         eval.finish_alpha();
+        let comparison =
+            comparison.map(
+                |(other_lml, other_factorizations, other_seconds)| SearchComparison {
+                    log_marginal_likelihood: runs[best].log_marginal_likelihood,
+                    other_log_marginal_likelihood: other_lml,
+                    factorizations,
+                    other_factorizations,
+                    seconds,
+                    other_seconds,
+                },
+            );
         let gp = Self {
             inputs: inputs.to_vec(),
             hyper: GpHyperparameters::from_log(&theta),
@@ -963,7 +1054,14 @@ impl<const D: usize> LargeGp<D> {
             par: options.parallelism,
             jitter: options.conditioning.jitter,
         };
-        Ok((gp, FitReport { runs, best }))
+        Ok((
+            gp,
+            FitReport {
+                runs,
+                best,
+                comparison,
+            },
+        ))
     }
 
     /// Number of training points.

@@ -315,6 +315,56 @@ fn screened_strategy_finds_the_spec_optimum() {
     assert_eq!(rc, ra);
 }
 
+#[test]
+fn comparison_keeps_the_strategy_gp_and_reports_the_other_optimum() {
+    let (zs, ys) = data(120, 13);
+    let spec = FitOptions::default();
+    let screened = FitStrategy::Screened {
+        subsample: 40,
+        merge_radius: 0.5,
+    };
+    let checked = FitOptions {
+        compare: Some(screened),
+        ..spec
+    };
+    let (a, ra) = LargeGp::fit(&zs, &ys, &spec, &mut rng(14)).unwrap();
+    let (b, rb) = LargeGp::fit(&zs, &ys, &checked, &mut rng(14)).unwrap();
+    let (c, _) = LargeGp::fit(
+        &zs,
+        &ys,
+        &FitOptions {
+            strategy: screened,
+            ..spec
+        },
+        &mut rng(14),
+    )
+    .unwrap();
+    // The kept GP is the spec's, bit for bit (the comparison draws nothing).
+    assert_eq!(ra.runs, rb.runs);
+    assert_eq!(ra.best, rb.best);
+    assert_eq!(a.hyperparameters(), b.hyperparameters());
+    assert_eq!(
+        a.log_marginal_likelihood().to_bits(),
+        b.log_marginal_likelihood().to_bits()
+    );
+    assert_eq!(a.predict(&[5.0, 5.0, 1.0]), b.predict(&[5.0, 5.0, 1.0]));
+    // The comparison reports both optima: the kept run's and the screened fit's.
+    let cmp = rb.comparison.unwrap();
+    assert_eq!(
+        cmp.log_marginal_likelihood,
+        ra.runs[ra.best].log_marginal_likelihood
+    );
+    assert!(
+        rel(
+            cmp.other_log_marginal_likelihood,
+            c.log_marginal_likelihood()
+        ) < 1e-12
+    );
+    assert!(cmp.relative_difference() < 1e-9, "{cmp:?}");
+    assert!(cmp.other_factorizations * 3 < cmp.factorizations, "{cmp:?}");
+    assert!(ra.comparison.is_none());
+}
+
 fn read_source(path: &str) -> Option<Vec<Vec<f64>>> {
     let text = std::fs::read_to_string(path).ok()?;
     Some(

@@ -88,6 +88,32 @@ pub struct GpOptions {
     /// The search strategy (absent from result files when it is the spec's).
     #[serde(default, skip_serializing_if = "GpSearch::is_spec")]
     pub search: GpSearch,
+    /// Also run the other search (spec ↔ screened) on every fit, on the same data and
+    /// starts, and record both optima in [`search_checks`]. The kept GP is `search`'s, so
+    /// the results do not change; never written to result files.
+    #[serde(skip)]
+    pub check: bool,
+}
+
+/// One checked fit (see [`GpOptions::check`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchCheck {
+    /// The search whose GP was kept.
+    pub search: GpSearch,
+    /// Training points.
+    pub points: usize,
+    /// Both searches' optima, counts and times.
+    pub comparison: gp_large::SearchComparison,
+}
+
+static SEARCH_CHECKS: std::sync::Mutex<Vec<SearchCheck>> = std::sync::Mutex::new(Vec::new());
+
+/// Takes the fits checked so far in this process (in completion order).
+pub fn search_checks() -> Vec<SearchCheck> {
+    SEARCH_CHECKS
+        .lock()
+        .map(|mut v| std::mem::take(&mut *v))
+        .unwrap_or_default()
 }
 
 /// How the hyperparameter optimisations are spent.
@@ -127,6 +153,7 @@ impl GpOptions {
             restarts: gp_large::DEFAULT_RESTARTS,
             max_gp: gp_large::MAX_GP,
             search: GpSearch::Spec,
+            check: false,
         }
     }
 
@@ -138,6 +165,10 @@ impl GpOptions {
                 GpSearch::Spec => gp_large::FitStrategy::AllStarts,
                 GpSearch::Screened => gp_large::FitStrategy::SCREENED,
             },
+            compare: self.check.then_some(match self.search {
+                GpSearch::Spec => gp_large::FitStrategy::SCREENED,
+                GpSearch::Screened => gp_large::FitStrategy::AllStarts,
+            }),
             ..FitOptions::default()
         }
     }
@@ -185,7 +216,16 @@ impl RecordGp {
     ) -> anyhow::Result<Self> {
         let model = match &spec.kernel {
             KernelSpec::Fitted => {
-                let (gp, _) = LargeGp::fit(inputs, targets, &options.fit_options(), rng)?;
+                let (gp, report) = LargeGp::fit(inputs, targets, &options.fit_options(), rng)?;
+                if let Some(comparison) = report.comparison
+                    && let Ok(mut checks) = SEARCH_CHECKS.lock()
+                {
+                    checks.push(SearchCheck {
+                        search: options.search,
+                        points: gp.len(),
+                        comparison,
+                    });
+                }
                 Model::Fitted(gp)
             }
             KernelSpec::Fixed(kernel) => {
