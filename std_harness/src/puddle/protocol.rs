@@ -47,9 +47,7 @@ pub struct Protocol {
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
-#[derive(
-    Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum FirstStep {
     /// Each action with probability 1/n (spec §3.2).
@@ -351,7 +349,12 @@ mod tests {
         let json = serde_json::to_value(protocol).unwrap();
         assert_eq!(json["first_step"], "zero-q");
         protocol.first_step = FirstStep::Uniform;
-        assert!(serde_json::to_value(protocol).unwrap().get("first_step").is_none());
+        assert!(
+            serde_json::to_value(protocol)
+                .unwrap()
+                .get("first_step")
+                .is_none()
+        );
     }
 
     #[test]
