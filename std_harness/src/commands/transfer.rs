@@ -160,6 +160,10 @@ pub struct Args {
     /// Acrobot 10000.
     #[arg(long)]
     pub rbt_total: Option<usize>,
+    /// Step 1's collection policy: `uniform` (spec §3.2, the default) or `zero-q` (the
+    /// reference code's ε-greedy around a zero Q-function: mostly the first action).
+    #[arg(long, value_enum)]
+    pub first_step: Option<protocol::FirstStep>,
     /// Grid spacing of the score tables. Default: Puddle World 0.1 (both coordinates), Dam
     /// 10 (storage; every day), Acrobot π/6 (angles; 9 values per velocity).
     #[arg(long)]
@@ -493,6 +497,7 @@ pub fn build_experiment<const D: usize>(
     protocol.dynamics = dynamics;
     protocol.iterations = config.iterations;
     protocol.trees = config.trees;
+    protocol.first_step = config.args.first_step.unwrap_or_default();
     let options = TransferOptions {
         variances: args.variances,
         noise: match args.noise {

@@ -41,6 +41,29 @@ pub struct Protocol {
     /// Growth limits of the trees (absent when fully grown, spec §4.1).
     #[serde(default, skip_serializing_if = "TreeParams::is_fully_grown")]
     pub tree: TreeParams,
+    /// The collection policy of step 1 (absent when uniform, spec §3.2).
+    #[serde(default, skip_serializing_if = "FirstStep::is_uniform")]
+    pub first_step: FirstStep,
+}
+
+/// The collection policy of step 1, before any Q-function is learned.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum FirstStep {
+    /// Each action with probability 1/n (spec §3.2).
+    #[default]
+    Uniform,
+    /// The reference code's step 1: ε-greedy around a Q-function that is zero everywhere,
+    /// whose greedy action is the first one (ties go to the smallest index), so action 0
+    /// is taken with probability 1 − ε + ε/n. An ablation, not the spec's protocol.
+    ZeroQ,
+}
+
+impl FirstStep {
+    /// Whether this is the spec's uniform first step (kept out of the result files).
+    pub fn is_uniform(&self) -> bool {
+        *self == Self::Uniform
+    }
 }
 
 impl Protocol {
@@ -65,6 +88,7 @@ impl Protocol {
             iterations: p.iterations,
             trees: p.trees,
             tree: p.tree,
+            first_step: FirstStep::Uniform,
         }
     }
 }
@@ -242,7 +266,8 @@ pub fn evaluate_step<const D: usize>(
 pub type Greedy<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
 
 /// Appends `B` episodes on the target to `data` (§3.2): uniform at step 1 (`greedy` is
-/// `None`), ε-greedy around `greedy` afterwards.
+/// `None`; or ε-greedy around a zero Q-function with [`FirstStep::ZeroQ`]), ε-greedy around
+/// `greedy` afterwards.
 pub fn collect_episodes<const D: usize>(
     domain: &Domain<D>,
     protocol: &Protocol,
@@ -256,12 +281,17 @@ pub fn collect_episodes<const D: usize>(
             data.push(r);
             Ok(())
         };
-        match greedy {
-            None => {
+        match (greedy, protocol.first_step) {
+            (None, FirstStep::Uniform) => {
                 let mut uniform = UniformPolicy::new(n)?;
                 domain.run_episode(&*domain.target, &mut uniform, rng, visit)?;
             }
-            Some(g) => {
+            (None, FirstStep::ZeroQ) => {
+                let zero_q = |_: &[f64; D]| Ok(0);
+                let mut policy = EpsilonGreedyPolicy::new(zero_q, protocol.epsilon, n)?;
+                domain.run_episode(&*domain.target, &mut policy, rng, visit)?;
+            }
+            (Some(g), _) => {
                 let inner = |s: &[f64; D]| Ok(g(s));
                 let mut policy = EpsilonGreedyPolicy::new(inner, protocol.epsilon, n)?;
                 domain.run_episode(&*domain.target, &mut policy, rng, visit)?;
@@ -297,6 +327,34 @@ mod tests {
         fn target_samples(&self) -> &[Record<2>] {
             &self.data
         }
+    }
+
+    #[test]
+    fn first_step_policies_take_the_first_action_at_their_rates() {
+        // Dam episodes are 360 steps long: 10 of them give 3600 actions.
+        let domain = crate::domains::dam::domain();
+        let mut protocol = Protocol::published(&domain, 1, 10);
+        let share_of_first_action = |protocol: &Protocol| {
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let mut data = Vec::new();
+            collect_episodes(&domain, protocol, None, &mut rng, &mut data).unwrap();
+            assert_eq!(data.len(), 3600);
+            data.iter().filter(|r| r.action == 0).count() as f64 / data.len() as f64
+        };
+        // Uniform: 1/8. Zero Q: 1 − ε + ε/8 = 0.7375 with ε = 0.3. Binomial s.d. ≤ 0.008.
+        assert!((share_of_first_action(&protocol) - 0.125).abs() < 0.03);
+        protocol.first_step = FirstStep::ZeroQ;
+        assert!((share_of_first_action(&protocol) - 0.7375).abs() < 0.03);
+        // The default stays out of the result files, the ablation is recorded.
+        let json = serde_json::to_value(protocol).unwrap();
+        assert_eq!(json["first_step"], "zero-q");
+        protocol.first_step = FirstStep::Uniform;
+        assert!(
+            serde_json::to_value(protocol)
+                .unwrap()
+                .get("first_step")
+                .is_none()
+        );
     }
 
     #[test]
