@@ -42,7 +42,7 @@ pub use fqi::{
     Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, QFunction, SampleSet,
     TabularFqi, TileFqi, Tilings,
 };
-pub use gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use record_gp::{GpTraining, Output, SubsetRule};
 pub use score::{

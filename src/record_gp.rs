@@ -11,7 +11,7 @@
 //! `len/N`-th record) keeps every part of the dataset represented instead.
 
 use crate::env::Transition;
-use crate::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use crate::gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
@@ -91,7 +91,8 @@ impl SubsetRule {
 }
 
 /// How a GP with `I`-dimensional inputs is trained (§4.2): the starting hyperparameters, the
-/// search box and the search budget. Size: about `2I + 6` `T` and 3 `usize`.
+/// search box, the search budget and the conditioning policy. Size: about `2I + 8` `T`, 3
+/// `usize` and a byte.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct GpTraining<T, const I: usize> {
@@ -101,6 +102,10 @@ pub struct GpTraining<T, const I: usize> {
     pub bounds: HyperparameterBounds<T, I>,
     /// Budget and restarts of the search.
     pub search: SearchOptions,
+    /// The GP's conditioning policy during this training ([`Conditioning::DEFAULT`]: the
+    /// jitter bound and condition limit of the precision). A plant whose outputs carry no
+    /// noise (the Dam's reward) may need a looser jitter bound; the caller says so here.
+    pub conditioning: Conditioning<T>,
 }
 
 impl<T: Real, const I: usize> GpTraining<T, I> {
@@ -111,6 +116,7 @@ impl<T: Real, const I: usize> GpTraining<T, I> {
             initial: Hyperparameters::SPEC_INITIAL,
             bounds: HyperparameterBounds::spec_default(),
             search: SearchOptions::default(),
+            conditioning: Conditioning::DEFAULT,
         }
     }
 
@@ -150,6 +156,7 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I:
     training.search.validate()?;
     training.bounds.validate()?;
     gp.clear();
+    gp.set_conditioning(training.conditioning)?;
     gp.set_hyperparameters(training.initial)?;
     for i in subset.indices(records.len(), N) {
         if let Some(r) = records.get(i) {
