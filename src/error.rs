@@ -85,9 +85,46 @@ impl core::hash::Hash for Number {
     }
 }
 
+/// Prints three significant digits in scientific notation (`1.5e-6`, `8e4`) with integer
+/// formatting only: core's float formatting keeps bounds checks that the no-panic proof
+/// cannot see through.
 impl fmt::Display for Number {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{:e}", self.0)
+        let v = self.0;
+        if v.is_nan() {
+            return f.write_str("NaN");
+        }
+        let sign = if v.is_sign_negative() { "-" } else { "" };
+        if v.is_infinite() {
+            return write!(f, "{sign}inf");
+        }
+        if v == 0.0 {
+            return write!(f, "{sign}0e0");
+        }
+        // The mantissa m in [1, 10) and the exponent e of |v| = m·10^e.
+        let (mut m, mut e) = (v.abs(), 0i32);
+        while m >= 10.0 {
+            m /= 10.0;
+            e += 1;
+        }
+        while m < 1.0 {
+            m *= 10.0;
+            e -= 1;
+        }
+        // Three significant digits, rounded (999.5 rounds up to the next power of ten).
+        let mut digits = (m * 100.0 + 0.5) as u32;
+        if digits >= 1000 {
+            digits = 100;
+            e += 1;
+        }
+        let (whole, fraction) = (digits / 100, digits % 100);
+        if fraction == 0 {
+            write!(f, "{sign}{whole}e{e}")
+        } else if fraction % 10 == 0 {
+            write!(f, "{sign}{whole}.{}e{e}", fraction / 10)
+        } else {
+            write!(f, "{sign}{whole}.{fraction:02}e{e}")
+        }
     }
 }
 
@@ -192,6 +229,14 @@ mod tests {
         };
         let text = e.to_string();
         assert!(text.contains("2e9") && text.contains("8e4"), "{text}");
+        let shown = |v: f64| Number(v).to_string();
+        assert_eq!(shown(0.13064821), "1.31e-1");
+        assert_eq!(shown(-2.5e300), "-2.5e300");
+        assert_eq!(shown(9.996), "1e1");
+        assert_eq!(shown(5e-324), "4.94e-324");
+        assert_eq!(shown(0.0), "0e0");
+        assert_eq!(shown(f64::NEG_INFINITY), "-inf");
+        assert_eq!(shown(f64::NAN), "NaN");
         assert_eq!(Number(0.5), Number(0.5));
         assert_ne!(Number(0.5), Number(0.25));
         assert_eq!(Number(0.25).value(), 0.25);
