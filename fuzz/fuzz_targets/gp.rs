@@ -178,11 +178,7 @@ fn run<T: Real>(b: &mut Bytes) {
                     Ok(policy) => match gp.set_conditioning(policy) {
                         Ok(()) => assert_eq!(gp.conditioning(), &policy),
                         Err(e) => {
-                            expect_kind(
-                                "set_conditioning",
-                                &e,
-                                &[Kind::NotPd, Kind::Conditioning],
-                            );
+                            expect_kind("set_conditioning", &e, &[Kind::NotPd, Kind::Conditioning]);
                             unchanged_after_error("set_conditioning", &gp, &before);
                         }
                     },

@@ -12,7 +12,6 @@
 use core::hint::black_box as opaque;
 
 use awfqi::alias::AliasTable;
-use awfqi::record_gp::{batch_transform, fit_gp, input, predict_posteriors};
 use awfqi::env::{
     Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
     Puddle, PuddleWorld,
@@ -27,6 +26,7 @@ use awfqi::planning::{
     value_iteration,
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+use awfqi::record_gp::{batch_transform, fit_gp, input, predict_posteriors};
 use awfqi::score::{GpSourceModel, PointGrid};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
