@@ -24,9 +24,8 @@ use std::path::Path;
 
 use awfqi::env::{DAM_ACTIONS, DAM_DAYS, DAM_MAX_STORAGE, DAM_MIN_STORAGE, Dam};
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Conditioning, Estimator, GenerativeModel,
-    HyperparameterBounds, Hyperparameters, PointGrid, Posterior, RowSet, Scores, SourceMeans,
-    SourceModel, Transition, WeightParams,
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
+    Scores, SourceMeans, SourceModel, Transition,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -61,31 +60,10 @@ impl SourceModel<f32, 2> for DamMeans {
     }
 }
 
-/// The GP training the example uses: the Dam's units (storage in volume, day, action index)
-/// are far from Puddle World's, so the initial values and bounds are the plant's own and
-/// the search has one length scale per input. The example repeats these values.
+/// The example's own settings ([`reservoir::settings`]): the source GPs of the tables are
+/// fitted with the training the device uses.
 fn gp_config() -> awfqi::Result<AwfqiConfig<f32, 3>> {
-    let mut config = AwfqiConfig::thesis(50);
-    config.weights = WeightParams::new(Estimator::Mean, 0.25, 1000.0)?;
-    config.gp_training.initial = Hyperparameters {
-        signal_variance: 400.0,
-        length_scales: [100.0, 1000.0, 0.5],
-        noise_variance: 0.1,
-    };
-    config.gp_training.bounds = HyperparameterBounds {
-        signal_variance: (1.0, 1e4),
-        length_scales: [(10.0, 1e3), (10.0, 1e4), (0.1, 10.0)],
-        noise_variance: (1e-2, 1.0),
-    };
-    config.gp_training.search.isotropic = false;
-    config.gp_training.search.restarts = 2;
-    config.gp_training.search.max_evaluations = 120;
-    // The Dam's reward has no noise, so the best fit drives the noise variance to its
-    // lower bound and the f32 factor needs jitter far above the default bound (up to
-    // 13x the noise variance, measured). That jitter only smooths the reward model the
-    // weights use, so this plant accepts it up to 100x; the condition check stays.
-    config.gp_training.conditioning = Conditioning::DEFAULT.with_max_jitter_ratio(100.0)?;
-    Ok(config)
+    reservoir::settings()
 }
 
 struct Tables {

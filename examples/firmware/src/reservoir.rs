@@ -61,20 +61,11 @@ pub struct Outcome {
     pub baseline: Evaluation<f32>,
 }
 
-/// Sets AWFQI up over the flash tables, runs its steps (`on_step` sees each step's
-/// report) and evaluates the learned policy and the baseline.
-pub fn learn_and_compare(
-    storage: &mut Storage,
-    seed: u64,
-    mut on_step: impl FnMut(&StepReport<f32, 3>),
-) -> awfqi::Result<Outcome> {
-    // All randomness comes from the caller's seeded generator: same seed, same run.
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-
-    // 1. Settings: the thesis's (§12 of docs/algorithms.md) with the GP and FQI set to this
-    //    plant. The GP input is (storage, day, action), in the plant's own units, so the
-    //    hyperparameter search starts and stays in ranges of those units, with one length
-    //    scale per input. (The host fitted the source GPs with the same training.)
+/// The thesis's AWFQI settings (§12 of docs/algorithms.md) with the GP and FQI set to this
+/// plant. The GP input is (storage, day, action), in the plant's own units, so the
+/// hyperparameter search starts and stays in ranges of those units, with one length scale
+/// per input. The host fitted the source GPs of the flash tables with the same training.
+pub fn settings() -> awfqi::Result<AwfqiConfig<f32, 3>> {
     let mut config = AwfqiConfig::thesis(BUDGET);
     config.weights = WeightParams::new(Estimator::Mean, 0.25, 1000.0)?;
     config.gp_training.initial = Hyperparameters {
@@ -97,6 +88,21 @@ pub fn learn_and_compare(
     config.gp_training.conditioning = Conditioning::DEFAULT.with_max_jitter_ratio(100.0)?;
     // The plant's discount; 200 sweeps of FQI so values look months ahead.
     config.fqi = FqiConfig::new(DAM_DISCOUNT as f32, 200, EmptyCells::CappedNearest)?;
+    Ok(config)
+}
+
+/// Sets AWFQI up over the flash tables, runs its steps (`on_step` sees each step's
+/// report) and evaluates the learned policy and the baseline.
+pub fn learn_and_compare(
+    storage: &mut Storage,
+    seed: u64,
+    mut on_step: impl FnMut(&StepReport<f32, 3>),
+) -> awfqi::Result<Outcome> {
+    // All randomness comes from the caller's seeded generator: same seed, same run.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+
+    // 1. Settings: see [`settings`].
+    let config = settings()?;
 
     // 2. What the builder needs: the source records (one slice per source, in flash), the
     //    candidate state-action pairs the score table covers, the FQI grid over the state
