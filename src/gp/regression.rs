@@ -301,22 +301,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     pub fn set_conditioning(&mut self, conditioning: Conditioning<T>) -> Result<()> {
         let previous = self.conditioning;
         self.conditioning = conditioning;
-        let fresh = Start {
-            level: 0,
-            row: 0,
-            solve: 0,
-        };
-        match self.factorize_stored(self.len, fresh) {
-            Ok(level) => {
-                self.jitter_level = level;
-                Ok(())
-            }
-            Err(e) => {
-                self.conditioning = previous;
-                self.restore();
-                Err(e)
-            }
-        }
+        self.refactorize_or_roll_back(|gp| gp.conditioning = previous)
     }
 
     /// The diagonal condition estimate `(max Lᵢᵢ / min Lᵢᵢ)²` of the current factor, a lower
@@ -358,6 +343,27 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
             &mut self.whitened,
             start,
         )
+    }
+
+    /// Refactorises the data held after a setting changed; on error `roll_back` puts the
+    /// previous setting back and the previous factor is restored.
+    fn refactorize_or_roll_back(&mut self, roll_back: impl FnOnce(&mut Self)) -> Result<()> {
+        let fresh = Start {
+            level: 0,
+            row: 0,
+            solve: 0,
+        };
+        match self.factorize_stored(self.len, fresh) {
+            Ok(level) => {
+                self.jitter_level = level;
+                Ok(())
+            }
+            Err(e) => {
+                roll_back(self);
+                self.restore();
+                Err(e)
+            }
+        }
     }
 
     /// Recomputes the factor of the stored data after a failed operation; empties the GP if
@@ -444,22 +450,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         hyper.validate()?;
         let previous = self.hyper;
         self.hyper = hyper;
-        let fresh = Start {
-            level: 0,
-            row: 0,
-            solve: 0,
-        };
-        match self.factorize_stored(self.len, fresh) {
-            Ok(level) => {
-                self.jitter_level = level;
-                Ok(())
-            }
-            Err(e) => {
-                self.hyper = previous;
-                self.restore();
-                Err(e)
-            }
-        }
+        self.refactorize_or_roll_back(|gp| gp.hyper = previous)
     }
 
     /// Adds one observation.
