@@ -544,7 +544,7 @@ pub fn adaptive_puddle<
         config.awfqi.gp_training.search.restarts = restarts;
     }
     let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
-    let mut buffers = kernel.buffers();
+    let buffers = kernel.buffers();
     for (mean, source) in means.iter_mut().zip(&sources) {
         mean.fit_rewards(
             &mut *buffers.gp,
