@@ -862,7 +862,8 @@ fn kernel<T, G, const D: usize, const I: usize>(
         1 => builder.scores_from(models, &mut computed),
         _ => Ok(builder.realistic_scores(&mut computed)),
     }
-    .and_then(|b| b.build(plant, &mut storage, rng));
+    // The plant lent by reference (`GenerativeModel for &G`), as the 32 KiB image does.
+    .and_then(|b| b.build(&plant, &mut storage, rng));
     if let Ok(mut kernel) = built {
         keep(kernel.step(rng));
         keep((
