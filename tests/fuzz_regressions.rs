@@ -253,3 +253,58 @@ fn gp_search_fallback_never_returns_a_non_finite_likelihood() {
         }
     }
 }
+
+/// Target `gp`: a search whose optimum the conditioning policy refused and whose fallback
+/// failed too returned the error with the GP holding the search's hyperparameters (the
+/// documented contract: on error the previous hyperparameters are kept). Trace of the
+/// crash input (f64, generator seed 125).
+#[test]
+fn gp_search_error_keeps_the_previous_hyperparameters() {
+    use awfqi::gp::{Conditioning, HyperparameterBounds, SearchOptions};
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+
+    let mut gp = Gp::<f64, 6, 2>::new(Hyperparameters::isotropic(
+        3.013_515_369_954_056_6e296,
+        125.488_281_25,
+        125.488_281_25,
+    ))
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(125);
+    let policy = Conditioning::<f64>::DEFAULT
+        .without_base_jitter()
+        .with_max_jitter_ratio(63.488_281_25)
+        .and_then(|p| p.with_max_condition(9.050_273_318_221_717e62))
+        .unwrap();
+    let _ = gp.set_conditioning(policy);
+    let _ = gp.add_point([1.96875, 1.00390625], 1.00390625, WhenFull::DropOldest);
+    let _ = gp.add_point([1.00390625, 1.00390625], 1.00390625, WhenFull::Refuse);
+    let _ = gp.add_point([1.01171875, 1.00390625], 1.00390625, WhenFull::DropOldest);
+    let _ = gp.add_point(
+        [0.00390625, 1.358408876914e-312],
+        42.59765625,
+        WhenFull::Refuse,
+    );
+    let _ = gp.add_point(
+        [1.0, 2.68156414328591e154],
+        3.542178508925456e-79,
+        WhenFull::DropOldest,
+    );
+    let _ = gp.add_point([-73.0, -73.0], -105.0, WhenFull::DropOldest);
+    let _ = gp.add_point([-73.0, -73.0], -74.29296875, WhenFull::DropOldest);
+    let bounds = HyperparameterBounds {
+        signal_variance: (1.00390625, 3.4e38),
+        length_scales: [(3.4e38, 3.4e38), (3.4e38, 3.4e38)],
+        noise_variance: (1.2e-38, 63.0),
+    };
+    let options = SearchOptions {
+        max_evaluations: 20,
+        restarts: 1,
+        isotropic: true,
+    };
+    let before = *gp.hyperparameters();
+    match gp.optimize_hyperparameters(&bounds, &options, &mut rng) {
+        Ok(v) => assert!(v.is_finite(), "{v}"),
+        Err(e) => assert_eq!(gp.hyperparameters(), &before, "after {e:?}"),
+    }
+}

@@ -710,8 +710,13 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
                 Ok(()) => return self.log_marginal_likelihood(),
                 Err(e) => e,
             };
+            // The fallback needs the data: when even the previous hyperparameters could not
+            // be refactorised, the roll-back cleared it (the documented last resort), and
+            // setting other hyperparameters on the empty GP would change them on an error.
             return match (refused, trusted) {
-                (Error::JitterLimit { .. } | Error::IllConditioned { .. }, Some((theta, _))) => {
+                (Error::JitterLimit { .. } | Error::IllConditioned { .. }, Some((theta, _)))
+                    if self.len == n =>
+                {
                     self.set_hyperparameters(space.hyperparameters::<D>(&theta))?;
                     self.log_marginal_likelihood()
                 }
