@@ -130,10 +130,13 @@ pub struct Args {
     /// Dam and Acrobot 10000.
     #[arg(long)]
     pub max_gp: Option<usize>,
-    /// GP hyperparameter search: `spec` (§4.2) or `screened` (faster, not the spec's
-    /// procedure: starts screened on a 300-point subsample, then refined on all data).
-    #[arg(long, value_enum, default_value = "spec")]
-    pub gp_search: GpSearch,
+    /// GP hyperparameter search: `spec` (§4.2: every start optimised on all data) or
+    /// `screened` (starts screened on a 300-point subsample, then refined on all data).
+    /// Default: `screened` for iwfqi without transition weights, where it was checked to
+    /// reach the spec's optimum (README, performance); `spec` for the others. `spec`
+    /// reproduces the spec's procedure exactly.
+    #[arg(long, value_enum)]
+    pub gp_search: Option<GpSearch>,
     /// Also run the other GP search (spec ↔ screened) on every fitted GP, on the same data
     /// and starts, keep `--gp-search`'s GP (results unchanged) and write both optima to
     /// `gp_search_check.tsv` in the output directory, with a summary on stderr.
@@ -977,6 +980,21 @@ fn timing_report(
     Ok(out)
 }
 
+/// The GP search of the report's header: the one asked for, else the default and, when
+/// this configuration runs it, iwfqi's.
+fn search_description<const D: usize>(config: &Config, experiment: &Experiment<D>) -> String {
+    let gp = &experiment.options.gp;
+    match gp.search {
+        Some(search) => format!("{search:?}"),
+        None if config.algorithms.contains(&Algorithm::Iwfqi)
+            && experiment.iwfqi_search() == GpSearch::Screened =>
+        {
+            "Spec (iwfqi: Screened)".into()
+        }
+        None => format!("{:?}", GpSearch::Spec),
+    }
+}
+
 /// The Markdown report: per-step means ± s.e. and transfer metrics.
 fn report_markdown<const D: usize>(
     config: &Config,
@@ -997,7 +1015,7 @@ fn report_markdown<const D: usize>(
     );
     let _ = writeln!(
         out,
-        "Sources: {} ({:?} records). Seed {}. GP: {} restarts, max_gp {}, {:?} search. {} iterations, {} trees.\n",
+        "Sources: {} ({:?} records). Seed {}. GP: {} restarts, max_gp {}, {} search. {} iterations, {} trees.\n",
         experiment.sources.origin,
         experiment
             .sources
@@ -1008,7 +1026,7 @@ fn report_markdown<const D: usize>(
         config.args.seed,
         experiment.options.gp.restarts,
         experiment.options.gp.max_gp,
-        experiment.options.gp.search,
+        search_description(config, experiment),
         p.iterations,
         p.trees
     );
