@@ -49,9 +49,9 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy,
-    Evaluation, FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans,
-    SourceModel, StepReport, Transition, evaluate_greedy,
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
+    FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
+    StepReport, Transition, evaluate_greedy,
 };
 
 /// A transition record in `f32`.
