@@ -286,7 +286,7 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
         KernelSetup::<PUDDLE_GP_POINTS>::new(&set, config, &mut stream(0, &[SCORE_TABLE, 100]))
             .unwrap();
     let records = setup.source_slices();
-    let posteriors = setup.reward_posteriors();
+    let posteriors = setup.posteriors();
     let scores = setup.score_values();
     assert_eq!(scores.len(), 324);
     assert!(scores.iter().all(|v| v.reward >= 0.0) && scores.iter().any(|v| v.reward > 0.0));

@@ -585,6 +585,27 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         })
     }
 
+    /// The mean weights `α = K⁻¹y` of the data held into `out[..len]` (`K` with noise and
+    /// jitter), so that the posterior mean is `Σᵢ k(x, xᵢ) αᵢ`: all a copy of the GP that
+    /// only predicts means needs besides its inputs and hyperparameters
+    /// (`crate::adaptive::MeanFunction`). Returns `len`; O(n²).
+    ///
+    /// Errors: `out` shorter than the points held ([`Error::CapacityExceeded`] with its
+    /// length); [`Error::NotPositiveDefinite`] when the back substitution is not finite.
+    pub fn mean_weights(&self, out: &mut [T]) -> Result<usize> {
+        let n = self.len;
+        let capacity = out.len();
+        let (Some(alpha), Some(z)) = (out.get_mut(..n), self.whitened.get(..n)) else {
+            return Err(Error::CapacityExceeded { capacity });
+        };
+        alpha.copy_from_slice(z);
+        if cholesky::backward_solve(self.factor.as_flattened(), N, n, alpha) {
+            Ok(n)
+        } else {
+            Err(Error::NotPositiveDefinite)
+        }
+    }
+
     /// The log marginal likelihood `−½ yᵀK⁻¹y − Σ ln L_ii − (n/2) ln 2π` of the data held,
     /// with `K` including noise and jitter; O(n). It is `−∞` when `yᵀK⁻¹y` overflows `T`.
     ///

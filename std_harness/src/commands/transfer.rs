@@ -275,6 +275,8 @@ pub struct KernelHooks<const D: usize> {
     pub setup: fn(&SourceSet<D>, KernelConfig, &mut ChaCha8Rng) -> anyhow::Result<KernelSetup>,
     /// Hands one run's learner to the protocol.
     pub learner: ScopedLearner<D>,
+    /// Hands one run's adaptive-kernel learner to the protocol.
+    pub adaptive_learner: ScopedLearner<D>,
 }
 
 /// The options resolved against the domain's defaults.
@@ -339,7 +341,12 @@ impl Config {
                 .into_iter()
                 .filter(|&a| {
                     kernel_available
-                        || !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptive)
+                        || !matches!(
+                            a,
+                            Algorithm::AwfqiKernel
+                                | Algorithm::AwfqiAdaptive
+                                | Algorithm::AwfqiAdaptiveKernel
+                        )
                 })
                 .collect()
         } else {
@@ -347,10 +354,13 @@ impl Config {
         };
         algorithms.sort();
         algorithms.dedup();
-        if algorithms.contains(&Algorithm::AwfqiKernel) && !kernel_available {
-            bail!(
-                "awfqi-kernel runs on Puddle World only until the core's kernel path is generic over the state dimension"
-            );
+        for kernel in [Algorithm::AwfqiKernel, Algorithm::AwfqiAdaptiveKernel] {
+            if algorithms.contains(&kernel) && !kernel_available {
+                bail!(
+                    "{} runs on Puddle World only until the harness's kernel path is generic over the state dimension",
+                    kernel.name()
+                );
+            }
         }
         let config = Self {
             args: args.clone(),
@@ -550,7 +560,8 @@ pub fn build_experiment<const D: usize>(
         }
         _ => None,
     };
-    let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
+    let wants_kernel = wants(Algorithm::AwfqiKernel) || wants(Algorithm::AwfqiAdaptiveKernel);
+    let kernel = match (wants_kernel, hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
             let kernel = KernelConfig::new(config.setting, config.spacing).with_q(
@@ -581,6 +592,7 @@ pub fn build_experiment<const D: usize>(
         ideal_weights: None,
         kernel,
         kernel_learner: hooks.map(|h| h.learner),
+        adaptive_kernel_learner: hooks.map(|h| h.adaptive_learner),
         adaptive,
         adaptive_options: args.adaptive(),
     };
@@ -649,7 +661,7 @@ fn cost_rank(a: Algorithm) -> usize {
         Algorithm::Iwfqi | Algorithm::IwfqiHeuristic => 1,
         Algorithm::Sdt | Algorithm::IwfqiIdeal | Algorithm::Rbt => 2,
         Algorithm::Fqi => 3,
-        Algorithm::AwfqiKernel => 4,
+        Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => 4,
     }
 }
 
@@ -811,11 +823,17 @@ fn run_in_pool<const D: usize>(
                 .map(|(a, rows)| (a.name().to_string(), a.color(), rows.clone()))
                 .collect()
         };
-        let std_path = curve(&|a| a != Algorithm::AwfqiKernel);
+        let std_path =
+            curve(&|a| !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel));
         let embedded = curve(&|a| {
             matches!(
                 a,
-                Algorithm::Fqi | Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiKernel
+                Algorithm::Fqi
+                    | Algorithm::Awfqi
+                    | Algorithm::AwfqiOracle
+                    | Algorithm::AwfqiKernel
+                    | Algorithm::AwfqiAdaptive
+                    | Algorithm::AwfqiAdaptiveKernel
             )
         });
         figures::learning_curves(&title, &std_path, &embedded)

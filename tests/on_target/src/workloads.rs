@@ -48,6 +48,7 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 }
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::{AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, MeanFunction, SourceData, Tilings};
 use awfqi::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
     FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
@@ -455,4 +456,116 @@ pub fn grid_identification(
         initial_value: values.first().copied().unwrap_or(0.0),
         initial_action: policy.first().copied().unwrap_or(0),
     })
+}
+
+/// The sources' reward mean functions and the adaptive kernel's [`AdaptiveStorage`]: a
+/// target GP of `N` points, `Q` target records (steps × budget), one weight per published
+/// source record (1033), `C` candidate slots, `E` FQI entries, room for `B` verified
+/// states (the budget), 3 source beliefs.
+pub struct AdaptiveMemory<
+    const N: usize,
+    const Q: usize,
+    const C: usize,
+    const E: usize,
+    const B: usize,
+> {
+    /// Each published source's reward-GP posterior mean, fitted on the device.
+    pub means: [MeanFunction<f32, N, 3>; 3],
+    /// The kernel's memory.
+    pub kernel: AdaptiveStorage<f32, 2, 3, N, Q, 1033, C, E, B, 3>,
+}
+
+impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: usize>
+    AdaptiveMemory<N, Q, C, E, B>
+{
+    /// All-zero memory, for a `static` in `.bss`.
+    pub const fn new() -> Self {
+        Self {
+            means: [
+                MeanFunction::EMPTY,
+                MeanFunction::EMPTY,
+                MeanFunction::EMPTY,
+            ],
+            kernel: AdaptiveStorage::new(),
+        }
+    }
+}
+
+/// What a run of [`adaptive_puddle`] changes from the recommended configuration.
+#[derive(Clone, Copy)]
+pub struct AdaptiveRun {
+    /// Queries per step.
+    pub budget: usize,
+    /// Steps (`Q` must hold `steps · budget`).
+    pub steps: usize,
+    /// Candidate rows per sub-batch (`C` must hold them).
+    pub candidates: usize,
+    /// Tiles per axis and tilings of the FQI approximator (`E` must hold its entries).
+    pub tiles: (usize, usize),
+    /// Likelihood evaluations and restarts of each GP search (`None`: the thesis's).
+    pub search: Option<(usize, usize)>,
+}
+
+/// Adaptive AWFQI on Puddle World on the device: the published source records and their
+/// posteriors from flash ([`crate::puddle_tables`]), one reward GP per source fitted in the
+/// kernel's GP and kept as a mean function, the candidate rows of the spacing-0.1 puddle
+/// grid (arithmetic, no memory), `steps` steps of the shared-dynamics target and the greedy
+/// policy's evaluation. `inspect` sees the kernel after the last step.
+pub fn adaptive_puddle<
+    const N: usize,
+    const Q: usize,
+    const C: usize,
+    const E: usize,
+    const B: usize,
+>(
+    memory: &mut AdaptiveMemory<N, Q, C, E, B>,
+    run: AdaptiveRun,
+    seed: u64,
+    inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
+) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
+    use crate::puddle_tables as t;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let AdaptiveMemory { means, kernel } = memory;
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let mut config = AdaptiveConfig::recommended(
+        run.budget,
+        target.initial_state(),
+        50,
+        0.3,
+        [(0.0, 10.0); 2],
+    );
+    config.candidates = run.candidates;
+    if let Some((evaluations, restarts)) = run.search {
+        config.awfqi.gp_training.search.max_evaluations = evaluations;
+        config.awfqi.gp_training.search.restarts = restarts;
+    }
+    let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
+    let buffers = kernel.buffers();
+    for (mean, source) in means.iter_mut().zip(&sources) {
+        mean.fit_rewards(
+            &mut *buffers.gp,
+            source,
+            &config.awfqi.gp_training,
+            config.awfqi.subset,
+            &mut rng,
+        )?;
+    }
+    let rows = RowSet::grid(PuddleWorld::score_grid(0.1)?, PUDDLE_ACTIONS)?;
+    let mut kernel = AdaptiveAwfqi::new(
+        config.validate()?,
+        Tilings::cube(0.0, 10.0, run.tiles.0, run.tiles.1)?,
+        SourceData::new(&sources, &t::SOURCE_POSTERIORS)?,
+        &*means,
+        rows,
+        target,
+        buffers,
+    )?;
+    let mut report = None;
+    for _ in 0..run.steps {
+        report = Some(kernel.step(&mut rng)?);
+    }
+    let target = kernel.target();
+    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    inspect(&kernel);
+    Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }

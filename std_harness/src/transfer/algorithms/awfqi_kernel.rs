@@ -18,8 +18,8 @@ use std::time::Instant;
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
     AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, FqiEntry, Gp,
-    GpTraining, Posterior, RowSet, ScoreTable, Scores, SubsetRule, Tilings, Transition,
-    WeightParams,
+    GpTraining, MeanFunction, Posterior, RowSet, ScoreTable, Scores, SubsetRule, Tilings,
+    Transition, WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -75,7 +75,7 @@ impl KernelQFunction {
     }
 
     /// The core's approximator over Puddle World's `[0, 10]²`.
-    fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
+    pub(super) fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
             Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
             Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
@@ -83,8 +83,10 @@ impl KernelQFunction {
     }
 }
 
-type T = f32;
-type Record32 = Transition<[T; 2], T>;
+/// The kernels' scalar.
+pub(super) type T = f32;
+/// A record in the kernels' scalar.
+pub(super) type Record32 = Transition<[T; 2], T>;
 
 fn to_f32(r: &Record) -> Record32 {
     Transition {
@@ -96,7 +98,7 @@ fn to_f32(r: &Record) -> Record32 {
     }
 }
 
-fn to_f64(r: &Record32) -> Record {
+pub(super) fn to_f64(r: &Record32) -> Record {
     Transition {
         state: r.state.map(f64::from),
         action: r.action,
@@ -150,6 +152,9 @@ pub struct KernelSetup<const N: usize = GP_POINTS> {
     /// Stored next-state posteriors of all sources, record after record, 2 per record
     /// (empty when the sources have none).
     transition_posteriors: Vec<Posterior<T>>,
+    /// Each source's reward-GP posterior mean (the score table's GPs), for
+    /// `awfqi-adaptive-kernel`.
+    means: Vec<MeanFunction<T, N, 3>>,
     /// Wall time of the set-up (source GP fits and score table), seconds.
     pub setup_seconds: f64,
 }
@@ -180,6 +185,7 @@ impl<const N: usize> KernelSetup<N> {
         let mut values = vec![Scores::ZERO; rows.len()];
         let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
         let mut gp = Box::new(Gp::<T, N, 3>::empty());
+        let mut means = vec![MeanFunction::EMPTY; slices.len()];
         ScoreTable::realistic(
             rows,
             &slices,
@@ -189,7 +195,10 @@ impl<const N: usize> KernelSetup<N> {
             &mut values,
             &mut scratch,
             rng,
-            |_, _| Ok(()),
+            |j, gp| match means.get_mut(j) {
+                Some(m) => m.copy_from(gp),
+                None => Ok(()),
+            },
         )?;
         let transition_posteriors = sources
             .sources
@@ -209,6 +218,7 @@ impl<const N: usize> KernelSetup<N> {
             posteriors,
             values,
             transition_posteriors,
+            means,
             setup_seconds: start.elapsed().as_secs_f64(),
         })
     }
@@ -245,8 +255,13 @@ impl<const N: usize> KernelSetup<N> {
     }
 
     /// The stored reward posteriors of all source records, source after source.
-    pub fn reward_posteriors(&self) -> &[Posterior<T>] {
+    pub fn posteriors(&self) -> &[Posterior<T>] {
         &self.posteriors
+    }
+
+    /// Each source's reward mean function.
+    pub(super) fn means(&self) -> &[MeanFunction<T, N, 3>] {
+        &self.means
     }
 
     /// The source records, one slice per source (what the kernel borrows).
@@ -255,7 +270,7 @@ impl<const N: usize> KernelSetup<N> {
     }
 }
 
-fn row_set<'a>(
+pub(super) fn row_set<'a>(
     config: &KernelConfig,
     slices: &'a [&'a [Record32]],
 ) -> anyhow::Result<RowSet<'a, T, 2>> {
