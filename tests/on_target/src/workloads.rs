@@ -48,13 +48,11 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 }
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::{AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, MeanFunction, SourceData, Tilings};
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, MeanFunction, SourceData, Tilings,
-};
-use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Conditioning, EmptyCells, EpsilonGreedyPolicy,
-    Evaluation, FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans,
-    SourceModel, StepReport, Transition, evaluate_greedy,
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
+    FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
+    StepReport, Transition, evaluate_greedy,
 };
 
 /// A transition record in `f32`.
@@ -207,30 +205,24 @@ pub fn awfqi_puddle_32k(
 ) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
     use crate::puddle_tables as t;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let target = PuddleWorld::target(Dynamics::Shared);
     let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
     let rows = RowSet::grid(PuddleWorld::score_grid(1.25)?, PUDDLE_ACTIONS)?;
-    // On seed 1 the default conditioning policy refuses a 24-point f32 target-GP fit
-    // (JitterLimit, measured under QEMU, even with the bound lifted to 100 × the noise
-    // variance): repeated queries of one pair make the factor need a large jitter. This
-    // image keeps the jitter ladder unbounded, as the core did before the policy existed,
-    // until the recommended configuration gets a policy that holds (an open item).
-    let mut config = AwfqiConfig::thesis(50);
-    config.gp_training.conditioning = Conditioning::UNBOUNDED;
     let mut kernel = Awfqi::builder(
-        config.validate()?,
+        AwfqiConfig::thesis(50).validate()?,
         CellGrid::cube(0.0, 10.0, 11)?,
         &sources,
         rows,
     )
     .stored_posteriors(&t::SOURCE_POSTERIORS)
     .stored_scores(&t::SCORES)
-    .build(PuddleWorld::target(Dynamics::Shared), storage, &mut rng)?;
+    // The plant lent, not moved: the kernel holds a reference instead of its 200 bytes.
+    .build(&target, storage, &mut rng)?;
     let mut report = None;
     for _ in 0..6 {
         report = Some(kernel.step(&mut rng)?);
     }
-    let target = kernel.target();
-    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    let evaluation = evaluate_greedy(&target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
@@ -489,7 +481,11 @@ impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: us
     /// All-zero memory, for a `static` in `.bss`.
     pub const fn new() -> Self {
         Self {
-            means: [MeanFunction::EMPTY, MeanFunction::EMPTY, MeanFunction::EMPTY],
+            means: [
+                MeanFunction::EMPTY,
+                MeanFunction::EMPTY,
+                MeanFunction::EMPTY,
+            ],
             kernel: AdaptiveStorage::new(),
         }
     }

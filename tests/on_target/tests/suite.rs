@@ -609,9 +609,9 @@ mod tests {
         let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
             let d0 = kernel.target_samples();
             let starts = d0.chunks(4).all(|b| b[0].state == [0.0, 0.0]);
-            let finite = d0
-                .iter()
-                .all(|t| t.reward.is_finite() && t.action < 4 && t.state.iter().all(|x| x.is_finite()));
+            let finite = d0.iter().all(|t| {
+                t.reward.is_finite() && t.action < 4 && t.state.iter().all(|x| x.is_finite())
+            });
             let total: f32 = kernel.beliefs().iter().map(|b| b.plausibility).sum();
             let weights = kernel
                 .reward_weights()

@@ -11,6 +11,7 @@
 
 use core::hint::black_box as opaque;
 
+use awfqi::adaptive;
 use awfqi::alias::AliasTable;
 use awfqi::env::{
     Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
@@ -26,7 +27,6 @@ use awfqi::planning::{
     value_iteration,
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-use awfqi::adaptive;
 use awfqi::record_gp::{batch_transform, fit_gp, fit_gp_on, input, predict_posteriors};
 use awfqi::score::{GpSourceModel, PointGrid};
 use awfqi::weights::{
@@ -34,9 +34,10 @@ use awfqi::weights::{
     effective_sample_size, ideal_weight, predictive_stds,
 };
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, MeanFunction, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells,
-    EvaluationProtocol, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy,
-    HyperparameterBounds, Hyperparameters, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
+    Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
+    FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
+    Hyperparameters, MeanFunction, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
     ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
     TabularFqi, TileFqi, Tilings, Transition, WhenFull, evaluate, evaluate_greedy, rollout,
 };
@@ -992,7 +993,8 @@ fn kernel<T, G, const D: usize, const I: usize>(
         1 => builder.scores_from(models, &mut computed),
         _ => Ok(builder.realistic_scores(&mut computed)),
     }
-    .and_then(|b| b.build(plant, &mut storage, rng));
+    // The plant lent by reference (`GenerativeModel for &G`), as the 32 KiB image does.
+    .and_then(|b| b.build(&plant, &mut storage, rng));
     if let Ok(mut kernel) = built {
         keep(kernel.step(rng));
         keep((
