@@ -362,7 +362,6 @@ impl<const D: usize> Experiment<D> {
             Algorithm::AwfqiAdaptiveKernel => {
                 if let Some(k) = &self.kernel {
                     o["kernel"] = k.parameters_with(k.config.adaptive_q);
-                    o["kernel"]["conditioning"] = "unbounded".into();
                 }
                 o["var_rw"] = v_r.into();
                 o["max_weight"] = self.options.max_weight.into();
