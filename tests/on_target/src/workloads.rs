@@ -140,6 +140,8 @@ pub fn awfqi_puddle<
         kernel,
     } = storage;
     let worlds = PuddleWorld::<f32>::sources(Dynamics::Shared);
+    // The plant lent to the kernel, not moved into it (see `awfqi_puddle_32k`).
+    let target = PuddleWorld::target(Dynamics::Shared);
     let mut config = AwfqiConfig::thesis(run.budget);
     config.gp_training.search.max_evaluations = run.search.0;
     config.gp_training.search.restarts = run.search.1;
@@ -176,13 +178,12 @@ pub fn awfqi_puddle<
     )
     .fit_posteriors(posteriors.get_mut(..total).unwrap_or(&mut []))
     .scores_from(&worlds, scores)?
-    .build(PuddleWorld::target(Dynamics::Shared), kernel, &mut rng)?;
+    .build(&target, kernel, &mut rng)?;
     let mut report = None;
     for _ in 0..run.steps {
         report = Some(kernel.step(&mut rng)?);
     }
-    let target = kernel.target();
-    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    let evaluation = evaluate_greedy(&target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
     inspect(kernel.target_samples());
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
