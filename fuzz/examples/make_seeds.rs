@@ -886,8 +886,16 @@ fn adaptive_seed(f32: bool, rows: u8, tiles: bool) -> Seed {
 fn adaptive_seeds() {
     for f32 in [true, false] {
         let p = if f32 { "f32" } else { "f64" };
-        write("adaptive_loop", &format!("grid_table_{p}"), &adaptive_seed(f32, 0, false));
-        write("adaptive_loop", &format!("sources_tiles_{p}"), &adaptive_seed(f32, 2, true));
+        write(
+            "adaptive_loop",
+            &format!("grid_table_{p}"),
+            &adaptive_seed(f32, 0, false),
+        );
+        write(
+            "adaptive_loop",
+            &format!("sources_tiles_{p}"),
+            &adaptive_seed(f32, 2, true),
+        );
     }
 }
 

@@ -23,5 +23,10 @@ awfqi_on_target::footprint_image!({
         "kernel bytes",
         core::mem::size_of::<AdaptiveAwfqi<'static, f32, PuddleWorld<f32>, 2, 3, 64>>(),
     );
-    adaptive_puddle(memory, ADAPTIVE_RECOMMENDED, core::hint::black_box(1), |_| {})
+    adaptive_puddle(
+        memory,
+        ADAPTIVE_RECOMMENDED,
+        core::hint::black_box(1),
+        |_| {},
+    )
 });
