@@ -118,6 +118,8 @@ pub struct KernelConfig {
     pub spacing: f64,
     /// The FQI approximator.
     pub q: KernelQFunction,
+    /// The FQI approximator of `awfqi-adaptive-kernel`.
+    pub adaptive_q: KernelQFunction,
 }
 
 impl KernelConfig {
@@ -128,12 +130,21 @@ impl KernelConfig {
             mode,
             spacing,
             q: KernelQFunction::Tiles(TILES, TILINGS),
+            adaptive_q: KernelQFunction::Tiles(
+                super::adaptive_kernel::ADAPTIVE_TILES,
+                super::adaptive_kernel::ADAPTIVE_TILINGS,
+            ),
         }
     }
 
-    /// The same configuration with another FQI approximator.
+    /// The same configuration with another FQI approximator (for `awfqi-kernel`).
     pub fn with_q(self, q: KernelQFunction) -> Self {
         Self { q, ..self }
+    }
+
+    /// The same configuration with another FQI approximator for `awfqi-adaptive-kernel`.
+    pub fn with_adaptive_q(self, adaptive_q: KernelQFunction) -> Self {
+        Self { adaptive_q, ..self }
     }
 }
 
@@ -225,6 +236,11 @@ impl<const N: usize> KernelSetup<N> {
 
     /// The kernel's fixed parameters for the result files.
     pub fn parameters(&self) -> serde_json::Value {
+        self.parameters_with(self.config.q)
+    }
+
+    /// The fixed parameters with the FQI approximator `q` (`awfqi-adaptive-kernel`'s).
+    pub fn parameters_with(&self, q: KernelQFunction) -> serde_json::Value {
         let mut out = serde_json::json!({
             "scalar": "f32",
             "gp_capacity": N,
@@ -233,7 +249,7 @@ impl<const N: usize> KernelSetup<N> {
             "score_rows": self.values.len(),
             "score_spacing": self.config.spacing,
         });
-        match self.config.q {
+        match q {
             KernelQFunction::Tabular(n) => out["fqi_cells"] = serde_json::json!([n, n]),
             KernelQFunction::Tiles(n, k) => {
                 out["fqi_tiles"] = serde_json::json!([n, n]);
