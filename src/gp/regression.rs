@@ -692,7 +692,10 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
             let jitter_ok = level == 0
                 || jitter_at(level, hyper.signal_variance, policy)
                     <= strict.allowed_jitter(hyper.noise_variance);
+            // Only a finite likelihood is a fallback: the first trusted point may rate −∞
+            // (in f32 a data fit that overflows), and a success must return a number.
             if jitter_ok
+                && lml.is_finite()
                 && conditioning::diagonal_condition(factor, N, n) <= limit
                 && trusted.is_none_or(|(_, best)| lml > best)
             {
@@ -707,8 +710,13 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
                 Ok(()) => return self.log_marginal_likelihood(),
                 Err(e) => e,
             };
+            // The fallback needs the data: when even the previous hyperparameters could not
+            // be refactorised, the roll-back cleared it (the documented last resort), and
+            // setting other hyperparameters on the empty GP would change them on an error.
             return match (refused, trusted) {
-                (Error::JitterLimit { .. } | Error::IllConditioned { .. }, Some((theta, _))) => {
+                (Error::JitterLimit { .. } | Error::IllConditioned { .. }, Some((theta, _)))
+                    if self.len == n =>
+                {
                     self.set_hyperparameters(space.hyperparameters::<D>(&theta))?;
                     self.log_marginal_likelihood()
                 }

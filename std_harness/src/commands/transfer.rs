@@ -180,7 +180,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "tiles")]
     pub kernel_q: KernelQ,
     /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
-    /// the table, 6 for tiles.
+    /// the table, 6 for tiles; awfqi-adaptive-kernel has its own default, 12 × 8 tiles,
+    /// which an explicit resolution replaces (with `--kernel-q` and `--kernel-tilings`).
     #[arg(long)]
     pub kernel_resolution: Option<usize>,
     /// Offset tilings of `--kernel-q tiles`.
@@ -567,13 +568,16 @@ pub fn build_experiment<const D: usize>(
     let kernel = match (wants_kernel, hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            let kernel = KernelConfig::new(config.setting, config.spacing).with_q(
-                KernelQFunction::from_args(
-                    args.kernel_q,
-                    args.kernel_resolution,
-                    args.kernel_tilings,
-                )?,
-            );
+            let q = KernelQFunction::from_args(
+                args.kernel_q,
+                args.kernel_resolution,
+                args.kernel_tilings,
+            )?;
+            let mut kernel = KernelConfig::new(config.setting, config.spacing).with_q(q);
+            // An explicit resolution sets both kernels' approximators.
+            if args.kernel_resolution.is_some() {
+                kernel = kernel.with_adaptive_q(q);
+            }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }
         _ => None,

@@ -140,14 +140,14 @@ impl Algorithm {
     /// states of the scatter plots, the crimson one is awfqi-adaptive's). The kernel shares the blue of IWFQI: the learning
     /// curves draw it in a separate panel, next to AWFQI, where IWFQI is absent; the
     /// heuristic IWFQI shares it too (not in the default set). The adaptive kernel, also in
-    /// that panel only, shares SDT's colour.
+    /// that panel only, shares IWFQI-ideal's sky blue (the kernels in blues).
     pub fn color(self) -> usize {
         match self {
             Algorithm::Fqi => 7,
             Algorithm::Iwfqi | Algorithm::IwfqiHeuristic | Algorithm::AwfqiKernel => 0,
-            Algorithm::IwfqiIdeal => 5,
+            Algorithm::IwfqiIdeal | Algorithm::AwfqiAdaptiveKernel => 5,
             Algorithm::Rbt => 4,
-            Algorithm::Sdt | Algorithm::AwfqiAdaptiveKernel => 3,
+            Algorithm::Sdt => 3,
             Algorithm::Awfqi => 1,
             Algorithm::AwfqiOracle => 2,
             Algorithm::AwfqiAdaptive => 8,
@@ -380,7 +380,7 @@ impl<const D: usize> Experiment<D> {
             }
             Algorithm::AwfqiAdaptiveKernel => {
                 if let Some(k) = &self.kernel {
-                    o["kernel"] = k.parameters();
+                    o["kernel"] = k.parameters_with(k.config.adaptive_q);
                 }
                 o["var_rw"] = v_r.into();
                 o["max_weight"] = self.options.max_weight.into();
