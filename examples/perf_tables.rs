@@ -497,7 +497,7 @@ fn m4_table(d: &Data) -> String {
         if total > 0.0 {
             s.push_str(
                 "\nWhere the six steps' instructions go (flat profile: each instruction counts \
-                 for the function holding it; `m4_counts::run` is the step's own loop, inlined):\n\n\
+                 for the function holding it, inlined code for the function it was inlined into):\n\n\
                  | function | instructions (6 steps) | share |\n|---|--:|--:|\n",
             );
             for (n, f) in d.m4_profile.iter().take(10) {
