@@ -265,7 +265,9 @@ pub struct StepReport<T, const I: usize> {
 /// GP's capacity `N`; the capacities of the buffers are the lengths of the slices it
 /// borrows, so its code is the same for every capacity. Built by [`AwfqiBuilder`].
 /// `size_of::<Awfqi<f32, PuddleWorld<f32>, 2, 3, 64>>()` is 468 bytes on
-/// `thumbv7em-none-eabihf` (216 of them the Puddle World model).
+/// `thumbv7em-none-eabihf` (216 of them the Puddle World model; a kernel built over
+/// `&model` — [`GenerativeModel`] is implemented for references — holds 4 bytes instead,
+/// which keeps every frame that holds the kernel small).
 #[derive(Debug)]
 pub struct Awfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     config: ValidAwfqiConfig<T, I>,
@@ -480,36 +482,24 @@ where
         // Reward weights, one noise-subtraction batch per source.
         let mut wr = WeightSummary::new();
         wr.add_ones(target.len());
-        let capacity = self.weights.len();
-        let mut rest: &mut [T] = self.weights;
-        for (records, posteriors) in self.sources.iter() {
-            let (mine, tail) = core::mem::take(&mut rest)
-                .split_at_mut_checked(records.len())
-                .ok_or(Error::CapacityExceeded { capacity })?;
-            rest = tail;
-            source_weights(
-                self.gp,
-                records,
-                posteriors,
-                &self.config.weights,
-                self.config.noise_subtraction,
-                mine,
-            )?;
-            wr.add(mine)?;
-        }
+        reward_weights(
+            self.gp,
+            &self.sources,
+            &self.config.weights,
+            self.config.noise_subtraction,
+            self.weights,
+            &mut wr,
+        )?;
         // 5: weighted FQI on D₀ then the sources.
-        let weights: &[T] = self.weights;
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
-        let sets = core::iter::once(SampleSet::unweighted(target)).chain(
-            self.sources.records.iter().scan(0usize, move |offset, &s| {
-                let start = *offset;
-                *offset += s.len();
-                let w = weights.get(start..*offset);
-                let ws = transition.and_then(|t| t.get(start..*offset));
-                Some(SampleSet::weighted(s, w, ws))
-            }),
-        );
-        self.fqi.fit_sets(sets, &self.config.fqi)?;
+        fit_weighted_fqi(
+            &mut self.fqi,
+            target,
+            &self.sources,
+            Some(self.weights),
+            transition,
+            &self.config.fqi,
+        )?;
         self.steps += 1;
         Ok(StepReport {
             step: self.steps,
@@ -529,6 +519,59 @@ where
             },
         })
     }
+}
+
+/// The reward weights of every source record under the target GP `gp` (§7.2 steps 2–3),
+/// one noise-subtraction batch per source, into `weights` (source after source, record
+/// after record), each source's weights also added to `summary`.
+///
+/// Errors: `weights` shorter than the source records ([`Error::CapacityExceeded`] with its
+/// length); those of the predictions and of [`WeightParams::weight`].
+pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    sources: &SourceData<'_, T, D>,
+    params: &WeightParams<T>,
+    noise: NoiseSubtraction,
+    weights: &mut [T],
+    summary: &mut WeightSummary<T>,
+) -> Result<()> {
+    let capacity = weights.len();
+    let mut rest: &mut [T] = weights;
+    for (records, posteriors) in sources.iter() {
+        let (mine, tail) = core::mem::take(&mut rest)
+            .split_at_mut_checked(records.len())
+            .ok_or(Error::CapacityExceeded { capacity })?;
+        rest = tail;
+        source_weights(gp, records, posteriors, params, noise, mine)?;
+        summary.add(mine)?;
+    }
+    Ok(())
+}
+
+/// Weighted FQI (§12 step 5) on `target` (weight 1) followed by the sources in order, with
+/// the sources' reward weights `weights` and transition weights `transition` (source after
+/// source; `None`: all 1).
+///
+/// Errors: those of [`QFunction::fit_sets`] (e.g. a weight slice of the wrong length).
+pub(crate) fn fit_weighted_fqi<T: Real, const D: usize>(
+    fqi: &mut QFunction<'_, T, D>,
+    target: &[Transition<[T; D], T>],
+    sources: &SourceData<'_, T, D>,
+    weights: Option<&[T]>,
+    transition: Option<&[T]>,
+    config: &FqiConfig<T>,
+) -> Result<()> {
+    let sets = core::iter::once(SampleSet::unweighted(target)).chain(sources.records.iter().scan(
+        0usize,
+        move |offset, &s| {
+            let start = *offset;
+            *offset += s.len();
+            let w = weights.and_then(|w| w.get(start..*offset));
+            let ws = transition.and_then(|t| t.get(start..*offset));
+            Some(SampleSet::weighted(s, w, ws))
+        },
+    ));
+    fqi.fit_sets(sets, config)
 }
 
 /// The reward weights of one source's records under the target GP (§7.2 steps 2–3).

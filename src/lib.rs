@@ -11,6 +11,7 @@
 )]
 #![deny(missing_docs)]
 
+pub mod adaptive;
 pub mod alias;
 pub mod awfqi;
 pub mod env;
@@ -31,6 +32,10 @@ pub use error::{Error, Result};
 pub use float::Real;
 
 // The types a user of the transfer path meets, at the crate root (as heapless does).
+pub use adaptive::{
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, MeanFunction,
+    ValidAdaptiveConfig,
+};
 pub use alias::AliasEntry;
 pub use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,

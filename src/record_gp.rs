@@ -153,6 +153,33 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I:
         return Err(Error::EmptyData);
     };
     output.of(first)?;
+    fit_gp_on(gp, records, |r| output.of(r), subset, training, rng)
+}
+
+/// [`fit_gp`] on any target of a record, `target(record)` (e.g. a reward minus a prior
+/// mean): resets `gp` to `training.initial`, loads the records `subset` keeps with their
+/// targets and searches the hyperparameters. Returns the log marginal likelihood reached.
+///
+/// Errors: no records ([`Error::EmptyData`]); those of `target`, of
+/// [`Gp::set_hyperparameters`], [`Gp::add_point`] and [`Gp::optimize_hyperparameters`]. On
+/// error the GP may hold part of the subset; refit it before use.
+pub fn fit_gp_on<T, R, F, const N: usize, const D: usize, const I: usize>(
+    gp: &mut Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
+    mut target: F,
+    subset: SubsetRule,
+    training: &GpTraining<T, I>,
+    rng: &mut R,
+) -> Result<T>
+where
+    T: Real,
+    R: Rng + ?Sized,
+    F: FnMut(&Transition<[T; D], T>) -> Result<T>,
+{
+    let () = InputDim::<D, I>::CHECK;
+    if records.is_empty() {
+        return Err(Error::EmptyData);
+    }
     training.search.validate()?;
     training.bounds.validate()?;
     gp.clear();
@@ -160,7 +187,7 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I:
     gp.set_hyperparameters(training.initial)?;
     for i in subset.indices(records.len(), N) {
         if let Some(r) = records.get(i) {
-            gp.add_point(input(r.state, r.action), output.of(r)?, WhenFull::Refuse)?;
+            gp.add_point(input(r.state, r.action), target(r)?, WhenFull::Refuse)?;
         }
     }
     gp.optimize_hyperparameters(&training.bounds, &training.search, rng)

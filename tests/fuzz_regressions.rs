@@ -193,3 +193,118 @@ fn weight_summary_of_huge_and_tiny_weights_is_finite_and_exact() {
     let direct = effective_sample_size(&w).unwrap();
     assert!((u.effective_sample_size() - direct).abs() < 1e-5 * direct);
 }
+
+/// Target `gp` (after the search's fallback to the best trusted point): in `f32`, with a
+/// target of 3.9e25 the data fit `yᵀK⁻¹y` overflows at small signal variances, so the first
+/// point the policy trusted rated −∞; the search's optimum (a large signal variance) was
+/// beyond the policy, and the fallback returned `Ok(−∞)`. Fix: only a point with a finite
+/// likelihood is a fallback; without one the refusal is the error.
+#[test]
+fn gp_search_fallback_never_returns_a_non_finite_likelihood() {
+    use awfqi::gp::{HyperparameterBounds, SearchOptions};
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+
+    let mut gp = Gp::<f32, 6, 2>::empty();
+    gp.fit(
+        &[[0.0, 0.0], [111.0, 111.0], [111.0, 111.0], [111.0, 111.0]],
+        &[111.0; 4],
+    )
+    .unwrap();
+    // The crash input's generator seed (its 17th byte).
+    let mut rng = ChaCha8Rng::seed_from_u64(255);
+    let fixed = HyperparameterBounds {
+        signal_variance: (111.0, 111.0),
+        length_scales: [(111.0, 111.0), (111.0, 111.0)],
+        noise_variance: (111.0, 111.0),
+    };
+    let options = SearchOptions {
+        max_evaluations: 0,
+        restarts: 3,
+        isotropic: false,
+    };
+    if let Ok(v) = gp.optimize_hyperparameters(&fixed, &options, &mut rng) {
+        assert!(v.is_finite(), "{v}");
+    }
+    gp.add_point([0.0, 0.0], 3.861_006_8e25, WhenFull::DropOldest)
+        .unwrap();
+    let bounds = HyperparameterBounds {
+        signal_variance: (69.269_53, 5.142_912_6e25),
+        length_scales: [(69.269_53, 69.269_53), (36.929_688, 69.269_53)],
+        noise_variance: (69.269_53, 111.0),
+    };
+    let options = SearchOptions {
+        max_evaluations: 31,
+        restarts: 3,
+        isotropic: true,
+    };
+    let before = *gp.hyperparameters();
+    match gp.optimize_hyperparameters(&bounds, &options, &mut rng) {
+        Ok(v) => {
+            assert!(v.is_finite(), "a success with lml {v}");
+            assert_eq!(gp.log_marginal_likelihood(), Ok(v));
+        }
+        Err(e) => {
+            assert!(
+                matches!(e, Error::JitterLimit { .. } | Error::IllConditioned { .. }),
+                "{e:?}"
+            );
+            assert_eq!(gp.hyperparameters(), &before);
+        }
+    }
+}
+
+/// Target `gp`: a search whose optimum the conditioning policy refused and whose fallback
+/// failed too returned the error with the GP holding the search's hyperparameters (the
+/// documented contract: on error the previous hyperparameters are kept). Trace of the
+/// crash input (f64, generator seed 125).
+#[test]
+fn gp_search_error_keeps_the_previous_hyperparameters() {
+    use awfqi::gp::{Conditioning, HyperparameterBounds, SearchOptions};
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+
+    let mut gp = Gp::<f64, 6, 2>::new(Hyperparameters::isotropic(
+        3.013_515_369_954_056_6e296,
+        125.488_281_25,
+        125.488_281_25,
+    ))
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(125);
+    let policy = Conditioning::<f64>::DEFAULT
+        .without_base_jitter()
+        .with_max_jitter_ratio(63.488_281_25)
+        .and_then(|p| p.with_max_condition(9.050_273_318_221_717e62))
+        .unwrap();
+    let _ = gp.set_conditioning(policy);
+    let _ = gp.add_point([1.96875, 1.00390625], 1.00390625, WhenFull::DropOldest);
+    let _ = gp.add_point([1.00390625, 1.00390625], 1.00390625, WhenFull::Refuse);
+    let _ = gp.add_point([1.01171875, 1.00390625], 1.00390625, WhenFull::DropOldest);
+    let _ = gp.add_point(
+        [0.00390625, 1.358408876914e-312],
+        42.59765625,
+        WhenFull::Refuse,
+    );
+    let _ = gp.add_point(
+        [1.0, 2.68156414328591e154],
+        3.542178508925456e-79,
+        WhenFull::DropOldest,
+    );
+    let _ = gp.add_point([-73.0, -73.0], -105.0, WhenFull::DropOldest);
+    let _ = gp.add_point([-73.0, -73.0], -74.29296875, WhenFull::DropOldest);
+    let bounds = HyperparameterBounds {
+        signal_variance: (1.00390625, 3.4e38),
+        length_scales: [(3.4e38, 3.4e38), (3.4e38, 3.4e38)],
+        noise_variance: (1.2e-38, 63.0),
+    };
+    let options = SearchOptions {
+        max_evaluations: 20,
+        restarts: 1,
+        isotropic: true,
+    };
+    let before = *gp.hyperparameters();
+    match gp.optimize_hyperparameters(&bounds, &options, &mut rng) {
+        Ok(v) => assert!(v.is_finite(), "{v}"),
+        Err(e) => assert_eq!(gp.hyperparameters(), &before, "after {e:?}"),
+    }
+}

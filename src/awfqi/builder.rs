@@ -462,7 +462,7 @@ fn check_transition_posteriors<T: Real, const D: usize>(
 }
 
 /// `Err(CapacityExceeded { capacity: have })` when `have < need`.
-fn short(have: usize, need: usize) -> Result<()> {
+pub(crate) fn short(have: usize, need: usize) -> Result<()> {
     if have < need {
         Err(Error::CapacityExceeded { capacity: have })
     } else {

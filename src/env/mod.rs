@@ -82,6 +82,26 @@ pub trait GenerativeModel<T: Real> {
     ) -> Result<Transition<Self::State, T>>;
 }
 
+/// A model lent by reference is a model: the kernel can borrow a plant that lives in a
+/// `static` or is shared with the rest of the firmware, instead of holding a copy of it
+/// (for Puddle World's 200-byte model, 200 bytes less in every frame that holds the kernel).
+impl<T: Real, G: GenerativeModel<T> + ?Sized> GenerativeModel<T> for &G {
+    type State = G::State;
+
+    fn num_actions(&self) -> usize {
+        (**self).num_actions()
+    }
+
+    fn query<R: Rng + ?Sized>(
+        &self,
+        state: Self::State,
+        action: usize,
+        rng: &mut R,
+    ) -> Result<Transition<Self::State, T>> {
+        (**self).query(state, action, rng)
+    }
+}
+
 /// A fully known finite MDP with Gaussian rewards (spec §10.1).
 ///
 /// States are `0..num_states()`, actions `0..num_actions()`. Rewards are

@@ -125,6 +125,32 @@ pub(crate) fn forward_solve<T: Real>(
     true
 }
 
+/// Solves `Lᵀ x = b` in place for the leading `n` entries (back substitution, O(n²)).
+///
+/// Returns `false` when an entry of the solution is not finite or a buffer is too small.
+pub(crate) fn backward_solve<T: Real>(l: &[T], stride: usize, n: usize, b: &mut [T]) -> bool {
+    for i in (0..n).rev() {
+        let Some(&diag) = l.get(i * stride + i) else {
+            return false;
+        };
+        let mut sum = T::ZERO;
+        for j in i + 1..n {
+            let (Some(&lji), Some(&xj)) = (l.get(j * stride + i), b.get(j)) else {
+                return false;
+            };
+            sum += lji * xj;
+        }
+        let Some(entry) = b.get_mut(i) else {
+            return false;
+        };
+        *entry = (*entry - sum) / diag;
+        if !entry.is_finite() {
+            return false;
+        }
+    }
+    true
+}
+
 /// `Σ ln L[i][i]` over `i < n`: half the log-determinant of `L Lᵀ`.
 pub(crate) fn half_log_det<T: Real>(l: &[T], stride: usize, n: usize) -> T {
     let mut sum = T::ZERO;

@@ -585,6 +585,27 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         })
     }
 
+    /// The mean weights `α = K⁻¹y` of the data held into `out[..len]` (`K` with noise and
+    /// jitter), so that the posterior mean is `Σᵢ k(x, xᵢ) αᵢ`: all a copy of the GP that
+    /// only predicts means needs besides its inputs and hyperparameters
+    /// (`crate::adaptive::MeanFunction`). Returns `len`; O(n²).
+    ///
+    /// Errors: `out` shorter than the points held ([`Error::CapacityExceeded`] with its
+    /// length); [`Error::NotPositiveDefinite`] when the back substitution is not finite.
+    pub fn mean_weights(&self, out: &mut [T]) -> Result<usize> {
+        let n = self.len;
+        let capacity = out.len();
+        let (Some(alpha), Some(z)) = (out.get_mut(..n), self.whitened.get(..n)) else {
+            return Err(Error::CapacityExceeded { capacity });
+        };
+        alpha.copy_from_slice(z);
+        if cholesky::backward_solve(self.factor.as_flattened(), N, n, alpha) {
+            Ok(n)
+        } else {
+            Err(Error::NotPositiveDefinite)
+        }
+    }
+
     /// The log marginal likelihood `−½ yᵀK⁻¹y − Σ ln L_ii − (n/2) ln 2π` of the data held,
     /// with `K` including noise and jitter; O(n). It is `−∞` when `yᵀK⁻¹y` overflows `T`.
     ///
@@ -610,16 +631,22 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// stack in `f64`. Each evaluation factorises in place, so the factor is rebuilt at the
     /// end. Failed factorisations count as `−∞`. The evaluations may use the whole jitter
     /// ladder (the search explores, and its path does not depend on the policy); the optimum
-    /// is then held to the GP's [`Conditioning`]. The generator is used only for the
-    /// restarts: one `u64` per searched parameter per restart.
+    /// is then held to the GP's [`Conditioning`]. An escalated jitter turns the model into
+    /// one with more noise, so the likelihood of such a point rates that other model, not the
+    /// hyperparameters found (in `f32` a long-length-scale, large-signal corner can look best
+    /// this way while its exact likelihood is far worse). When the optimum is beyond the
+    /// policy, the GP therefore takes the best evaluated point whose factor the policy
+    /// trusts (no jitter beyond its bound, condition within its limit); only when there is
+    /// none does the search fail. The generator is used only for the restarts: one `u64` per
+    /// searched parameter per restart.
     ///
     /// Errors: those of [`HyperparameterBounds::validate`] and [`SearchOptions::validate`];
     /// [`Error::CapacityExceeded`] for an ARD search (`isotropic == false`) with
     /// `D + 2 >` [`MAX_SEARCH_PARAMETERS`](super::MAX_SEARCH_PARAMETERS);
     /// [`Error::EmptyData`] without data; [`Error::NotPositiveDefinite`] when no evaluated
     /// point could be factorised; [`Error::JitterLimit`] or [`Error::IllConditioned`] when
-    /// the optimum is beyond the conditioning policy. On error the previous hyperparameters
-    /// are kept.
+    /// the optimum is beyond the conditioning policy and no evaluated point is within it.
+    /// On error the previous hyperparameters are kept.
     pub fn optimize_hyperparameters<R: Rng + ?Sized>(
         &mut self,
         bounds: &HyperparameterBounds<T, D>,
@@ -651,20 +678,49 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
             row: 0,
             solve: 0,
         };
+        // The best evaluated point whose factor the GP's own policy trusts (jitter within its
+        // bound, condition estimate within its limit): the fallback when the optimum is not.
+        let strict = self.conditioning;
+        let limit = strict.max_condition();
+        let mut trusted: Option<(search::Theta<T>, T)> = None;
         let mut objective = |theta: &search::Theta<T>| -> T {
             let hyper = space.hyperparameters::<D>(theta);
-            match factorize(&hyper, policy, xs, ys, factor, N, whitened, fresh) {
-                Ok(_) => log_marginal_likelihood(factor, N, whitened, n),
-                Err(_) => T::NEG_INFINITY,
+            let Ok(level) = factorize(&hyper, policy, xs, ys, factor, N, whitened, fresh) else {
+                return T::NEG_INFINITY;
+            };
+            let lml = log_marginal_likelihood(factor, N, whitened, n);
+            let jitter_ok = level == 0
+                || jitter_at(level, hyper.signal_variance, policy)
+                    <= strict.allowed_jitter(hyper.noise_variance);
+            // Only a finite likelihood is a fallback: the first trusted point may rate −∞
+            // (in f32 a data fit that overflows), and a success must return a number.
+            if jitter_ok
+                && lml.is_finite()
+                && conditioning::diagonal_condition(factor, N, n) <= limit
+                && trusted.is_none_or(|(_, best)| lml > best)
+            {
+                trusted = Some((*theta, lml));
             }
+            lml
         };
         let (best, value) = search::maximize(&space, options, rng, &mut objective);
-        let best_hyper = space.hyperparameters::<D>(&best);
         if value.is_finite() {
             // On error `set_hyperparameters` keeps (and refactorises) the previous ones.
-            return match self.set_hyperparameters(best_hyper) {
-                Ok(()) => self.log_marginal_likelihood(),
-                Err(e) => Err(e),
+            let refused = match self.set_hyperparameters(space.hyperparameters::<D>(&best)) {
+                Ok(()) => return self.log_marginal_likelihood(),
+                Err(e) => e,
+            };
+            // The fallback needs the data: when even the previous hyperparameters could not
+            // be refactorised, the roll-back cleared it (the documented last resort), and
+            // setting other hyperparameters on the empty GP would change them on an error.
+            return match (refused, trusted) {
+                (Error::JitterLimit { .. } | Error::IllConditioned { .. }, Some((theta, _)))
+                    if self.len == n =>
+                {
+                    self.set_hyperparameters(space.hyperparameters::<D>(&theta))?;
+                    self.log_marginal_likelihood()
+                }
+                (e, _) => Err(e),
             };
         }
         self.hyper = previous;

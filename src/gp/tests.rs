@@ -934,3 +934,134 @@ fn memory_matches_the_documented_formula() {
         size_of::<Gp<f32, 128, 3>>()
     );
 }
+
+/// The 24 rewards the 32 KiB Puddle World image's target GP held at step 4 of its QEMU seed
+/// (`tests/on_target/src/workloads.rs`): two inputs are queried twice. Rewards are not
+/// centred (about −1 away from the puddle, down to −18 in it), so a zero-mean GP explains
+/// their offset with a large signal variance and long length scales.
+const PUDDLE_TARGET: [([f32; 3], f32); 24] = [
+    ([2.5, 1.25, 0.0], -0.8395412),
+    ([2.5, 1.25, 1.0], -0.88803256),
+    ([5.0, 6.25, 2.0], -11.604224),
+    ([10.0, 0.0, 0.0], -1.2915125),
+    ([7.5, 2.5, 3.0], -2.3602183),
+    ([3.75, 1.25, 1.0], -0.9738195),
+    ([2.5, 2.5, 0.0], -1.921176),
+    ([1.25, 6.25, 2.0], -4.4469852),
+    ([5.0, 0.0, 3.0], -0.9368937),
+    ([2.5, 1.25, 1.0], -1.1880652),
+    ([1.25, 5.0, 3.0], -11.510133),
+    ([1.25, 7.5, 3.0], -17.67365),
+    ([7.5, 0.0, 2.0], -0.93444055),
+    ([10.0, 0.0, 2.0], -0.84650373),
+    ([2.5, 10.0, 0.0], -6.356575),
+    ([1.25, 2.5, 0.0], -5.235218),
+    ([0.0, 8.75, 1.0], -12.405372),
+    ([2.5, 7.5, 3.0], -5.3399196),
+    ([5.0, 2.5, 2.0], -3.5146742),
+    ([0.0, 10.0, 2.0], -12.577213),
+    ([8.75, 1.25, 2.0], -1.0646403),
+    ([10.0, 0.0, 2.0], -0.9213066),
+    ([5.0, 10.0, 0.0], 0.07122979),
+    ([8.75, 3.75, 0.0], -1.1699104),
+];
+
+fn puddle_target_gp(policy: Conditioning<f32>) -> Gp<f32, 24, 3> {
+    let mut gp = Gp::<f32, 24, 3>::empty();
+    gp.set_conditioning(policy).unwrap();
+    let (xs, ys): (Vec<[f32; 3]>, Vec<f32>) = PUDDLE_TARGET.iter().copied().unzip();
+    gp.fit(&xs, &ys).unwrap();
+    gp
+}
+
+#[test]
+fn a_search_whose_optimum_f32_cannot_trust_returns_the_best_trusted_point() {
+    // A box that keeps the signal variance ≥ 1e3, so that the search spends its time where
+    // the image's did (its target-GP search, from its generator, ended at c ≈ 1e5, ℓ ≈ 385).
+    let bounds = HyperparameterBounds {
+        signal_variance: (1e3, 1e5),
+        ..HyperparameterBounds::spec_default()
+    };
+    let options = SearchOptions {
+        max_evaluations: 100,
+        restarts: 2,
+        isotropic: true,
+    };
+    let policy = Conditioning::<f32>::DEFAULT;
+    // Exploring with the whole jitter ladder, the optimum is that corner (c ≈ 9e4, ℓ ≈ 330):
+    // its f32 factor needs a jitter of ≈ 10, a hundred times the noise variance, and the
+    // likelihood the search rated it by is that of the jittered model, not of the
+    // hyperparameters found — exactly, in f64, they are a thousand nats worse.
+    let mut free = puddle_target_gp(Conditioning::UNBOUNDED);
+    let free_lml = free
+        .optimize_hyperparameters(&bounds, &options, &mut rng(6))
+        .unwrap();
+    let h = *free.hyperparameters();
+    assert!(h.signal_variance > 1e4, "{h:?}");
+    assert!(free.jitter() > 100.0 * h.noise_variance);
+    let wide = |h: &Hyperparameters<f32, 3>| {
+        Hyperparameters::isotropic(
+            f64::from(h.signal_variance),
+            f64::from(h.length_scales[0]),
+            f64::from(h.noise_variance),
+        )
+    };
+    let xs64: Vec<[f64; 3]> = PUDDLE_TARGET.iter().map(|p| p.0.map(f64::from)).collect();
+    let ys64: Vec<f64> = PUDDLE_TARGET.iter().map(|p| f64::from(p.1)).collect();
+    let mut exact = Gp::<f64, 24, 3>::new(wide(&h)).unwrap();
+    exact.fit(&xs64, &ys64).unwrap();
+    assert!(exact.condition_estimate() > 1e-2 / f64::from(f32::EPSILON));
+    assert!(exact.log_marginal_likelihood().unwrap() < f64::from(free_lml) - 1000.0);
+    // Merging the two duplicated inputs would not help: the 22 distinct inputs need the
+    // same jitter at these hyperparameters.
+    let mut distinct = Gp::<f32, 24, 3>::new(h).unwrap();
+    distinct.set_conditioning(Conditioning::UNBOUNDED).unwrap();
+    let mut seen: Vec<[f32; 3]> = Vec::new();
+    let mut ys = Vec::new();
+    for &(x, y) in &PUDDLE_TARGET {
+        if !seen.contains(&x) {
+            seen.push(x);
+            ys.push(y);
+        }
+    }
+    distinct.fit(&seen, &ys).unwrap();
+    assert_eq!((seen.len(), distinct.jitter()), (22, free.jitter()));
+
+    // Under the default policy the same search (same generator, same path) settles on the
+    // best point it evaluated whose factor the policy trusts, instead of refusing.
+    let mut held = puddle_target_gp(policy);
+    let lml = held
+        .optimize_hyperparameters(&bounds, &options, &mut rng(6))
+        .unwrap();
+    let t = *held.hyperparameters();
+    assert!(bounds.contains(&t) && t != h, "{t:?}");
+    assert!(held.jitter() <= policy.allowed_jitter(t.noise_variance));
+    assert!(held.condition_estimate() <= policy.max_condition());
+    assert!(lml <= free_lml && lml.is_finite());
+    assert_eq!(Ok(lml), held.log_marginal_likelihood());
+    // A trusted factor answers as f64 does at the same hyperparameters (the f32 row of
+    // tests/gp_differential.rs's tolerance table: 1e-2 of the data scale, here ≈ 18).
+    let mut reference = Gp::<f64, 24, 3>::new(wide(&t)).unwrap();
+    reference.fit(&xs64, &ys64).unwrap();
+    let lml64 = reference.log_marginal_likelihood().unwrap();
+    assert!(close(f64::from(lml), lml64, 1e-2), "{lml} vs {lml64}");
+    for (x, _) in PUDDLE_TARGET.iter().step_by(3) {
+        let got = f64::from(held.predict(x).unwrap().mean);
+        let want = reference.predict(&x.map(f64::from)).unwrap().mean;
+        assert!((got - want).abs() <= 0.18, "{got} vs {want}");
+    }
+
+    // With nothing trusted to fall back on (the box pinned at the untrusted corner) the
+    // search still refuses, and the GP keeps its hyperparameters.
+    let pinned = HyperparameterBounds {
+        signal_variance: (h.signal_variance, h.signal_variance),
+        length_scales: [(h.length_scales[0], h.length_scales[0]); 3],
+        noise_variance: (h.noise_variance, h.noise_variance),
+    };
+    let before = held.clone();
+    assert!(matches!(
+        held.optimize_hyperparameters(&pinned, &options, &mut rng(6)),
+        Err(Error::JitterLimit { .. })
+    ));
+    assert_unchanged(&held, &before);
+}

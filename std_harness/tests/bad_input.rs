@@ -1,8 +1,9 @@
 //! Every door of the harness refuses bad input with a clear error — naming the file, the
 //! line and the field, or the option — and a non-zero exit, before any result file is
-//! written: source CSVs (column set, numbers, states inside Puddle World's [0, 10]²,
-//! actions, absorbing flags), GP case JSON, CLI ranges and an output directory that cannot
-//! be written. The binary is run as a user would run it.
+//! written: source CSVs (column set, numbers, states inside the environment's space —
+//! Puddle World's [0, 10]², the Dam's storage ≥ 0 and integer day in 1..=360, Acrobot's
+//! angles and velocity ranges —, actions, absorbing flags), GP case JSON, CLI ranges and an
+//! output directory that cannot be written. The binary is run as a user would run it.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -275,4 +276,168 @@ fn a_malformed_gp_case_file_names_file_line_and_field() {
     }
     let (ok, stderr) = harness(&["gp", "--cases", dir.join("absent.json").to_str().unwrap()]);
     assert!(!ok && stderr.contains("absent.json"), "{stderr}");
+}
+
+/// The IWFQI paper's published Dam and Acrobot source files (gzip copies of
+/// `shared/data/iwfqi-paper-sources/`).
+const IWFQI_PUBLISHED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/iwfqi-sources");
+
+/// Copies of `prefix`'s `count` published source files in `dir`, with line `line` of source
+/// `k` changed by `edit`.
+fn iwfqi_sources_with(
+    dir: &Path,
+    prefix: &str,
+    count: usize,
+    (k, line): (usize, usize),
+    edit: impl Fn(&mut Vec<String>),
+) {
+    use std::io::Read;
+    for j in 1..=count {
+        let name = format!("{prefix}_source_{j}.csv");
+        let gz = std::fs::read(Path::new(IWFQI_PUBLISHED).join(format!("{name}.gz"))).unwrap();
+        let mut text = String::new();
+        flate2::read::GzDecoder::new(&gz[..])
+            .read_to_string(&mut text)
+            .unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        if j == k {
+            let mut cells: Vec<String> = lines[line - 1].split(',').map(str::to_owned).collect();
+            edit(&mut cells);
+            lines[line - 1] = cells.join(",");
+        }
+        std::fs::write(dir.join(&name), lines.join("\n") + "\n").unwrap();
+    }
+}
+
+/// `command` (`dam` or `acrobot`) on the source directory `sources`, into `out`.
+fn transfer_on(command: &str, sources: &Path, out: &Path) -> (bool, String) {
+    harness(&[
+        command,
+        "--sources",
+        sources.to_str().unwrap(),
+        "--algorithms",
+        "fqi",
+        "--steps",
+        "1",
+        "--runs",
+        "1",
+        "--iterations",
+        "1",
+        "--trees",
+        "1",
+        "--quiet",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn dam_sources_outside_the_reservoirs_state_space_are_named() {
+    let dir = scratch("dam");
+    let out = dir.join("out");
+    // Columns: t, storage, day, a, r, next_storage, next_day, absorbing, ….
+    iwfqi_sources_with(&dir, "dam", 6, (4, 5), |c| c[1] = "-3".into());
+    refused(
+        transfer_on("dam", &dir, &out),
+        &["dam_source_4.csv", "line 5", "`storage`", "-3", "[0, inf]"],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "dam", 6, (2, 9), |c| c[2] = "361".into());
+    refused(
+        transfer_on("dam", &dir, &out),
+        &["dam_source_2.csv", "line 9", "`day`", "361", "[1, 360]"],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "dam", 6, (6, 3), |c| c[6] = "12.5".into());
+    refused(
+        transfer_on("dam", &dir, &out),
+        &["dam_source_6.csv", "line 3", "`next_day`", "not an integer"],
+        &out,
+    );
+    // A release that is not one of the eight, a flag other than 0/1, a non-finite reward.
+    iwfqi_sources_with(&dir, "dam", 6, (1, 4), |c| c[3] = "4".into());
+    refused(
+        transfer_on("dam", &dir, &out),
+        &["dam_source_1.csv", "line 4", "`a`", "action 4"],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "dam", 6, (3, 7), |c| c[7] = "0.5".into());
+    refused(
+        transfer_on("dam", &dir, &out),
+        &["dam_source_3.csv", "line 7", "`absorbing`", "not 0 or 1"],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "dam", 6, (5, 8), |c| c[4] = "NaN".into());
+    refused(
+        transfer_on("dam", &dir, &out),
+        &["dam_source_5.csv", "line 8", "`r`", "non-finite"],
+        &out,
+    );
+}
+
+#[test]
+fn acrobot_sources_outside_the_arms_state_space_are_named() {
+    let dir = scratch("acrobot");
+    let out = dir.join("out");
+    // Columns: t, θ₁, θ₂, θ̇₁, θ̇₂, a, r, next θ₁, next θ₂, next θ̇₁, next θ̇₂, absorbing, ….
+    // θ̇₂ = 30 > 9π.
+    iwfqi_sources_with(&dir, "acrobot", 2, (1, 3), |c| c[4] = "30".into());
+    refused(
+        transfer_on("acrobot", &dir, &out),
+        &["acrobot_source_1.csv", "line 3", "`dtheta2`", "30"],
+        &out,
+    );
+    // A next angle beyond π.
+    iwfqi_sources_with(&dir, "acrobot", 2, (2, 6), |c| c[7] = "3.2".into());
+    refused(
+        transfer_on("acrobot", &dir, &out),
+        &["acrobot_source_2.csv", "line 6", "`next_theta1`", "3.2"],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "acrobot", 2, (2, 4), |c| c[5] = "2".into());
+    refused(
+        transfer_on("acrobot", &dir, &out),
+        &["acrobot_source_2.csv", "line 4", "`a`", "action 2"],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "acrobot", 2, (1, 2), |c| c[11] = "-1".into());
+    refused(
+        transfer_on("acrobot", &dir, &out),
+        &[
+            "acrobot_source_1.csv",
+            "line 2",
+            "`absorbing`",
+            "not 0 or 1",
+        ],
+        &out,
+    );
+    iwfqi_sources_with(&dir, "acrobot", 2, (1, 9), |c| c[2] = "inf".into());
+    refused(
+        transfer_on("acrobot", &dir, &out),
+        &["acrobot_source_1.csv", "line 9", "`theta2`", "non-finite"],
+        &out,
+    );
+}
+
+#[test]
+fn the_published_dam_and_acrobot_sources_pass_the_same_checks() {
+    use awfqi_harness::domains::{acrobot, dam};
+    use awfqi_harness::transfer::sources::SourceSet;
+    let dir = scratch("iwfqi-published");
+    // Unchanged copies (line 1 edited by nothing), read through the `--sources DIR` door.
+    iwfqi_sources_with(&dir, "dam", 6, (1, 1), |_| {});
+    iwfqi_sources_with(&dir, "acrobot", 2, (1, 1), |_| {});
+    let dam = SourceSet::<2>::read_layout(&dir, &dam::layout(), 6, 8).unwrap();
+    assert_eq!(dam.total_records(), 6 * 10_800);
+    // The storage exceeds the 500 that forces a release (the space is unbounded above).
+    let max_storage = dam
+        .sources
+        .iter()
+        .flat_map(|s| &s.records)
+        .map(|r| r.next_state[0])
+        .fold(0.0, f64::max);
+    assert!(max_storage > 500.0, "{max_storage}");
+    let acrobot = SourceSet::<4>::read_layout(&dir, &acrobot::layout(), 2, 2).unwrap();
+    assert_eq!(acrobot.total_records(), 3_400 + 5_000);
 }

@@ -110,14 +110,23 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     assert_eq!(summary.lines().count(), 1 + 2 * algorithms.len());
     // IWFQI and the kernel report their weight diagnostics, RBT its compliances.
     let d = base.join("d");
-    run(&args(&d, "1", "iwfqi,awfqi-kernel")).unwrap();
-    for name in ["iwfqi", "awfqi-kernel"] {
+    run(&args(&d, "1", "iwfqi,awfqi-kernel,awfqi-adaptive-kernel")).unwrap();
+    for name in ["iwfqi", "awfqi-kernel", "awfqi-adaptive-kernel"] {
         let json: serde_json::Value =
             serde_json::from_str(&read(&d, &format!("{name}.json"))).unwrap();
         let step = &json["runs"][0]["steps"][1];
         assert!(step["wr_eff"].as_f64().unwrap() > 0.0, "{name}");
         assert!(step["reward_gp"]["noise_variance"].is_number(), "{name}");
     }
+    // The adaptive kernel spends 50 queries per step and names its own approximator.
+    let adaptive: serde_json::Value =
+        serde_json::from_str(&read(&d, "awfqi-adaptive-kernel.json")).unwrap();
+    let steps = &adaptive["runs"][0]["steps"];
+    assert_eq!(steps[0]["n_target_samples"].as_f64(), Some(50.0));
+    assert_eq!(steps[1]["n_target_samples"].as_f64(), Some(100.0));
+    let kernel = &adaptive["runs"][0]["parameters"]["kernel"];
+    assert_eq!(kernel["fqi_tiles"], serde_json::json!([12, 12]), "{kernel}");
+    assert_eq!(kernel["fqi_tilings"], serde_json::json!(8));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
         .as_array()

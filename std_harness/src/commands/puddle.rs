@@ -6,6 +6,7 @@
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::puddle;
+use crate::transfer::algorithms::adaptive_kernel;
 use crate::transfer::algorithms::awfqi_kernel::{self, KernelConfig, KernelSetup};
 use crate::transfer::sources::SourceSet;
 
@@ -36,6 +37,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let hooks = KernelHooks {
         setup: kernel_setup,
         learner: awfqi_kernel::with_learner,
+        adaptive_learner: adaptive_kernel::with_learner,
     };
     super::transfer::run(&config, domain, Some(dynamics), Some(hooks))
 }

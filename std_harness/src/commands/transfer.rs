@@ -177,7 +177,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "tiles")]
     pub kernel_q: KernelQ,
     /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
-    /// the table, 6 for tiles.
+    /// the table, 6 for tiles; awfqi-adaptive-kernel has its own default, 12 × 8 tiles,
+    /// which an explicit resolution replaces (with `--kernel-q` and `--kernel-tilings`).
     #[arg(long)]
     pub kernel_resolution: Option<usize>,
     /// Offset tilings of `--kernel-q tiles`.
@@ -285,6 +286,8 @@ pub struct KernelHooks<const D: usize> {
     pub setup: fn(&SourceSet<D>, KernelConfig, &mut ChaCha8Rng) -> anyhow::Result<KernelSetup>,
     /// Hands one run's learner to the protocol.
     pub learner: ScopedLearner<D>,
+    /// Hands one run's adaptive-kernel learner to the protocol.
+    pub adaptive_learner: ScopedLearner<D>,
 }
 
 /// The options resolved against the domain's defaults.
@@ -349,7 +352,12 @@ impl Config {
                 .into_iter()
                 .filter(|&a| {
                     kernel_available
-                        || !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptive)
+                        || !matches!(
+                            a,
+                            Algorithm::AwfqiKernel
+                                | Algorithm::AwfqiAdaptive
+                                | Algorithm::AwfqiAdaptiveKernel
+                        )
                 })
                 .collect()
         } else {
@@ -357,10 +365,13 @@ impl Config {
         };
         algorithms.sort();
         algorithms.dedup();
-        if algorithms.contains(&Algorithm::AwfqiKernel) && !kernel_available {
-            bail!(
-                "awfqi-kernel runs on Puddle World only until the core's kernel path is generic over the state dimension"
-            );
+        for kernel in [Algorithm::AwfqiKernel, Algorithm::AwfqiAdaptiveKernel] {
+            if algorithms.contains(&kernel) && !kernel_available {
+                bail!(
+                    "{} runs on Puddle World only until the harness's kernel path is generic over the state dimension",
+                    kernel.name()
+                );
+            }
         }
         let config = Self {
             args: args.clone(),
@@ -560,16 +571,20 @@ pub fn build_experiment<const D: usize>(
         }
         _ => None,
     };
-    let kernel = match (wants(Algorithm::AwfqiKernel), hooks) {
+    let wants_kernel = wants(Algorithm::AwfqiKernel) || wants(Algorithm::AwfqiAdaptiveKernel);
+    let kernel = match (wants_kernel, hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            let kernel = KernelConfig::new(config.setting, config.spacing).with_q(
-                KernelQFunction::from_args(
-                    args.kernel_q,
-                    args.kernel_resolution,
-                    args.kernel_tilings,
-                )?,
-            );
+            let q = KernelQFunction::from_args(
+                args.kernel_q,
+                args.kernel_resolution,
+                args.kernel_tilings,
+            )?;
+            let mut kernel = KernelConfig::new(config.setting, config.spacing).with_q(q);
+            // An explicit resolution sets both kernels' approximators.
+            if args.kernel_resolution.is_some() {
+                kernel = kernel.with_adaptive_q(q);
+            }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }
         _ => None,
@@ -591,6 +606,7 @@ pub fn build_experiment<const D: usize>(
         ideal_weights: None,
         kernel,
         kernel_learner: hooks.map(|h| h.learner),
+        adaptive_kernel_learner: hooks.map(|h| h.adaptive_learner),
         adaptive,
         adaptive_options: args.adaptive(),
     };
@@ -659,7 +675,7 @@ fn cost_rank(a: Algorithm) -> usize {
         Algorithm::Iwfqi | Algorithm::IwfqiHeuristic => 1,
         Algorithm::Sdt | Algorithm::IwfqiIdeal | Algorithm::Rbt => 2,
         Algorithm::Fqi => 3,
-        Algorithm::AwfqiKernel => 4,
+        Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => 4,
     }
 }
 
@@ -821,11 +837,17 @@ fn run_in_pool<const D: usize>(
                 .map(|(a, rows)| (a.name().to_string(), a.color(), rows.clone()))
                 .collect()
         };
-        let std_path = curve(&|a| a != Algorithm::AwfqiKernel);
+        let std_path =
+            curve(&|a| !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel));
         let embedded = curve(&|a| {
             matches!(
                 a,
-                Algorithm::Fqi | Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiKernel
+                Algorithm::Fqi
+                    | Algorithm::Awfqi
+                    | Algorithm::AwfqiOracle
+                    | Algorithm::AwfqiKernel
+                    | Algorithm::AwfqiAdaptive
+                    | Algorithm::AwfqiAdaptiveKernel
             )
         });
         figures::learning_curves(&title, &std_path, &embedded)

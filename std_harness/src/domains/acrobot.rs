@@ -60,7 +60,19 @@ const PUBLISHED: [&[u8]; 2] = [
     include_bytes!("../../data/iwfqi-sources/acrobot_source_2.csv.gz"),
 ];
 
-/// The CSV layout of Acrobot's source files.
+/// Acrobot's state space: angles wrapped into [−π, π], velocities clipped into
+/// [−4π, 4π] and [−9π, 9π] (as [`Acrobot::check_state`]).
+fn state_space() -> [(f64, f64); 4] {
+    use std::f64::consts::PI;
+    [
+        (-PI, PI),
+        (-PI, PI),
+        (-ACROBOT_MAX_VELOCITY_1, ACROBOT_MAX_VELOCITY_1),
+        (-ACROBOT_MAX_VELOCITY_2, ACROBOT_MAX_VELOCITY_2),
+    ]
+}
+
+/// The CSV layout of Acrobot's source files, with its state space.
 pub fn layout() -> SourceLayout {
     SourceLayout::iwfqi(
         "acrobot",
@@ -68,6 +80,7 @@ pub fn layout() -> SourceLayout {
         4,
         None,
     )
+    .with_state_space(&state_space(), &[])
 }
 
 fn published() -> anyhow::Result<SourceSet<4>> {
@@ -108,17 +121,11 @@ fn grid_rows(spacing: f64) -> anyhow::Result<Vec<([f64; 4], usize)>> {
 
 /// The Acrobot domain with the published configuration.
 pub fn domain() -> Domain<4> {
-    use std::f64::consts::PI;
     Domain {
         name: "acrobot",
         command: "acrobot",
         state_names: ["theta1", "theta2", "dtheta1", "dtheta2"],
-        state_bounds: [
-            (-PI, PI),
-            (-PI, PI),
-            (-ACROBOT_MAX_VELOCITY_1, ACROBOT_MAX_VELOCITY_1),
-            (-ACROBOT_MAX_VELOCITY_2, ACROBOT_MAX_VELOCITY_2),
-        ],
+        state_bounds: state_space(),
         target: Arc::new(Acrobot::<f64>::target()),
         sources: Acrobot::<f64>::sources()
             .into_iter()
@@ -176,7 +183,7 @@ pub fn domain() -> Domain<4> {
             },
         },
         grid_rows,
-        grid_spacing: PI / 6.0,
+        grid_spacing: std::f64::consts::PI / 6.0,
     }
 }
 

@@ -90,9 +90,13 @@ pub(super) fn gunzip(files: &[&[u8]]) -> anyhow::Result<Vec<String>> {
         .collect()
 }
 
-/// The CSV layout of the Dam's source files (`a` holds the release).
+/// The CSV layout of the Dam's source files (`a` holds the release), with the Dam's state
+/// space: a storage ≥ 0 and an integer day in 1..=360 (as [`Dam::check_state`]). The storage
+/// has no upper bound: 500 only forces a release of at least `s − 500`, and the inflow can
+/// still push the next storage above it (the published files reach 532.7).
 pub fn layout() -> SourceLayout {
     SourceLayout::iwfqi("dam", &["storage", "day"], 1, Some(DAM_RELEASES.to_vec()))
+        .with_state_space(&[(0.0, f64::INFINITY), (1.0, DAM_DAYS as f64)], &[1])
 }
 
 fn published() -> anyhow::Result<SourceSet<2>> {

@@ -84,8 +84,9 @@ fn clipped(mut panel: Panel, lo: f64, hi: Option<f64>, from: f64) -> Panel {
 
 /// Learning curves: the faithful std algorithms with the main panel clipped at
 /// [`CLIP_BELOW`] (clipped means marked) and a zoom on the asymptote (the second half of
-/// the steps, as the thesis's figures do); FQI, AWFQI, AWFQI_oracle and the kernel's
-/// embedded AWFQI in a last panel (omitted without the kernel).
+/// the steps, as the thesis's figures do); FQI, AWFQI, AWFQI_oracle, awfqi-adaptive and
+/// the core's embedded versions of AWFQI and of awfqi-adaptive in a last panel (omitted
+/// without either kernel).
 pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Figure {
     let full = curve_panel(title.to_string(), std_path);
     let min = std_path
@@ -115,8 +116,11 @@ pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Fig
         zoom.title = "zoom: the second half of the steps".into();
         panels.push(zoom);
     }
-    if embedded.iter().any(|(name, ..)| name == "awfqi-kernel") {
-        let panel = curve_panel("embedded kernel path vs std AWFQI".into(), embedded);
+    if embedded
+        .iter()
+        .any(|(name, ..)| name == "awfqi-kernel" || name == "awfqi-adaptive-kernel")
+    {
+        let panel = curve_panel("embedded kernel paths vs std AWFQI".into(), embedded);
         let min = embedded
             .iter()
             .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))

@@ -55,9 +55,12 @@ pub struct SourceLayout {
     /// `Some(values)` when the `a` column holds the action's value (`values[a]`) rather
     /// than its index.
     pub action_values: Option<Vec<f64>>,
-    /// The environment's state space, `[low, high]` per coordinate, when it is a box: every
-    /// state and next state of a record must lie inside it (`None`: not checked).
+    /// The environment's state space, `[low, high]` per coordinate (a bound may be infinite,
+    /// as the Dam's storage is above): every state and next state of a record must lie
+    /// inside it (`None`: not checked).
     pub state_bounds: Option<Vec<(f64, f64)>>,
+    /// State coordinates whose values are integers only (the Dam's day).
+    pub integer_coordinates: Vec<usize>,
 }
 
 impl SourceLayout {
@@ -73,6 +76,7 @@ impl SourceLayout {
             posterior_dims: 2,
             action_values: None,
             state_bounds: Some(vec![(0.0, 10.0); 2]),
+            integer_coordinates: Vec::new(),
         }
     }
 
@@ -100,7 +104,16 @@ impl SourceLayout {
             posterior_dims,
             action_values,
             state_bounds: None,
+            integer_coordinates: Vec::new(),
         }
+    }
+
+    /// The layout with the environment's state space checked on every state and next
+    /// state: `bounds` per coordinate, `integer` the coordinates that take integers only.
+    pub fn with_state_space(mut self, bounds: &[(f64, f64)], integer: &[usize]) -> Self {
+        self.state_bounds = Some(bounds.to_vec());
+        self.integer_coordinates = integer.to_vec();
+        self
     }
 
     /// File name of source `k` (1-based).
@@ -171,7 +184,7 @@ impl<const D: usize> SourceDataset<D> {
     /// Errors, each naming the line and the field: a missing or different header (the
     /// column set), a row with another number of columns, a value that is not a finite
     /// number, a time index that is not a non-negative integer, a state or next state outside
-    /// the layout's state space, an action that is not one of the domain's, an absorbing flag
+    /// the layout's state space (or not an integer in an integer coordinate), an action that is not one of the domain's, an absorbing flag
     /// other than 0 or 1, a std below −[`NEGATIVE_STD_TOLERANCE`] (one within it is read as
     /// its absolute value).
     pub fn from_csv(text: &str, layout: &SourceLayout, num_actions: usize) -> anyhow::Result<Self> {
@@ -240,6 +253,18 @@ impl<const D: usize> SourceDataset<D> {
                                 v[k]
                             );
                         }
+                    }
+                }
+            }
+            for &d in layout.integer_coordinates.iter().filter(|&&d| d < D) {
+                for k in [1 + d, D + 3 + d] {
+                    if v[k].fract() != 0.0 {
+                        bail!(
+                            "line {row}, field `{}`: {} is not an integer (the state space \
+                             holds whole values only in this coordinate)",
+                            field(k),
+                            v[k]
+                        );
                     }
                 }
             }

@@ -48,10 +48,11 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 }
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::{AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, MeanFunction, SourceData, Tilings};
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Conditioning, EmptyCells, EpsilonGreedyPolicy,
-    Evaluation, FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans,
-    SourceModel, StepReport, Transition, evaluate_greedy,
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
+    FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
+    StepReport, Transition, evaluate_greedy,
 };
 
 /// A transition record in `f32`.
@@ -139,6 +140,8 @@ pub fn awfqi_puddle<
         kernel,
     } = storage;
     let worlds = PuddleWorld::<f32>::sources(Dynamics::Shared);
+    // The plant lent to the kernel, not moved into it (see `awfqi_puddle_32k`).
+    let target = PuddleWorld::target(Dynamics::Shared);
     let mut config = AwfqiConfig::thesis(run.budget);
     config.gp_training.search.max_evaluations = run.search.0;
     config.gp_training.search.restarts = run.search.1;
@@ -175,13 +178,12 @@ pub fn awfqi_puddle<
     )
     .fit_posteriors(posteriors.get_mut(..total).unwrap_or(&mut []))
     .scores_from(&worlds, scores)?
-    .build(PuddleWorld::target(Dynamics::Shared), kernel, &mut rng)?;
+    .build(&target, kernel, &mut rng)?;
     let mut report = None;
     for _ in 0..run.steps {
         report = Some(kernel.step(&mut rng)?);
     }
-    let target = kernel.target();
-    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    let evaluation = evaluate_greedy(&target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
     inspect(kernel.target_samples());
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
@@ -204,30 +206,24 @@ pub fn awfqi_puddle_32k(
 ) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
     use crate::puddle_tables as t;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let target = PuddleWorld::target(Dynamics::Shared);
     let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
     let rows = RowSet::grid(PuddleWorld::score_grid(1.25)?, PUDDLE_ACTIONS)?;
-    // On seed 1 the default conditioning policy refuses a 24-point f32 target-GP fit
-    // (JitterLimit, measured under QEMU, even with the bound lifted to 100 × the noise
-    // variance): repeated queries of one pair make the factor need a large jitter. This
-    // image keeps the jitter ladder unbounded, as the core did before the policy existed,
-    // until the recommended configuration gets a policy that holds (an open item).
-    let mut config = AwfqiConfig::thesis(50);
-    config.gp_training.conditioning = Conditioning::UNBOUNDED;
     let mut kernel = Awfqi::builder(
-        config.validate()?,
+        AwfqiConfig::thesis(50).validate()?,
         CellGrid::cube(0.0, 10.0, 11)?,
         &sources,
         rows,
     )
     .stored_posteriors(&t::SOURCE_POSTERIORS)
     .stored_scores(&t::SCORES)
-    .build(PuddleWorld::target(Dynamics::Shared), storage, &mut rng)?;
+    // The plant lent, not moved: the kernel holds a reference instead of its 200 bytes.
+    .build(&target, storage, &mut rng)?;
     let mut report = None;
     for _ in 0..6 {
         report = Some(kernel.step(&mut rng)?);
     }
-    let target = kernel.target();
-    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    let evaluation = evaluate_greedy(&target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
@@ -462,3 +458,132 @@ pub fn grid_identification(
         initial_action: policy.first().copied().unwrap_or(0),
     })
 }
+
+/// The sources' reward mean functions and the adaptive kernel's [`AdaptiveStorage`]: a
+/// target GP of `N` points, `Q` target records (steps × budget), one weight per published
+/// source record (1033), `C` candidate slots, `E` FQI entries, room for `B` verified
+/// states (the budget), 3 source beliefs.
+pub struct AdaptiveMemory<
+    const N: usize,
+    const Q: usize,
+    const C: usize,
+    const E: usize,
+    const B: usize,
+> {
+    /// Each published source's reward-GP posterior mean, fitted on the device.
+    pub means: [MeanFunction<f32, N, 3>; 3],
+    /// The kernel's memory.
+    pub kernel: AdaptiveStorage<f32, 2, 3, N, Q, 1033, C, E, B, 3>,
+}
+
+impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: usize>
+    AdaptiveMemory<N, Q, C, E, B>
+{
+    /// All-zero memory, for a `static` in `.bss`.
+    pub const fn new() -> Self {
+        Self {
+            means: [
+                MeanFunction::EMPTY,
+                MeanFunction::EMPTY,
+                MeanFunction::EMPTY,
+            ],
+            kernel: AdaptiveStorage::new(),
+        }
+    }
+}
+
+/// What a run of [`adaptive_puddle`] changes from the recommended configuration.
+#[derive(Clone, Copy)]
+pub struct AdaptiveRun {
+    /// Queries per step.
+    pub budget: usize,
+    /// Steps (`Q` must hold `steps · budget`).
+    pub steps: usize,
+    /// Candidate rows per sub-batch (`C` must hold them).
+    pub candidates: usize,
+    /// Tiles per axis and tilings of the FQI approximator (`E` must hold its entries).
+    pub tiles: (usize, usize),
+    /// Likelihood evaluations and restarts of each GP search (`None`: the thesis's).
+    pub search: Option<(usize, usize)>,
+}
+
+/// Adaptive AWFQI on Puddle World on the device: the published source records and their
+/// posteriors from flash ([`crate::puddle_tables`]), one reward GP per source fitted in the
+/// kernel's GP and kept as a mean function, the candidate rows of the spacing-0.1 puddle
+/// grid (arithmetic, no memory), `steps` steps of the shared-dynamics target and the greedy
+/// policy's evaluation. `inspect` sees the kernel after the last step.
+pub fn adaptive_puddle<
+    const N: usize,
+    const Q: usize,
+    const C: usize,
+    const E: usize,
+    const B: usize,
+>(
+    memory: &mut AdaptiveMemory<N, Q, C, E, B>,
+    run: AdaptiveRun,
+    seed: u64,
+    inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
+) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
+    use crate::puddle_tables as t;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let AdaptiveMemory { means, kernel } = memory;
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let mut config = AdaptiveConfig::recommended(
+        run.budget,
+        target.initial_state(),
+        50,
+        0.3,
+        [(0.0, 10.0); 2],
+    );
+    config.candidates = run.candidates;
+    if let Some((evaluations, restarts)) = run.search {
+        config.awfqi.gp_training.search.max_evaluations = evaluations;
+        config.awfqi.gp_training.search.restarts = restarts;
+    }
+    let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
+    let buffers = kernel.buffers();
+    for (mean, source) in means.iter_mut().zip(&sources) {
+        mean.fit_rewards(
+            &mut *buffers.gp,
+            source,
+            &config.awfqi.gp_training,
+            config.awfqi.subset,
+            &mut rng,
+        )?;
+    }
+    let rows = RowSet::grid(PuddleWorld::score_grid(0.1)?, PUDDLE_ACTIONS)?;
+    let mut kernel = AdaptiveAwfqi::new(
+        config.validate()?,
+        Tilings::cube(0.0, 10.0, run.tiles.0, run.tiles.1)?,
+        SourceData::new(&sources, &t::SOURCE_POSTERIORS)?,
+        &*means,
+        rows,
+        target,
+        buffers,
+    )?;
+    let mut report = None;
+    for _ in 0..run.steps {
+        report = Some(kernel.step(&mut rng)?);
+    }
+    let target = kernel.target();
+    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    inspect(&kernel);
+    Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
+}
+
+/// The recommended Puddle World configuration of adaptive AWFQI (the one the harness
+/// measures as `awfqi-adaptive-kernel`): the sources' 64-point mean functions and the
+/// kernel's memory — a 64-point target GP, 6 steps × 50 target records, one weight per
+/// published source record, 4 000 candidate slots (and their alias table), 12 × 12 tiles
+/// × 8 tilings of FQI entries (13² · 8 · 4 = 5 408), 50 verified states, 3 beliefs.
+pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 5408, 50>;
+
+/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 12 × 8
+/// tiles, the thesis's GP search.
+pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
+    budget: 50,
+    steps: 6,
+    candidates: 4000,
+    tiles: (12, 8),
+    search: None,
+};

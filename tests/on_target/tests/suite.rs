@@ -587,6 +587,52 @@ mod tests {
         assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
     }
 
+    /// Adaptive AWFQI on the target (f32) over the published sources in flash, small: a
+    /// 16-point GP, 60 candidates, 6 × 6 tiles × 2 tilings, 2 steps of 12 queries, short
+    /// searches. Checks the run's sizes, the verification rollouts (each sub-batch of 4
+    /// starts with 3 verified queries from (0, 0)), the beliefs (a distribution) and that
+    /// every output is finite and in range.
+    #[test]
+    fn adaptive_awfqi_on_the_published_sources() {
+        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveRun, adaptive_puddle};
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
+        // SAFETY: the only reference.
+        let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+        let run = AdaptiveRun {
+            budget: 12,
+            steps: 2,
+            candidates: 60,
+            tiles: (6, 2),
+            search: Some((40, 1)),
+        };
+        let mut checked = false;
+        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+            let d0 = kernel.target_samples();
+            let starts = d0.chunks(4).all(|b| b[0].state == [0.0, 0.0]);
+            let finite = d0.iter().all(|t| {
+                t.reward.is_finite() && t.action < 4 && t.state.iter().all(|x| x.is_finite())
+            });
+            let total: f32 = kernel.beliefs().iter().map(|b| b.plausibility).sum();
+            let weights = kernel
+                .reward_weights()
+                .iter()
+                .all(|w| w.is_finite() && *w >= 0.0 && *w <= 1000.0);
+            checked = d0.len() == 24
+                && starts
+                && finite
+                && (total - 1.0).abs() < 1e-5
+                && weights
+                && kernel.path().len() == 9;
+        })
+        .unwrap();
+        assert!(checked);
+        assert!(report.step == 2 && report.n_target_samples == 24);
+        assert!(report.n_source_samples == 1033 && report.gp_points == 16);
+        assert!(report.wr_eff > 0.0 && report.wr_eff <= 1057.0 * 1.0001);
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
+    }
+
     /// The 4-D loop on the target: the greedy policy is the closed-form optimum in more
     /// than half of the cells where that is known (110 of 132 measured).
     #[test]

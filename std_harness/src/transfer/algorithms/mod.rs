@@ -2,6 +2,7 @@
 //! context they share ([`Experiment`]).
 
 pub mod adaptive;
+pub mod adaptive_kernel;
 pub mod awfqi_kernel;
 pub mod episodic;
 pub mod iwfqi;
@@ -45,11 +46,14 @@ pub enum Algorithm {
     /// AWFQI with a query distribution recomputed from the target's answers within every
     /// step (issue 11; not a thesis algorithm).
     AwfqiAdaptive,
+    /// The core's adaptive AWFQI (`awfqi::AdaptiveAwfqi`, f32, fixed memory) on the same
+    /// protocol as `awfqi-adaptive`.
+    AwfqiAdaptiveKernel,
 }
 
 impl Algorithm {
     /// Every algorithm.
-    pub const ALL: [Algorithm; 10] = [
+    pub const ALL: [Algorithm; 11] = [
         Algorithm::Fqi,
         Algorithm::Iwfqi,
         Algorithm::IwfqiHeuristic,
@@ -60,6 +64,7 @@ impl Algorithm {
         Algorithm::AwfqiOracle,
         Algorithm::AwfqiKernel,
         Algorithm::AwfqiAdaptive,
+        Algorithm::AwfqiAdaptiveKernel,
     ];
 
     /// The name used in file names, tables and on the command line.
@@ -75,6 +80,7 @@ impl Algorithm {
             Algorithm::AwfqiOracle => "awfqi-oracle",
             Algorithm::AwfqiKernel => "awfqi-kernel",
             Algorithm::AwfqiAdaptive => "awfqi-adaptive",
+            Algorithm::AwfqiAdaptiveKernel => "awfqi-adaptive-kernel",
         }
     }
 
@@ -91,6 +97,7 @@ impl Algorithm {
             Algorithm::AwfqiOracle => 8,
             Algorithm::AwfqiKernel => 9,
             Algorithm::AwfqiAdaptive => 10,
+            Algorithm::AwfqiAdaptiveKernel => 11,
         }
     }
 
@@ -102,6 +109,7 @@ impl Algorithm {
                 | Algorithm::AwfqiOracle
                 | Algorithm::AwfqiKernel
                 | Algorithm::AwfqiAdaptive
+                | Algorithm::AwfqiAdaptiveKernel
         )
     }
 
@@ -111,11 +119,11 @@ impl Algorithm {
     }
 
     /// The default set of the command: every algorithm but the heuristic-estimator IWFQI
-    /// (a variant of the shared-dynamics reference runs only, §13.1). `awfqi-kernel` and
-    /// `awfqi-adaptive` are in Puddle World's default set only (the kernel runs nowhere
-    /// else yet; the adaptive algorithm's re-planning multiplies the Dam's and Acrobot's
+    /// (a variant of the shared-dynamics reference runs only, §13.1). `awfqi-kernel`,
+    /// `awfqi-adaptive` and `awfqi-adaptive-kernel` are in Puddle World's default set only
+    /// (the kernels run nowhere else yet; the adaptive algorithm's re-planning multiplies the Dam's and Acrobot's
     /// large FQI fits, so there it is asked for by name).
-    pub const DEFAULT: [Algorithm; 9] = [
+    pub const DEFAULT: [Algorithm; 10] = [
         Algorithm::Fqi,
         Algorithm::Iwfqi,
         Algorithm::IwfqiIdeal,
@@ -125,17 +133,19 @@ impl Algorithm {
         Algorithm::AwfqiOracle,
         Algorithm::AwfqiKernel,
         Algorithm::AwfqiAdaptive,
+        Algorithm::AwfqiAdaptiveKernel,
     ];
 
     /// Colour index in the plot palette (9 colours; the yellow one is left for the source
     /// states of the scatter plots, the crimson one is awfqi-adaptive's). The kernel shares the blue of IWFQI: the learning
     /// curves draw it in a separate panel, next to AWFQI, where IWFQI is absent; the
-    /// heuristic IWFQI shares it too (not in the default set).
+    /// heuristic IWFQI shares it too (not in the default set). The adaptive kernel, also in
+    /// that panel only, shares IWFQI-ideal's sky blue (the kernels in blues).
     pub fn color(self) -> usize {
         match self {
             Algorithm::Fqi => 7,
             Algorithm::Iwfqi | Algorithm::IwfqiHeuristic | Algorithm::AwfqiKernel => 0,
-            Algorithm::IwfqiIdeal => 5,
+            Algorithm::IwfqiIdeal | Algorithm::AwfqiAdaptiveKernel => 5,
             Algorithm::Rbt => 4,
             Algorithm::Sdt => 3,
             Algorithm::Awfqi => 1,
@@ -243,6 +253,8 @@ pub struct Experiment<const D: usize = 2> {
     pub kernel: Option<Arc<awfqi_kernel::KernelSetup>>,
     /// The kernel's learner on this domain (`None`: not available).
     pub kernel_learner: Option<ScopedLearner<D>>,
+    /// The adaptive kernel's learner on this domain (`None`: not available).
+    pub adaptive_kernel_learner: Option<ScopedLearner<D>>,
     /// The shared set-up of awfqi-adaptive (its rows and source GPs).
     pub adaptive: Option<Arc<adaptive::AdaptiveSetup<D>>>,
     /// awfqi-adaptive's options.
@@ -347,6 +359,14 @@ impl<const D: usize> Experiment<D> {
                     o["kernel"] = k.parameters();
                 }
             }
+            Algorithm::AwfqiAdaptiveKernel => {
+                if let Some(k) = &self.kernel {
+                    o["kernel"] = k.parameters_with(k.config.adaptive_q);
+                }
+                o["var_rw"] = v_r.into();
+                o["max_weight"] = self.options.max_weight.into();
+                o["adaptive"] = serde_json::to_value(self.adaptive_options).unwrap_or_default();
+            }
             Algorithm::AwfqiAdaptive => {
                 o["var_rw"] = v_r.into();
                 o["max_weight"] = self.options.max_weight.into();
@@ -359,7 +379,7 @@ impl<const D: usize> Experiment<D> {
             let table = match algorithm {
                 Algorithm::AwfqiOracle => self.oracle_table.as_ref().map(|t| (t.mode, "oracle")),
                 Algorithm::Awfqi => self.realistic_table.as_ref().map(|t| (t.mode, "realistic")),
-                Algorithm::AwfqiAdaptive => None,
+                Algorithm::AwfqiAdaptive | Algorithm::AwfqiAdaptiveKernel => None,
                 _ => self
                     .kernel
                     .as_ref()
@@ -395,6 +415,15 @@ impl<const D: usize> Experiment<D> {
             })?;
             return scoped(self, rng, f);
         }
+        if algorithm == Algorithm::AwfqiAdaptiveKernel {
+            let scoped = self.adaptive_kernel_learner.ok_or_else(|| {
+                anyhow::anyhow!(
+                    "awfqi-adaptive-kernel is not available on {}",
+                    self.domain.name
+                )
+            })?;
+            return scoped(self, rng, f);
+        }
         let mut learner = self.learner(algorithm)?;
         f(learner.as_mut(), rng)
     }
@@ -421,7 +450,9 @@ impl<const D: usize> Experiment<D> {
                 Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
             }
             Algorithm::AwfqiAdaptive => Box::new(adaptive::Adaptive::new(self)?),
-            Algorithm::AwfqiKernel => anyhow::bail!("awfqi-kernel runs through with_learner"),
+            Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => {
+                anyhow::bail!("{} runs through with_learner", algorithm.name())
+            }
         })
     }
 }

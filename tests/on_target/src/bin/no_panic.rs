@@ -11,6 +11,7 @@
 
 use core::hint::black_box as opaque;
 
+use awfqi::adaptive;
 use awfqi::alias::AliasTable;
 use awfqi::env::{
     Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
@@ -26,16 +27,17 @@ use awfqi::planning::{
     value_iteration,
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-use awfqi::record_gp::{batch_transform, fit_gp, input, predict_posteriors};
+use awfqi::record_gp::{batch_transform, fit_gp, fit_gp_on, input, predict_posteriors};
 use awfqi::score::{GpSourceModel, PointGrid};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
     effective_sample_size, ideal_weight, predictive_stds,
 };
 use awfqi::{
-    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells,
-    EvaluationProtocol, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy,
-    HyperparameterBounds, Hyperparameters, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
+    Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
+    FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
+    Hyperparameters, MeanFunction, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
     ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
     TabularFqi, TileFqi, Tilings, Transition, WhenFull, evaluate, evaluate_greedy, rollout,
 };
@@ -797,6 +799,135 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         high,
         rng,
     );
+    adaptive::<T, G, D, I>(plant, &records, &posteriors, rows, high, rng);
+}
+
+/// The adaptive kernel: its configuration, mean functions, beliefs, candidate scoring,
+/// `AdaptiveAwfqi` itself (two steps, every accessor, `reset`) and its storage block.
+fn adaptive<T, G, const D: usize, const I: usize>(
+    plant: G,
+    records: &[Transition<[T; D], T>; 12],
+    posteriors: &[Posterior<T>],
+    rows: RowSet<'_, T, D>,
+    high: T,
+    rng: &mut ChaCha8Rng,
+) where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + Copy,
+{
+    let mut config = AdaptiveConfig::<T, D, I>::recommended(
+        index(6),
+        [num(0.5); D],
+        index(5),
+        num(0.3),
+        [(num(0.0), high); D],
+    );
+    config.awfqi.gp_training.search.max_evaluations = index(10);
+    config.awfqi.gp_training.search.restarts = index(1);
+    config.candidates = index(20);
+    config.sub_batches = index(2);
+    config.verify = num(0.5);
+    config.surprise = opaque(true);
+    config.uncertainty = opaque(true);
+    config.decision = opaque(true);
+    let Ok(config) = config.validate() else {
+        return;
+    };
+    keep((config.sub_batches, config.horizon));
+    let (first, rest) = records.split_at(5);
+    let sources: [&[Transition<[T; D], T>]; 2] = [first, rest];
+    let Ok(data) = SourceData::new(&sources, posteriors) else {
+        return;
+    };
+    let mut gp = Gp::<T, 8, I>::empty();
+    let mut means = [MeanFunction::<T, 8, I>::EMPTY, MeanFunction::EMPTY];
+    let training = config.awfqi.gp_training;
+    for (m, s) in means.iter_mut().zip(&sources) {
+        keep(m.fit_rewards(&mut gp, s, &training, SubsetRule::Spread, rng));
+    }
+    keep(means[index(1) % 2].copy_from(&gp));
+    let mut alpha = [T::ZERO; 8];
+    keep(gp.mean_weights(alpha.get_mut(..index(8)).unwrap_or(&mut [])));
+    let z: [T; I] = input(records[index(2) % 12].state, index(1));
+    keep((
+        means[0].mean(&z),
+        means[0].len(),
+        means[0].is_empty(),
+        *means[0].hyperparameters(),
+    ));
+    keep(fit_gp_on(
+        &mut gp,
+        &records[..],
+        |r| Ok(r.reward + num(1.0)),
+        SubsetRule::Spread,
+        &training,
+        rng,
+    ));
+    // The pieces on their own.
+    let mut beliefs = [adaptive::SourceBelief::<T>::EMPTY; 3];
+    adaptive::plausibility::reset(&mut beliefs);
+    beliefs[index(1) % 3].squared_errors = num(2.0);
+    keep(adaptive::plausibility::update(&mut beliefs, num(0.1)));
+    keep(adaptive::plausibility::clipped_error(
+        num::<T>(-1.0),
+        num(-2.0),
+        opaque(true),
+        num(0.1),
+    ));
+    keep(adaptive::plausibility::nearest_ends(
+        &records[..],
+        &records[index(3) % 12].state,
+        index(1),
+        &[(num(0.0), high); D],
+    ));
+    let path = [records[index(4) % 12].state; 2];
+    keep(adaptive::candidates::relevance(
+        &records[index(5) % 12].state,
+        path.get(..index(2)).unwrap_or(&[]),
+        &[(num(0.0), high); D],
+        num(0.1),
+    ));
+    keep(adaptive::candidates::weighted_spread(
+        [Ok((num::<T>(-1.0), num(0.5))), Ok((num(-2.0), num(0.5)))].into_iter(),
+    ));
+    let mut slots = [adaptive::Candidate::<T>::EMPTY; 4];
+    let u = |v: T| v.min(T::ONE);
+    let totals =
+        adaptive::candidates::finish_scores(slots.get_mut(..index(3)).unwrap_or(&mut []), Some(&u));
+    keep(adaptive::candidates::probability(
+        &slots[index(1) % 4],
+        totals,
+        num(0.1),
+        index(3),
+    ));
+    // The kernel.
+    let Ok(grid) = CellGrid::cube(num::<T>(0.0), high, index(3)) else {
+        return;
+    };
+    let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 400, 6, 2>::new();
+    let built = AdaptiveAwfqi::new(config, grid, data, &means, rows, plant, &mut storage);
+    if let Ok(mut kernel) = built {
+        keep(kernel.step(rng));
+        keep(kernel.step(rng));
+        keep((
+            kernel.config().candidates,
+            kernel.steps(),
+            kernel.target_samples().len(),
+            kernel.reward_weights().len(),
+            kernel.beliefs().len(),
+            kernel.path().len(),
+        ));
+        keep((
+            kernel.q().actions(),
+            kernel.gp().len(),
+            kernel.target().num_actions(),
+        ));
+        kernel.reset();
+        keep(kernel.steps());
+    }
+    let mut heap = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 400, 6, 2>::default();
+    let buffers: AdaptiveBuffers<'_, T, D, I, 8> = heap.buffers();
+    keep(buffers.samples.len());
 }
 
 /// The builder in every configuration, `Awfqi` itself (a step, every accessor, `reset`),
@@ -862,7 +993,8 @@ fn kernel<T, G, const D: usize, const I: usize>(
         1 => builder.scores_from(models, &mut computed),
         _ => Ok(builder.realistic_scores(&mut computed)),
     }
-    .and_then(|b| b.build(plant, &mut storage, rng));
+    // The plant lent by reference (`GenerativeModel for &G`), as the 32 KiB image does.
+    .and_then(|b| b.build(&plant, &mut storage, rng));
     if let Ok(mut kernel) = built {
         keep(kernel.step(rng));
         keep((

@@ -1,0 +1,301 @@
+//! Adaptive AWFQI (`AdaptiveAwfqi`) on Puddle World, in f32 and f64: `AdaptiveConfig`
+//! (budget, sub-batches, verification share, floor, candidates, relevance width, start,
+//! horizon, exploration, bounds, switches) and its `validate`; source records and
+//! posteriors from the fuzzer (NaN, ±∞ and huge values included); each source's
+//! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
+//! pairs or source rows); buffers of every size (one short of what is needed too); then
+//! steps and `reset`.
+//!
+//! Invariants: no panic; errors only of the documented kinds; a successful step spends the
+//! whole budget (`D₀` grows by it), reports finite diagnostics, leaves finite weights and
+//! Q-values and beliefs that sum to 1; a failed step leaves the step count as it was.
+#![no_main]
+
+use awfqi::adaptive::{Candidate, SourceBelief};
+use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::record_gp::GpTraining;
+use awfqi::{
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, CellGrid, EmptyCells, Error,
+    FqiConfig, FqiEntry, Gp, MeanFunction, PointGrid, Posterior, Real, RowSet, SourceData,
+    SubsetRule, Tilings, Transition,
+};
+use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
+use libfuzzer_sys::fuzz_target;
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+/// Capacity of the GP and of the mean functions.
+const N: usize = 8;
+
+/// Every kind: a step fits GPs (which can fail to factorise) on fuzzed data.
+const ANY: &[Kind] = &[
+    Kind::Empty,
+    Kind::Capacity,
+    Kind::NonFinite,
+    Kind::OutOfRange,
+    Kind::Invalid,
+    Kind::NotPd,
+    Kind::Conditioning,
+];
+
+fn real<T: Real>(b: &mut Bytes) -> T {
+    T::from_f64(b.num())
+}
+
+/// `needed` or, when the fuzzer says so, one less (an error the constructor must catch) or
+/// a few more.
+fn size(b: &mut Bytes, needed: usize) -> usize {
+    match b.u8() % 8 {
+        0 => needed.saturating_sub(1),
+        1 => needed + 3,
+        _ => needed,
+    }
+}
+
+fn run<T: Real>(b: &mut Bytes) {
+    let dynamics = if b.bool() {
+        Dynamics::PuddleBased
+    } else {
+        Dynamics::Shared
+    };
+    let target = PuddleWorld::<T>::target(dynamics);
+    // A near-valid state (and sometimes anything at all).
+    let state = |b: &mut Bytes| -> [T; 2] {
+        core::array::from_fn(|_| match b.u8() {
+            0xff => real(b),
+            v => T::from_f64(10.0 * f64::from(v) / 254.0),
+        })
+    };
+
+    // Configuration.
+    let start = if b.bool() { state(b) } else { [T::ZERO; 2] };
+    let bounds = if b.u8().is_multiple_of(8) {
+        [(real(b), real(b)), (T::ZERO, T::from_f64(10.0))]
+    } else {
+        [(T::ZERO, T::from_f64(10.0)); 2]
+    };
+    let mut config = AdaptiveConfig::<T, 2, 3>::recommended(
+        b.index(9),
+        start,
+        b.index(12),
+        T::from_f64(f64::from(b.u8()) / 200.0),
+        bounds,
+    );
+    config.awfqi.gp_training = GpTraining {
+        search: awfqi::SearchOptions {
+            max_evaluations: b.index(20),
+            restarts: b.index(2),
+            isotropic: true,
+        },
+        ..GpTraining::published()
+    };
+    if b.bool() {
+        config.awfqi.gp_training.initial.noise_variance = real(b);
+    }
+    config.awfqi.subset = if b.bool() {
+        SubsetRule::Spread
+    } else {
+        SubsetRule::Last
+    };
+    config.sub_batches = b.index(4);
+    config.verify = T::from_f64(f64::from(b.u8()) / 200.0);
+    config.floor = if b.bool() {
+        real(b)
+    } else {
+        T::from_f64(f64::from(b.u8()) / 255.0)
+    };
+    config.candidates = b.index(20);
+    config.relevance_width = if b.u8().is_multiple_of(8) {
+        real(b)
+    } else {
+        T::from_f64(0.1)
+    };
+    config.surprise = b.bool();
+    config.uncertainty = b.bool();
+    config.decision = b.bool();
+    // The published FQI settings (γ = 0.99, capped nearest, minimum weight 0.5) with 1 to 8
+    // iterations instead of their 60: the same loop body, while 60 iterations per replan
+    // took three quarters of the target's time (measured with perf).
+    config.awfqi.fqi = FqiConfig::new(T::from_f64(0.99), 1 + b.index(8), EmptyCells::CappedNearest)
+        .and_then(|c| c.with_min_weight(T::from_f64(0.5)))
+        .expect("the published FQI settings");
+    trace!("{config:?}");
+    let config = match config.validate() {
+        Ok(c) => c,
+        Err(e) => {
+            expect_kind(
+                "AdaptiveConfig::validate",
+                &e,
+                &[Kind::Invalid, Kind::NonFinite, Kind::OutOfRange],
+            );
+            return;
+        }
+    };
+
+    // Sources: records with fuzzed rewards, their posteriors and mean functions.
+    let sources: Vec<Vec<Transition<[T; 2], T>>> = (0..b.index(4))
+        .map(|_| {
+            (0..b.index(7))
+                .map(|_| Transition {
+                    state: state(b),
+                    action: b.index(4),
+                    reward: real(b),
+                    next_state: state(b),
+                    absorbing: b.bool(),
+                })
+                .collect()
+        })
+        .collect();
+    let slices: Vec<&[Transition<[T; 2], T>]> = sources.iter().map(Vec::as_slice).collect();
+    let total: usize = slices.iter().map(|s| s.len()).sum();
+    let posteriors: Vec<Posterior<T>> = (0..size(b, total))
+        .map(|_| Posterior::new(real(b), T::from_f64(f64::from(b.u8()) / 100.0)))
+        .collect();
+    let data = match SourceData::new(&slices, &posteriors) {
+        Ok(d) => d,
+        Err(e) => {
+            expect_kind("SourceData::new", &e, &[Kind::Invalid, Kind::NonFinite]);
+            return;
+        }
+    };
+    let mut gp = Box::new(Gp::<T, N, 3>::empty());
+    let mut rng = ChaCha8Rng::seed_from_u64(u64::from(b.u8()));
+    let mut means = vec![MeanFunction::<T, N, 3>::EMPTY; size(b, slices.len())];
+    for (mean, source) in means.iter_mut().zip(&slices) {
+        if b.bool() {
+            let before = mean.clone();
+            if let Err(e) = mean.fit_rewards(
+                &mut gp,
+                source,
+                &config.awfqi.gp_training,
+                config.awfqi.subset,
+                &mut rng,
+            ) {
+                expect_kind("MeanFunction::fit_rewards", &e, ANY);
+                assert!(*mean == before, "a failed fit changed the mean function");
+            }
+        }
+    }
+
+    // Candidates.
+    let pairs: Vec<([T; 2], usize)> = (0..1 + b.index(4))
+        .map(|_| (state(b), b.index(5)))
+        .collect();
+    let spacing = T::from_f64(10.0 / f64::from(1 + b.u8() % 4));
+    let grid = PointGrid::spanning([T::ZERO; 2], [T::from_f64(10.0); 2], spacing);
+    let rows = match (b.u8() % 3, grid) {
+        (0, Ok(g)) => RowSet::grid(g, 4),
+        (1, _) => RowSet::pairs(&pairs),
+        _ => RowSet::source_data(&slices),
+    };
+    let rows = match rows {
+        Ok(r) => r,
+        Err(e) => {
+            expect_kind(
+                "RowSet",
+                &e,
+                &[Kind::Empty, Kind::NonFinite, Kind::Capacity],
+            );
+            return;
+        }
+    };
+    let approximator: awfqi::Approximator<T, 2> = if b.bool() {
+        match Tilings::cube(T::ZERO, T::from_f64(10.0), b.index(4), b.index(4)) {
+            Ok(t) => t.into(),
+            Err(e) => {
+                expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
+                return;
+            }
+        }
+    } else {
+        CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(4))
+            .expect("a valid cube")
+            .into()
+    };
+
+    // The kernel's memory.
+    let budget = config.awfqi.budget;
+    let steps = 1 + b.index(3);
+    let slots = config.candidates.min(rows.len());
+    let needed = approximator
+        .required_entries(4)
+        .unwrap_or(usize::MAX)
+        .min(1 << 14);
+    let mut samples = vec![Transition::EMPTY; size(b, steps * budget)];
+    let mut weights = vec![T::ZERO; size(b, total)];
+    let mut candidates = vec![Candidate::EMPTY; size(b, slots)];
+    let mut alias = vec![AliasEntry::EMPTY; size(b, slots)];
+    let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
+    let mut path = vec![[T::ZERO; 2]; size(b, budget)];
+    let mut beliefs = vec![SourceBelief::EMPTY; size(b, slices.len())];
+    let buffers = AdaptiveBuffers {
+        gp: &mut gp,
+        samples: &mut samples,
+        weights: &mut weights,
+        candidates: &mut candidates,
+        alias: &mut alias,
+        fqi: &mut fqi,
+        path: &mut path,
+        beliefs: &mut beliefs,
+    };
+    let mut kernel =
+        match AdaptiveAwfqi::new(config, approximator, data, &means, rows, target, buffers) {
+            Ok(k) => k,
+            Err(e) => {
+                expect_kind("AdaptiveAwfqi::new", &e, ANY);
+                return;
+            }
+        };
+    trace!("built: {} rows, {} source records", rows.len(), total);
+    for round in 0..2 {
+        for _ in 0..steps + 1 {
+            let done = kernel.steps();
+            let len = kernel.target_samples().len();
+            match kernel.step(&mut rng) {
+                Ok(report) => {
+                    trace!("step {}: {report:?}", report.step);
+                    assert_eq!(report.step, done + 1);
+                    assert_eq!(kernel.target_samples().len(), len + budget);
+                    assert_eq!(report.n_target_samples, len + budget);
+                    finite("step", "wr_mean", report.wr_mean.to_f64());
+                    finite("step", "wr_eff", report.wr_eff.to_f64());
+                    for e in kernel.q().entries() {
+                        finite("step", "q", e.q().to_f64());
+                    }
+                    for &w in kernel.reward_weights() {
+                        finite("step", "weight", w.to_f64());
+                    }
+                    let sum: f64 = kernel
+                        .beliefs()
+                        .iter()
+                        .map(|b| b.plausibility.to_f64())
+                        .sum();
+                    assert!((sum - 1.0).abs() < 1e-3, "beliefs sum to {sum}");
+                }
+                Err(e) => {
+                    trace!("step error {e:?}");
+                    expect_kind("step", &e, ANY);
+                    assert_eq!(kernel.steps(), done, "a failed step advanced the count");
+                    if let Error::CapacityExceeded { .. } = e {
+                        // The only capacity a step can lack is D₀'s, refused up front.
+                        assert_eq!(kernel.target_samples().len(), len);
+                    }
+                }
+            }
+        }
+        if round == 0 {
+            kernel.reset();
+            assert_eq!(kernel.steps(), 0);
+            assert!(kernel.target_samples().is_empty());
+        }
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut b = Bytes::new(data);
+    if b.bool() {
+        run::<f32>(&mut b);
+    } else {
+        run::<f64>(&mut b);
+    }
+});

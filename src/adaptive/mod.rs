@@ -1,0 +1,708 @@
+//! Adaptive AWFQI (issue 11; not a thesis algorithm): the query distribution is recomputed
+//! from what the target has answered, several times per step, and aims at what decides the
+//! greedy policy. The harness's `awfqi-adaptive` (`docs/active-budget.md`) in fixed memory,
+//! for any plant with a `D`-dimensional state; the harness runs it as
+//! `awfqi-adaptive-kernel`.
+//!
+//! Each step's budget `n` is spent in [`AdaptiveConfig::sub_batches`] sub-batches; in each:
+//!
+//! 1. **verification** ([`AdaptiveConfig::verify`] of the sub-batch): rollouts of the current
+//!    greedy policy from [`AdaptiveConfig::start`] in the generative model (ε-greedy after
+//!    the first rollout of the sub-batch), so a feature of the target no source has is met
+//!    where the policy would meet it;
+//! 2. **drawn queries** (the rest): [`AdaptiveConfig::candidates`] rows drawn uniformly
+//!    (with replacement) from the candidate set, then drawn with probability
+//!    `(1 − floor)·score/Σscore + floor·relevance/Σrelevance`, with
+//!    `score = relevance × (surprise + disagreement) × uncertainty`
+//!    ([`candidates`]): *surprise*, the squared mean of the residual GP (a GP on
+//!    `r − m(z)`, `m(z) = Σₖ πₖ μₖ(z)` the sources' reward means weighted by their
+//!    plausibility, [`plausibility`]); *disagreement*, the π-weighted variance of the
+//!    sources' means; *uncertainty*, the residual GP's remaining variance as a share of its
+//!    signal variance (reference noise subtraction over the batch), at most 1;
+//!    *relevance*, `exp(−d²/2)` with `d` the distance to the nearest state verified in this
+//!    step in units of [`AdaptiveConfig::relevance_width`] of each coordinate's range;
+//! 3. **re-plan**: the target reward GP (zero prior mean, the thesis's), the reward weights
+//!    of every source record (§7.3 estimator) and weighted FQI on `D₀` and the sources
+//!    (§12 steps 4–5, the core's [`crate::Awfqi`] pieces); then the residual GP for the next
+//!    sub-batch, in the same GP. Before any target data the plan is FQI on the unweighted
+//!    sources.
+//!
+//! **What it needs beyond AWFQI's set-up:** one [`MeanFunction`] per source (its reward
+//! GP's posterior mean, 1 048 bytes for `f32`, `N = 64`), the candidate rows (a
+//! [`RowSet`]; no score table), the start state, horizon and exploration rate of the
+//! verification rollouts, and the state bounds.
+//!
+//! **Differences from the harness's `awfqi-adaptive`** (its default configuration is what is
+//! ported; its options `prior`, `model_rewards`, `source_weights`, `surprise_stop` and
+//! `plan_trees` are left out, all off by default): the Q-function is the core's table or
+//! tile coding instead of Extra-Trees; every GP has a fixed capacity `N` fitted on an even
+//! spread of its data ([`crate::SubsetRule`]) instead of up to 4 000 points; the residual GP
+//! is fitted after the weights' GP (one GP in memory), so the random streams differ.
+//!
+//! **Errors part-way** are those of [`crate::Awfqi`]: records already queried stay in `D₀`,
+//! the Q-function keeps its last fit, the step counter does not advance.
+
+pub mod candidates;
+pub mod mean_function;
+pub mod plausibility;
+pub mod storage;
+
+pub use candidates::Candidate;
+pub use mean_function::MeanFunction;
+pub use plausibility::SourceBelief;
+pub use storage::{AdaptiveBuffers, AdaptiveStorage};
+
+use crate::alias::AliasTable;
+use crate::awfqi::builder::short;
+use crate::awfqi::{AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, reward_weights};
+use crate::env::{GenerativeModel, Transition};
+use crate::fqi::{Approximator, QFunction};
+use crate::gp::{Gp, Hyperparameters};
+use crate::record_gp::{InputDim, Output, fit_gp, fit_gp_on, input};
+use crate::score::RowSet;
+use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
+use crate::{Error, Real, Result};
+use rand_core::Rng;
+
+/// Settings of adaptive AWFQI for a `D`-dimensional plant (`I = D + 1`): the AWFQI
+/// settings it shares (budget, weights, GP training, subset rule, FQI; its `sampling`
+/// column is unused) and its own. [`AdaptiveConfig::validate`] checks them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
+    /// The AWFQI settings: per-step budget `n`, the reward weights' estimator (`v_r` is
+    /// also the plausibilities' scale), noise subtraction, subset rule, GP training, FQI.
+    pub awfqi: AwfqiConfig<T, I>,
+    /// Sub-batches per step (re-planning points), ≥ 1.
+    pub sub_batches: usize,
+    /// Share of each sub-batch spent on verification rollouts, in [0, 1].
+    pub verify: T,
+    /// Score by residual surprise.
+    pub surprise: bool,
+    /// Scale scores by the residual GP's remaining variance.
+    pub uncertainty: bool,
+    /// Weight rows by their closeness to this step's verified states.
+    pub decision: bool,
+    /// Coverage floor, in [0, 1].
+    pub floor: T,
+    /// Candidate rows scored per sub-batch (at most the number of rows are), ≥ 1.
+    pub candidates: usize,
+    /// Width of the relevance kernel as a share of each coordinate's range, > 0.
+    pub relevance_width: T,
+    /// The state every verification rollout starts in (the target's initial state).
+    pub start: [T; D],
+    /// Most steps of a verification rollout, ≥ 1.
+    pub horizon: usize,
+    /// Exploration rate of the verification rollouts after the first of a sub-batch.
+    pub epsilon: T,
+    /// `(lower, upper)` of every state coordinate (`lower < upper`): the relevance kernel's
+    /// and the nearest-record distances' units.
+    pub bounds: [(T, T); D],
+}
+
+impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
+    /// The harness's default configuration (`docs/active-budget.md`): 3 sub-batches, 70 %
+    /// verification, surprise, uncertainty and decision relevance on, floor 0.1, 4 000
+    /// candidates, relevance width 0.1, on the thesis's AWFQI settings for `budget`
+    /// ([`AwfqiConfig::thesis`]), for a plant that starts in `start`, with episodes of
+    /// `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state `bounds`.
+    pub fn recommended(
+        budget: usize,
+        start: [T; D],
+        horizon: usize,
+        epsilon: T,
+        bounds: [(T, T); D],
+    ) -> Self {
+        Self {
+            awfqi: AwfqiConfig::thesis(budget),
+            sub_batches: 3,
+            verify: T::from_f64(0.7),
+            surprise: true,
+            uncertainty: true,
+            decision: true,
+            floor: T::from_f64(0.1),
+            candidates: 4000,
+            relevance_width: T::from_f64(0.1),
+            start,
+            horizon,
+            epsilon,
+            bounds,
+        }
+    }
+
+    /// Checks every setting.
+    ///
+    /// Errors: those of [`AwfqiConfig::validate`]; `sub_batches`, `candidates` or `horizon`
+    /// 0 ([`Error::InvalidParameter`] naming it); `verify`, `floor` or `epsilon` outside
+    /// [0, 1], `relevance_width ≤ 0`, a non-finite `start` or bound, a bound with
+    /// `lower ≥ upper` ([`Error::OutOfRange`] / [`Error::NonFinite`] naming it).
+    pub fn validate(self) -> Result<ValidAdaptiveConfig<T, D, I>> {
+        self.awfqi.validate()?;
+        for (value, parameter) in [
+            (self.sub_batches, "sub_batches"),
+            (self.candidates, "candidates"),
+            (self.horizon, "horizon"),
+        ] {
+            if value == 0 {
+                return Err(Error::InvalidParameter { parameter });
+            }
+        }
+        for (value, parameter) in [
+            (self.verify, "verify"),
+            (self.floor, "floor"),
+            (self.epsilon, "epsilon"),
+        ] {
+            crate::error::ensure_finite(value, parameter)?;
+            if !(T::ZERO..=T::ONE).contains(&value) {
+                return Err(Error::OutOfRange { parameter });
+            }
+        }
+        crate::error::ensure_finite(self.relevance_width, "relevance_width")?;
+        if self.relevance_width <= T::ZERO {
+            return Err(Error::OutOfRange {
+                parameter: "relevance_width",
+            });
+        }
+        crate::error::ensure_all_finite(&self.start, "start")?;
+        for &(lo, hi) in &self.bounds {
+            crate::error::ensure_finite(lo, "bounds")?;
+            crate::error::ensure_finite(hi, "bounds")?;
+            if !(lo < hi && (hi - lo).is_finite()) {
+                return Err(Error::OutOfRange {
+                    parameter: "bounds",
+                });
+            }
+        }
+        Ok(ValidAdaptiveConfig { config: self })
+    }
+}
+
+/// An [`AdaptiveConfig`] that passed [`AdaptiveConfig::validate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ValidAdaptiveConfig<T, const D: usize, const I: usize> {
+    config: AdaptiveConfig<T, D, I>,
+}
+
+impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig<T, D, I> {
+    type Target = AdaptiveConfig<T, D, I>;
+
+    fn deref(&self) -> &AdaptiveConfig<T, D, I> {
+        &self.config
+    }
+}
+
+/// The adaptive AWFQI kernel: configuration, borrowed storage and the state of a run.
+///
+/// Generic like [`crate::Awfqi`]: scalar `T`, target model `G`, state dimension `D`, GP
+/// input dimension `I = D + 1`, GP capacity `N` (the target GP's and the sources' mean
+/// functions'); every buffer's capacity is its slice's length.
+#[derive(Debug)]
+pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
+    config: ValidAdaptiveConfig<T, D, I>,
+    target: G,
+    rows: RowSet<'a, T, D>,
+    sources: SourceData<'a, T, D>,
+    means: &'a [MeanFunction<T, N, I>],
+    beliefs: &'a mut [SourceBelief<T>],
+    samples: &'a mut [Transition<[T; D], T>],
+    len: usize,
+    weights: &'a mut [T],
+    gp: &'a mut Gp<T, N, I>,
+    /// `gp` holds the residual GP of the last re-plan.
+    residual: bool,
+    fqi: QFunction<'a, T, D>,
+    slots: &'a mut [Candidate<T>],
+    alias: &'a mut [crate::AliasEntry<T>],
+    path: &'a mut [[T; D]],
+    path_len: usize,
+    /// The Q-function has been fitted in this run.
+    planned: bool,
+    steps: usize,
+    last: Option<StepReport<T, I>>,
+}
+
+impl<'a, T, G, const D: usize, const I: usize, const N: usize> AdaptiveAwfqi<'a, T, G, D, I, N>
+where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]>,
+{
+    /// A kernel for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
+    /// stored reward posteriors, one mean function per source (`means`, e.g.
+    /// [`MeanFunction::fit_rewards`] on each source), the candidate `rows`, the FQI
+    /// `approximator` and the `target` model.
+    ///
+    /// Errors, checked before anything changes: a model without actions
+    /// ([`Error::InvalidParameter`] `actions`), a row whose action the model lacks
+    /// ([`Error::OutOfRange`] `actions`); no sources ([`Error::EmptyData`]), a mean-function
+    /// count other than the source count ([`Error::InvalidParameter`] `means`); a buffer
+    /// too short ([`Error::CapacityExceeded`] with its length): `samples` for one budget,
+    /// `weights` for the source records, `candidates` or `alias` for
+    /// `min(candidates, rows)`, `path` for the budget, `beliefs` for the sources, `fqi`
+    /// for the approximator.
+    pub fn new(
+        config: ValidAdaptiveConfig<T, D, I>,
+        approximator: impl Into<Approximator<T, D>>,
+        sources: SourceData<'a, T, D>,
+        means: &'a [MeanFunction<T, N, I>],
+        rows: RowSet<'a, T, D>,
+        target: G,
+        buffers: impl Into<AdaptiveBuffers<'a, T, D, I, N>>,
+    ) -> Result<Self> {
+        let () = InputDim::<D, I>::CHECK;
+        let AdaptiveBuffers {
+            gp,
+            samples,
+            weights,
+            candidates,
+            alias,
+            fqi,
+            path,
+            beliefs,
+        } = buffers.into();
+        let actions = target.num_actions();
+        if actions == 0 {
+            return Err(Error::InvalidParameter {
+                parameter: "actions",
+            });
+        }
+        if rows.iter().any(|(_, a)| a >= actions) {
+            return Err(Error::OutOfRange {
+                parameter: "actions",
+            });
+        }
+        let m = sources.records().len();
+        if m == 0 {
+            return Err(Error::EmptyData);
+        }
+        if means.len() != m {
+            return Err(Error::InvalidParameter { parameter: "means" });
+        }
+        let slots = config.candidates.min(rows.len());
+        let budget = config.awfqi.budget;
+        short(samples.len(), budget)?;
+        short(weights.len(), sources.len())?;
+        short(candidates.len(), slots)?;
+        short(alias.len(), slots)?;
+        short(path.len(), budget)?;
+        short(beliefs.len(), m)?;
+        let fqi = approximator.into().build(actions, fqi)?;
+        let beliefs = beliefs
+            .get_mut(..m)
+            .ok_or(Error::CapacityExceeded { capacity: m })?;
+        let mut kernel = Self {
+            config,
+            target,
+            rows,
+            sources,
+            means,
+            beliefs,
+            samples,
+            len: 0,
+            weights,
+            gp,
+            residual: false,
+            fqi,
+            slots: candidates,
+            alias,
+            path,
+            path_len: 0,
+            planned: false,
+            steps: 0,
+            last: None,
+        };
+        kernel.reset();
+        Ok(kernel)
+    }
+
+    /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
+    /// step count.
+    pub fn reset(&mut self) {
+        self.len = 0;
+        self.steps = 0;
+        self.path_len = 0;
+        self.planned = false;
+        self.residual = false;
+        self.last = None;
+        self.fqi.clear();
+        self.gp.clear();
+        plausibility::reset(self.beliefs);
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ValidAdaptiveConfig<T, D, I> {
+        &self.config
+    }
+
+    /// Steps completed in this run.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The target dataset `D₀` (generative-model records, in query order).
+    pub fn target_samples(&self) -> &[Transition<[T; D], T>] {
+        self.samples.get(..self.len).unwrap_or(&[])
+    }
+
+    /// The reward weights of the last re-plan, source by source, record by record.
+    pub fn reward_weights(&self) -> &[T] {
+        self.weights.get(..self.sources.len()).unwrap_or(&[])
+    }
+
+    /// The sources' beliefs (plausibilities as of the last re-plan).
+    pub fn beliefs(&self) -> &[SourceBelief<T>] {
+        self.beliefs
+    }
+
+    /// The states verified in the current step.
+    pub fn path(&self) -> &[[T; D]] {
+        self.path.get(..self.path_len).unwrap_or(&[])
+    }
+
+    /// The Q-function of the last re-plan (0 before the first).
+    pub fn q(&self) -> &QFunction<'a, T, D> {
+        &self.fqi
+    }
+
+    /// The GP: the residual GP of the last re-plan (empty before target data).
+    pub fn gp(&self) -> &Gp<T, N, I> {
+        self.gp
+    }
+
+    /// The target model.
+    pub fn target(&self) -> &G {
+        &self.target
+    }
+
+    /// Runs one step (module docs): `sub_batches` × (verification, drawn queries,
+    /// re-plan). The report's GP fields describe the weights' reward GP of the last
+    /// re-plan.
+    ///
+    /// Errors: `D₀` has no room for `n` more records ([`Error::CapacityExceeded`] with the
+    /// buffer's length; checked before anything is drawn); then the first error of a
+    /// greedy action, a query, a GP fit, a prediction, a weight or FQI (module docs).
+    pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
+        let n = self.config.awfqi.budget;
+        self.len
+            .checked_add(n)
+            .filter(|&e| e <= self.samples.len())
+            .ok_or(Error::CapacityExceeded {
+                capacity: self.samples.len(),
+            })?;
+        self.path_len = 0;
+        if !self.planned {
+            self.replan(rng)?;
+        }
+        let s = self.config.sub_batches;
+        let mut report = None;
+        for b in 0..s {
+            // n·b/s without overflow: b < s, n·(b + 1) ≤ n·s fits when n·s does.
+            let share = |k: usize| n.checked_mul(k).and_then(|x| x.checked_div(s)).unwrap_or(n);
+            let quota = share(b + 1).saturating_sub(share(b));
+            let verify = (T::from_usize(quota) * self.config.verify + T::from_f64(0.5))
+                .floor()
+                .to_f64() as usize;
+            let verify = verify.min(quota);
+            self.verify(verify, rng)?;
+            self.draw(quota - verify, rng)?;
+            report = Some(self.replan(rng)?);
+        }
+        self.steps += 1;
+        let mut report = report.ok_or(Error::InvalidParameter {
+            parameter: "sub_batches",
+        })?;
+        report.step = self.steps;
+        self.last = Some(report);
+        Ok(report)
+    }
+
+    /// Appends a queried record to `D₀` and adds its clipped errors to the beliefs.
+    fn record(&mut self, record: Transition<[T; D], T>) -> Result<()> {
+        let mut evidence = Evidence {
+            config: &self.config,
+            means: self.means,
+            sources: &self.sources,
+            beliefs: self.beliefs,
+            samples: self.samples,
+            len: &mut self.len,
+        };
+        evidence.append(record)
+    }
+
+    /// `n` queries along greedy rollouts from the start state (ε-greedy after the first
+    /// rollout of the call), each state kept in the path.
+    fn verify<R: Rng + ?Sized>(&mut self, n: usize, rng: &mut R) -> Result<()> {
+        let actions = self.target.num_actions();
+        let mut left = n;
+        let mut first = true;
+        while left > 0 {
+            let mut state = self.config.start;
+            for _ in 0..self.config.horizon {
+                if left == 0 {
+                    break;
+                }
+                let explore = !first && crate::rng::uniform::<T, R>(rng) < self.config.epsilon;
+                let action = if explore {
+                    crate::rng::uniform_index(rng, actions)
+                } else {
+                    self.fqi.greedy_action(state)?
+                };
+                let record = self.target.query(state, action, rng)?;
+                self.record(record)?;
+                if let Some(slot) = self.path.get_mut(self.path_len) {
+                    *slot = state;
+                    self.path_len += 1;
+                }
+                left -= 1;
+                if record.absorbing {
+                    break;
+                }
+                state = record.next_state;
+            }
+            first = false;
+        }
+        Ok(())
+    }
+
+    /// `n` queries drawn from a fresh candidate subset by the adaptive score.
+    fn draw<R: Rng + ?Sized>(&mut self, n: usize, rng: &mut R) -> Result<()> {
+        if n == 0 {
+            return Ok(());
+        }
+        let rows = self.rows.len();
+        let c = self.config.candidates.min(rows);
+        let capacity = self.slots.len();
+        let slots = self
+            .slots
+            .get_mut(..c)
+            .ok_or(Error::CapacityExceeded { capacity })?;
+        let path = self.path.get(..self.path_len).unwrap_or(&[]);
+        let config = &self.config;
+        let residual = self.residual.then_some(&*self.gp);
+        let mut smallest = T::INFINITY;
+        // Pass 1: rows and the factors that do not depend on the batch.
+        for slot in slots.iter_mut() {
+            let row = crate::rng::uniform_index(rng, rows);
+            let (state, action) = self
+                .rows
+                .row(row)
+                .ok_or(Error::OutOfRange { parameter: "row" })?;
+            let z = input(state, action);
+            let relevance = if config.decision {
+                candidates::relevance(&state, path, &config.bounds, config.relevance_width)
+            } else {
+                T::ONE
+            };
+            let (_, disagreement) = spread(self.means, self.beliefs, &z)?;
+            let (surprise, variance) = match residual {
+                Some(gp) => {
+                    let p = gp.predict(&z)?;
+                    smallest = smallest.min(p.noisy_variance);
+                    let s = if config.surprise {
+                        p.mean.squared()
+                    } else {
+                        T::ZERO
+                    };
+                    (s, p.noisy_variance)
+                }
+                None => (T::ZERO, T::ZERO),
+            };
+            *slot = Candidate {
+                row,
+                relevance,
+                score: surprise + disagreement,
+                variance,
+            };
+        }
+        // Pass 2: the uncertainty factor needs the batch's smallest variance.
+        let totals = match residual {
+            Some(gp) if config.uncertainty => {
+                let hyper: &Hyperparameters<T, I> = gp.hyperparameters();
+                let signal = hyper.signal_variance.max(T::MIN_POSITIVE);
+                let transform =
+                    StdTransform::new(NoiseSubtraction::Reference, hyper.noise_variance, smallest)?;
+                let share = move |v: T| transform.apply(v).squared() / signal;
+                let u = move |v: T| share(v).min(T::ONE);
+                candidates::finish_scores(slots, Some(&u))
+            }
+            _ => candidates::finish_scores(slots, None),
+        };
+        // Pass 3: the alias table, then the queries.
+        let floor = config.floor;
+        let table = AliasTable::build(
+            slots
+                .iter()
+                .map(|s| candidates::probability(s, totals, floor, c)),
+            &mut *self.alias,
+        )?;
+        let mut evidence = Evidence {
+            config: &self.config,
+            means: self.means,
+            sources: &self.sources,
+            beliefs: self.beliefs,
+            samples: self.samples,
+            len: &mut self.len,
+        };
+        for _ in 0..n {
+            let j = table.sample(rng);
+            let row = self.slots.get(j).map_or(0, |s| s.row);
+            let (state, action) = self
+                .rows
+                .row(row)
+                .ok_or(Error::OutOfRange { parameter: "row" })?;
+            evidence.append(self.target.query(state, action, rng)?)?;
+        }
+        Ok(())
+    }
+
+    /// Re-plans: reward GP, reward weights and weighted FQI on `D₀` and the sources (the
+    /// sources unweighted before any target data), then the plausibilities and the
+    /// residual GP.
+    fn replan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
+        let config = &self.config.awfqi;
+        let target = self.samples.get(..self.len).unwrap_or(&[]);
+        let mut wr = WeightSummary::new();
+        wr.add_ones(target.len());
+        if target.is_empty() {
+            fit_weighted_fqi(
+                &mut self.fqi,
+                target,
+                &self.sources,
+                None,
+                None,
+                &config.fqi,
+            )?;
+            wr.add_ones(self.sources.len());
+            self.planned = true;
+            self.residual = false;
+            return Ok(self.report(&wr, T::ZERO, *self.gp.hyperparameters(), 0));
+        }
+        let lml = fit_gp(
+            self.gp,
+            target,
+            Output::Reward,
+            config.subset,
+            &config.gp_training,
+            rng,
+        )?;
+        let (hyper, points) = (*self.gp.hyperparameters(), self.gp.len());
+        reward_weights(
+            self.gp,
+            &self.sources,
+            &config.weights,
+            config.noise_subtraction,
+            self.weights,
+            &mut wr,
+        )?;
+        fit_weighted_fqi(
+            &mut self.fqi,
+            target,
+            &self.sources,
+            Some(self.weights),
+            None,
+            &config.fqi,
+        )?;
+        self.planned = true;
+        // The residual model for the next sub-batch's scores.
+        self.residual = false;
+        plausibility::update(self.beliefs, config.weights.noise_variance())?;
+        let (means, beliefs) = (self.means, &*self.beliefs);
+        fit_gp_on(
+            self.gp,
+            target,
+            |r| {
+                let (prior, _) = spread(means, beliefs, &input(r.state, r.action))?;
+                Ok(r.reward - prior)
+            },
+            config.subset,
+            &config.gp_training,
+            rng,
+        )?;
+        self.residual = true;
+        Ok(self.report(&wr, lml, hyper, points))
+    }
+
+    fn report(
+        &self,
+        wr: &WeightSummary<T>,
+        lml: T,
+        hyper: Hyperparameters<T, I>,
+        points: usize,
+    ) -> StepReport<T, I> {
+        StepReport {
+            step: self.steps,
+            n_target_samples: self.len,
+            n_source_samples: self.sources.len(),
+            gp_points: points,
+            gp_log_likelihood: lml,
+            gp_hyperparameters: hyper,
+            wr_mean: wr.mean(),
+            wr_eff: wr.effective_sample_size(),
+            ws_mean: T::ONE,
+            ws_eff: wr.count(),
+        }
+    }
+}
+
+/// What a query changes: `D₀` and the sources' running errors.
+struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {
+    config: &'k ValidAdaptiveConfig<T, D, I>,
+    means: &'a [MeanFunction<T, N, I>],
+    sources: &'k SourceData<'a, T, D>,
+    beliefs: &'k mut [SourceBelief<T>],
+    samples: &'k mut [Transition<[T; D], T>],
+    len: &'k mut usize,
+}
+
+impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N> {
+    /// Appends `record` to `D₀` and adds its clipped errors to the beliefs.
+    fn append(&mut self, record: Transition<[T; D], T>) -> Result<()> {
+        let capacity = self.samples.len();
+        let slot = self
+            .samples
+            .get_mut(*self.len)
+            .ok_or(Error::CapacityExceeded { capacity })?;
+        let z = input(record.state, record.action);
+        let v = self.config.awfqi.weights.noise_variance();
+        for ((belief, mean), source) in self
+            .beliefs
+            .iter_mut()
+            .zip(self.means)
+            .zip(self.sources.records())
+        {
+            let ends = plausibility::nearest_ends(
+                source,
+                &record.state,
+                record.action,
+                &self.config.bounds,
+            );
+            let e2 = plausibility::clipped_error(
+                record.reward,
+                mean.mean(&z)?,
+                ends == record.absorbing,
+                v,
+            );
+            belief.squared_errors += e2;
+        }
+        *slot = record;
+        *self.len += 1;
+        Ok(())
+    }
+}
+
+/// The plausibility-weighted mean `m(z) = Σₖ πₖ μₖ(z)` of the sources' means at `z` and
+/// their weighted variance.
+fn spread<T: Real, const N: usize, const I: usize>(
+    means: &[MeanFunction<T, N, I>],
+    beliefs: &[SourceBelief<T>],
+    z: &[T; I],
+) -> Result<(T, T)> {
+    candidates::weighted_spread(
+        means
+            .iter()
+            .zip(beliefs)
+            .map(|(f, b)| Ok((f.mean(z)?, b.plausibility))),
+    )
+}
+
+#[cfg(test)]
+mod tests;

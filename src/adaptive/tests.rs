@@ -1,0 +1,417 @@
+extern crate std;
+use super::*;
+use crate::env::{Dynamics, Puddle, PuddleWorld};
+use crate::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry};
+use crate::gp::SearchOptions;
+use crate::record_gp::{GpTraining, SubsetRule};
+use crate::score::PointGrid;
+use crate::weights::Posterior;
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+use std::vec;
+use std::vec::Vec;
+
+type Record = Transition<[f64; 2], f64>;
+const GP: usize = 16;
+
+/// Generative-model records of `world` at pseudo-random states.
+fn query_records(world: &PuddleWorld<f64>, n: usize, seed: u64) -> Vec<Record> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|i| {
+            let s = [
+                crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
+                crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
+            ];
+            world.query(s, i % 4, &mut rng).unwrap()
+        })
+        .collect()
+}
+
+fn training() -> GpTraining<f64, 3> {
+    GpTraining {
+        search: SearchOptions {
+            max_evaluations: 40,
+            restarts: 1,
+            isotropic: true,
+        },
+        ..GpTraining::published()
+    }
+}
+
+fn config(budget: usize) -> AdaptiveConfig<f64, 2, 3> {
+    let mut c = AdaptiveConfig::recommended(budget, [0.0, 0.0], 50, 0.3, [(0.0, 10.0); 2]);
+    c.awfqi.gp_training = training();
+    c.awfqi.fqi = FqiConfig::new(0.99, 20, EmptyCells::Nearest).unwrap();
+    c.verify = 0.5;
+    c.candidates = 40;
+    c
+}
+
+/// Sources, their oracle posteriors (std 0.05) and their reward mean functions.
+struct Fixture {
+    sources: Vec<Vec<Record>>,
+    posteriors: Vec<Posterior<f64>>,
+    means: Vec<MeanFunction<f64, GP, 3>>,
+}
+
+impl Fixture {
+    fn new(worlds: &[PuddleWorld<f64>]) -> Self {
+        let sources: Vec<Vec<Record>> = worlds
+            .iter()
+            .enumerate()
+            .map(|(k, w)| query_records(w, 40, k as u64))
+            .collect();
+        let posteriors = worlds
+            .iter()
+            .zip(&sources)
+            .flat_map(|(w, rs)| {
+                rs.iter()
+                    .map(|r| Posterior::new(w.mean_reward(r.state).unwrap(), 0.05))
+            })
+            .collect();
+        let mut gp = std::boxed::Box::new(Gp::<f64, GP, 3>::empty());
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let means = sources
+            .iter()
+            .map(|rs| {
+                let mut f = MeanFunction::EMPTY;
+                f.fit_rewards(&mut gp, rs, &training(), SubsetRule::Spread, &mut rng)
+                    .unwrap();
+                f
+            })
+            .collect();
+        Self {
+            sources,
+            posteriors,
+            means,
+        }
+    }
+
+    fn slices(&self) -> Vec<&[Record]> {
+        self.sources.iter().map(Vec::as_slice).collect()
+    }
+}
+
+/// Storage for budget 12 × 3 steps, 120 source records, 40 slots, 6 × 6 cells, 3 sources.
+type Storage = AdaptiveStorage<f64, 2, 3, GP, 36, 120, 40, 144, 12, 3>;
+
+fn rows() -> RowSet<'static, f64, 2> {
+    RowSet::grid(PointGrid::spanning([0.0; 2], [10.0; 2], 2.0).unwrap(), 4).unwrap()
+}
+
+fn grid() -> CellGrid<f64, 2> {
+    CellGrid::cube(0.0, 10.0, 6).unwrap()
+}
+
+#[test]
+fn a_mean_function_predicts_its_gps_mean_from_k_inverse_y() {
+    let records = query_records(&PuddleWorld::target(Dynamics::Shared), 30, 3);
+    let mut gp = Gp::<f64, GP, 3>::empty();
+    let mut f = MeanFunction::<f64, GP, 3>::EMPTY;
+    assert_eq!(f.mean(&[1.0, 2.0, 0.0]), Ok(0.0));
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    f.fit_rewards(&mut gp, &records, &training(), SubsetRule::Spread, &mut rng)
+        .unwrap();
+    assert_eq!(f.len(), GP);
+    // α solves (K + (σ²ₙ + jitter) I) α = y: check the residual by hand.
+    let mut alpha = [0.0; GP];
+    assert_eq!(gp.mean_weights(&mut alpha), Ok(GP));
+    let h = *gp.hyperparameters();
+    let diag = h.noise_variance + gp.jitter();
+    for (i, (xi, yi)) in gp.inputs().iter().zip(gp.targets()).enumerate() {
+        let k_alpha: f64 = gp
+            .inputs()
+            .iter()
+            .zip(&alpha)
+            .map(|(xj, a)| h.covariance(xi, xj) * a)
+            .sum::<f64>()
+            + diag * alpha[i];
+        assert!(
+            (k_alpha - yi).abs() < 1e-8 * (1.0 + yi.abs()),
+            "{k_alpha} {yi}"
+        );
+    }
+    for r in query_records(&PuddleWorld::target(Dynamics::Shared), 20, 4) {
+        let z = input(r.state, r.action);
+        let want = gp.predict(&z).unwrap().mean;
+        assert!((f.mean(&z).unwrap() - want).abs() < 1e-9 * (1.0 + want.abs()));
+    }
+    assert!(f.mean(&[f64::NAN, 0.0, 0.0]).is_err());
+    let mut short = [0.0; 3];
+    assert_eq!(
+        gp.mean_weights(&mut short),
+        Err(Error::CapacityExceeded { capacity: 3 })
+    );
+}
+
+#[test]
+fn invalid_settings_are_named() {
+    let ok = config(12);
+    assert!(ok.validate().is_ok());
+    let cases: [(AdaptiveConfig<f64, 2, 3>, Error); 7] = [
+        (
+            AdaptiveConfig {
+                sub_batches: 0,
+                ..ok
+            },
+            Error::InvalidParameter {
+                parameter: "sub_batches",
+            },
+        ),
+        (
+            AdaptiveConfig { horizon: 0, ..ok },
+            Error::InvalidParameter {
+                parameter: "horizon",
+            },
+        ),
+        (
+            AdaptiveConfig { verify: 1.5, ..ok },
+            Error::OutOfRange {
+                parameter: "verify",
+            },
+        ),
+        (
+            AdaptiveConfig {
+                floor: f64::NAN,
+                ..ok
+            },
+            Error::NonFinite { parameter: "floor" },
+        ),
+        (
+            AdaptiveConfig {
+                relevance_width: 0.0,
+                ..ok
+            },
+            Error::OutOfRange {
+                parameter: "relevance_width",
+            },
+        ),
+        (
+            AdaptiveConfig {
+                bounds: [(0.0, 10.0), (3.0, 3.0)],
+                ..ok
+            },
+            Error::OutOfRange {
+                parameter: "bounds",
+            },
+        ),
+        (
+            AdaptiveConfig {
+                awfqi: AwfqiConfig {
+                    budget: 0,
+                    ..ok.awfqi
+                },
+                ..ok
+            },
+            Error::InvalidParameter {
+                parameter: "budget",
+            },
+        ),
+    ];
+    for (c, e) in cases {
+        assert_eq!(c.validate().map(|_| ()), Err(e));
+    }
+}
+
+#[test]
+fn construction_checks_the_parts_before_anything_changes() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let valid = config(12).validate().unwrap();
+    let mut storage = std::boxed::Box::new(Storage::new());
+    let e = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means[..2],
+        rows(),
+        target,
+        &mut *storage,
+    );
+    assert_eq!(
+        e.err(),
+        Some(Error::InvalidParameter { parameter: "means" })
+    );
+    let mut small =
+        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 36, 119, 40, 144, 12, 3>::new());
+    let e = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means,
+        rows(),
+        target,
+        &mut *small,
+    );
+    assert_eq!(e.err(), Some(Error::CapacityExceeded { capacity: 119 }));
+    let pairs = [([1.0, 1.0], 4)];
+    let e = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means,
+        RowSet::pairs(&pairs).unwrap(),
+        target,
+        &mut *storage,
+    );
+    assert_eq!(
+        e.err(),
+        Some(Error::OutOfRange {
+            parameter: "actions"
+        })
+    );
+}
+
+#[test]
+fn a_step_spends_its_budget_on_verified_paths_and_drawn_rows() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
+    let valid = config(12).validate().unwrap();
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let mut storage = std::boxed::Box::new(Storage::new());
+    let mut kernel = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means,
+        rows(),
+        target,
+        &mut *storage,
+    )
+    .unwrap();
+    // The first verification follows the plan fitted on the unweighted sources alone.
+    let mut entries = vec![FqiEntry::EMPTY; 144];
+    let mut q = Approximator::from(grid()).build(4, &mut entries).unwrap();
+    let sets: Vec<_> = slices
+        .iter()
+        .map(|s| crate::fqi::SampleSet::unweighted(s))
+        .collect();
+    q.fit(&sets, &valid.awfqi.fqi).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let report = kernel.step(&mut rng).unwrap();
+    assert_eq!((report.step, report.n_target_samples), (1, 12));
+    assert_eq!(report.n_source_samples, 120);
+    let d0 = kernel.target_samples().to_vec();
+    assert_eq!(d0.len(), 12);
+    assert_eq!(d0[0].action, q.greedy_action([0.0, 0.0]).unwrap());
+    // Quotas 4, 4, 4, half verified: records 0–1, 4–5, 8–9 are rollouts from the start;
+    // the others are drawn grid rows (coordinates multiples of 2).
+    let mut path = Vec::new();
+    for b in 0..3 {
+        let first = d0[4 * b];
+        assert_eq!(first.state, [0.0, 0.0]);
+        if !first.absorbing {
+            assert_eq!(d0[4 * b + 1].state, first.next_state);
+        }
+        path.extend([d0[4 * b].state, d0[4 * b + 1].state]);
+        for r in &d0[4 * b + 2..4 * b + 4] {
+            assert!(r.state.iter().all(|x| x % 2.0 == 0.0), "{:?}", r.state);
+        }
+    }
+    assert_eq!(kernel.path(), &path[..]);
+    // Every weight is a valid weight, the beliefs a distribution.
+    assert_eq!(kernel.reward_weights().len(), 120);
+    assert!(
+        kernel
+            .reward_weights()
+            .iter()
+            .all(|w| w.is_finite() && *w >= 0.0 && *w <= 1000.0)
+    );
+    let total: f64 = kernel.beliefs().iter().map(|b| b.plausibility).sum();
+    assert!((total - 1.0).abs() < 1e-12);
+    // The residual GP holds the target records' residuals: 12 points.
+    assert_eq!(kernel.gp().len(), 12);
+
+    // Same seed, fresh run: the same records.
+    kernel.reset();
+    assert!(kernel.target_samples().is_empty());
+    kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
+    assert_eq!(kernel.target_samples(), &d0[..]);
+}
+
+#[test]
+fn a_full_buffer_refuses_the_step_before_any_query() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
+    let valid = config(12).validate().unwrap();
+    let mut storage =
+        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 12, 120, 40, 144, 12, 3>::new());
+    let mut kernel = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means,
+        rows(),
+        PuddleWorld::target(Dynamics::Shared),
+        &mut *storage,
+    )
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    kernel.step(&mut rng).unwrap();
+    let before = kernel.target_samples().to_vec();
+    let beliefs = kernel.beliefs().to_vec();
+    assert_eq!(
+        kernel.step(&mut rng).err(),
+        Some(Error::CapacityExceeded { capacity: 12 })
+    );
+    assert_eq!(kernel.target_samples(), &before[..]);
+    assert_eq!(kernel.beliefs(), &beliefs[..]);
+    assert_eq!(kernel.steps(), 1);
+}
+
+#[test]
+fn the_source_that_answers_like_the_target_becomes_plausible() {
+    // Source 0 is the target itself; source 1 has a deep puddle on the start, where every
+    // verification begins, so its rewards there contradict the target's.
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let wrong = PuddleWorld::new(
+        [5.0, 10.0],
+        &[Puddle::new([0.5, 0.5], 0.8)],
+        Dynamics::Shared,
+    )
+    .unwrap();
+    let fx = Fixture::new(&[target, wrong]);
+    let slices = fx.slices();
+    let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
+    let valid = config(12).validate().unwrap();
+    let mut storage =
+        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 24, 80, 40, 144, 12, 2>::new());
+    let mut kernel = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means,
+        rows(),
+        target,
+        &mut *storage,
+    )
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    kernel.step(&mut rng).unwrap();
+    kernel.step(&mut rng).unwrap();
+    let b = kernel.beliefs();
+    assert!(b[0].squared_errors < b[1].squared_errors, "{b:?}");
+    assert!(b[0].plausibility > 0.99, "{b:?}");
+    // The beliefs are exactly the clipped likelihood of the records' errors.
+    let mut expect = [SourceBelief::<f64>::EMPTY; 2];
+    for r in kernel.target_samples() {
+        let z = input(r.state, r.action);
+        for (k, e) in expect.iter_mut().enumerate() {
+            let ends = plausibility::nearest_ends(slices[k], &r.state, r.action, &[(0.0, 10.0); 2]);
+            e.squared_errors += plausibility::clipped_error(
+                r.reward,
+                fx.means[k].mean(&z).unwrap(),
+                ends == r.absorbing,
+                0.1,
+            );
+        }
+    }
+    for (e, b) in expect.iter().zip(b) {
+        assert!((e.squared_errors - b.squared_errors).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,193 @@
+//! `awfqi-adaptive-kernel`: the core's adaptive AWFQI ([`awfqi::AdaptiveAwfqi`]) on the
+//! same protocol as `awfqi-adaptive`, so the embedded version of the algorithm is measured,
+//! not guessed.
+//!
+//! It runs as on a microcontroller, in `f32`, in fixed storage sized once per run: the
+//! kernel path's set-up ([`KernelSetup`]: the `f32` source records, their stored posteriors,
+//! the candidate rows of the setting and one `Gp<f32, 64, 3>` reward GP per source, whose
+//! posterior means are the sources' [`MeanFunction`]s), tile coding with
+//! [`ADAPTIVE_TILINGS`] offset tilings of [`ADAPTIVE_TILES`] tiles per axis (chosen on the
+//! tuning runs `--seed 100`, `docs/active-budget.md`; `--kernel-resolution` given
+//! explicitly sets the approximator of both kernels), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
+//! verification share, surprise, uncertainty, decision relevance, floor, candidates,
+//! relevance width; the others must keep their defaults).
+
+use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::{
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, MeanFunction,
+    SourceData, Transition,
+};
+use rand_chacha::ChaCha8Rng;
+
+use super::Experiment;
+use super::adaptive::AdaptiveOptions;
+use super::awfqi_kernel::{GP_POINTS, KernelSetup, Record32, T, row_set, to_f64};
+use crate::transfer::gp::GpSummary;
+use crate::transfer::protocol::{Diagnostics, Learner};
+use crate::transfer::sources::Record;
+
+/// Tiles per axis of the adaptive kernel's FQI by default: chosen on the tuning runs
+/// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
+/// 16 × 8, 20 × 8; 12 × 8 best at every step but one, see `docs/active-budget.md`).
+pub const ADAPTIVE_TILES: usize = 12;
+/// Offset tilings of the adaptive kernel's FQI by default.
+pub const ADAPTIVE_TILINGS: usize = 8;
+
+/// The core's configuration for `experiment`: the recommended one with the harness's
+/// adaptive options.
+///
+/// Errors: an option the core does not have set away from its default, or an invalid one.
+fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
+    let o = experiment.adaptive_options;
+    let d = AdaptiveOptions::default();
+    anyhow::ensure!(
+        o.prior == d.prior
+            && o.model_rewards == d.model_rewards
+            && o.source_weights == d.source_weights
+            && o.surprise_stop == d.surprise_stop,
+        "awfqi-adaptive-kernel has the default configuration of awfqi-adaptive only \
+         (no --adaptive-prior, --adaptive-model-rewards, --adaptive-source-weights, \
+         --adaptive-surprise-stop)"
+    );
+    let domain = &experiment.domain;
+    let mut bounds = [(0.0, 0.0); 2];
+    for (b, &(lo, hi)) in bounds.iter_mut().zip(&domain.state_bounds) {
+        *b = (lo as T, hi as T);
+    }
+    let start = awfqi::env::PUDDLE_INITIAL_STATE.map(|x| x as T);
+    let mut c = AdaptiveConfig::recommended(
+        experiment.budget(),
+        start,
+        domain.horizon,
+        experiment.protocol.epsilon as T,
+        bounds,
+    );
+    c.sub_batches = o.sub_batches;
+    c.verify = o.verify as T;
+    c.surprise = o.surprise;
+    c.uncertainty = o.uncertainty;
+    c.decision = o.decision;
+    c.floor = o.floor as T;
+    c.candidates = o.candidates;
+    c.relevance_width = o.relevance_width as T;
+    Ok(c)
+}
+
+/// The memory one run writes, on the heap and sized at run time: what a firmware holds in
+/// an [`awfqi::AdaptiveStorage`].
+#[derive(Debug)]
+struct Memory {
+    gp: Box<Gp<T, GP_POINTS, 3>>,
+    samples: Vec<Record32>,
+    weights: Vec<T>,
+    candidates: Vec<awfqi::adaptive::Candidate<T>>,
+    alias: Vec<AliasEntry<T>>,
+    fqi: Vec<FqiEntry<T>>,
+    path: Vec<[T; 2]>,
+    beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
+}
+
+impl Memory {
+    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, 2, 3, GP_POINTS> {
+        AdaptiveBuffers {
+            gp: &mut self.gp,
+            samples: &mut self.samples,
+            weights: &mut self.weights,
+            candidates: &mut self.candidates,
+            alias: &mut self.alias,
+            fqi: &mut self.fqi,
+            path: &mut self.path,
+            beliefs: &mut self.beliefs,
+        }
+    }
+}
+
+/// `awfqi-adaptive-kernel` as a [`Learner`]: each protocol step is one
+/// [`AdaptiveAwfqi::step`]; the greedy action is the `f32` Q-function's, and `D₀` is kept in
+/// `f64` for the result files.
+struct AdaptiveKernelLearner<'a> {
+    kernel: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, GP_POINTS>,
+    collected: Vec<Record>,
+}
+
+impl Learner for AdaptiveKernelLearner<'_> {
+    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+        let report = self.kernel.step(rng)?;
+        let new = &self.kernel.target_samples()[self.collected.len()..];
+        self.collected.extend(new.iter().map(to_f64));
+        let hyper = &report.gp_hyperparameters;
+        Ok(Diagnostics {
+            n_source_samples: Some(report.n_source_samples),
+            wr_mean: Some(f64::from(report.wr_mean)),
+            wr_eff: Some(f64::from(report.wr_eff)),
+            reward_gp: Some(GpSummary {
+                points: report.gp_points,
+                signal_variance: f64::from(hyper.signal_variance),
+                length_scale: f64::from(hyper.length_scales[0]),
+                noise_variance: f64::from(hyper.noise_variance),
+                log_marginal_likelihood: f64::from(report.gp_log_likelihood),
+            }),
+            ..Diagnostics::default()
+        })
+    }
+
+    fn greedy_action(&self, s: &[f64; 2]) -> usize {
+        let state = [s[0] as T, s[1] as T];
+        self.kernel.q().greedy_action(state).unwrap_or(0)
+    }
+
+    fn target_samples(&self) -> &[Record] {
+        &self.collected
+    }
+}
+
+/// Hands a fresh learner for one run of `experiment` to `f` (the kernel borrows its memory
+/// and the set-up for the whole run, so they live in this frame).
+pub fn with_learner(
+    experiment: &Experiment,
+    rng: &mut ChaCha8Rng,
+    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let setup: &KernelSetup = experiment
+        .kernel
+        .as_deref()
+        .ok_or_else(|| anyhow::anyhow!("no kernel set-up"))?;
+    let dynamics: Dynamics = experiment
+        .protocol
+        .dynamics
+        .ok_or_else(|| anyhow::anyhow!("awfqi-adaptive-kernel runs on Puddle World only"))?;
+    let config = config(experiment)?.validate()?;
+    let sources = setup.source_slices();
+    let rows = row_set(&setup.config, &sources)?;
+    let approximator = setup.config.adaptive_q.approximator()?;
+    let entries = approximator
+        .required_entries(awfqi::env::PUDDLE_ACTIONS)
+        .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
+    let budget = experiment.budget();
+    let slots = config.candidates.min(rows.len());
+    let mut memory = Memory {
+        gp: Box::new(Gp::empty()),
+        samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
+        weights: vec![0.0; setup.posteriors().len()],
+        candidates: vec![awfqi::adaptive::Candidate::EMPTY; slots],
+        alias: vec![AliasEntry::EMPTY; slots],
+        fqi: vec![FqiEntry::EMPTY; entries],
+        path: vec![[0.0; 2]; budget],
+        beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
+    };
+    let means: &[MeanFunction<T, GP_POINTS, 3>] = setup.means();
+    let kernel = AdaptiveAwfqi::new(
+        config,
+        approximator,
+        SourceData::new(&sources, setup.posteriors())?,
+        means,
+        rows,
+        PuddleWorld::target(dynamics),
+        memory.buffers(),
+    )?;
+    let mut learner = AdaptiveKernelLearner {
+        kernel,
+        collected: Vec::new(),
+    };
+    f(&mut learner, rng)
+}
