@@ -235,6 +235,14 @@ pub struct Args {
     /// awfqi-adaptive: end a verification rollout at the first surprising reward.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise_stop)]
     pub adaptive_surprise_stop: bool,
+    /// awfqi-adaptive: hyperparameter search of its own GP fits (`screened` equals `spec`
+    /// up to 300 target points).
+    #[arg(long, value_enum, default_value_t = AdaptiveOptions::default().gp_search)]
+    pub adaptive_gp_search: GpSearch,
+    /// awfqi-adaptive: exploration ε of the verification rollouts after a sub-batch's
+    /// first (default: the protocol's ε).
+    #[arg(long)]
+    pub adaptive_verify_epsilon: Option<f64>,
 }
 
 impl Args {
@@ -254,6 +262,8 @@ impl Args {
             model_rewards: self.adaptive_model_rewards,
             source_weights: self.adaptive_source_weights,
             surprise_stop: self.adaptive_surprise_stop,
+            gp_search: self.adaptive_gp_search,
+            verify_epsilon: self.adaptive_verify_epsilon,
         }
     }
 }
