@@ -283,7 +283,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     /// The experiment's GP options with this algorithm's hyperparameter search.
     fn gp_options(&self) -> GpOptions {
         GpOptions {
-            search: self.options.gp_search,
+            search: Some(self.options.gp_search),
             ..self.experiment.options.gp
         }
     }
