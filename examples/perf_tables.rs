@@ -33,6 +33,10 @@ struct Data {
     cpu: BTreeMap<String, f64>,
     /// Date, cores and load averages of the criterion run.
     conditions: BTreeMap<String, String>,
+    /// Cortex-M4F instructions of one repetition, by operation (`scripts/m4-counts`).
+    m4: BTreeMap<String, f64>,
+    /// `(instructions, function)` over the six AWFQI steps on the Cortex-M4F, largest first.
+    m4_profile: Vec<(f64, String)>,
 }
 
 fn read_criterion(dir: &Path, data: &mut Data) {
@@ -431,6 +435,79 @@ fn experiments_table(d: &Data) -> String {
     s
 }
 
+/// Clock of the Cortex-M4F the instruction counts are converted at.
+const M4_HZ: f64 = 168e6;
+/// Assumed cycles per instruction (README: why), and a pessimistic one.
+const M4_CPI: f64 = 1.25;
+const M4_CPI_SLOW: f64 = 1.5;
+
+fn m4_table(d: &Data) -> String {
+    let at = |v: f64, cpi: f64| time(v * cpi / M4_HZ * 1e9);
+    let mut s = format!(
+        "| operation | instructions | at 168 MHz, CPI {M4_CPI} | at CPI {M4_CPI_SLOW} |\n|---|--:|--:|--:|\n"
+    );
+    let mut row = |what: &str, v: Option<f64>| {
+        let _ = writeln!(
+            s,
+            "| {what} | {} | {} | {} |",
+            opt(v, count),
+            opt(v, |v| at(v, M4_CPI)),
+            opt(v, |v| at(v, M4_CPI_SLOW))
+        );
+    };
+    let get = |k: &str| d.m4.get(k).copied();
+    row("GP fit at fixed hyperparameters, N = 24", get("gp_fit"));
+    row(
+        "GP prediction, one point (mean + variance), N = 24",
+        get("gp_predict"),
+    );
+    row(
+        "GP hyperparameter search (thesis: 550 evaluations, 10 restarts), N = 24",
+        get("gp_search"),
+    );
+    row(
+        "a step's target-GP training (`fit_gp`: reset, 24 of the 300 records, search)",
+        get("target_gp_training"),
+    );
+    let (one, sixty) = (get("fqi_1_iteration"), get("fqi_60_iterations"));
+    row(
+        "FQI sweep (an iteration ≥ 2; 11 × 11 × 4 cells, 300 + 1 033 samples)",
+        one.zip(sixty).map(|(a, b)| (b - a) / 59.0),
+    );
+    row("a step's FQI (60 iterations)", sixty);
+    row("set-up (builder over the flash tables)", get("build"));
+    let steps: Vec<f64> = (1..=6).filter_map(|k| get(&format!("step{k}"))).collect();
+    for (k, v) in steps.iter().enumerate() {
+        row(
+            &format!("**AWFQI step {}** (50 queries, GP, weights, FQI)", k + 1),
+            Some(*v),
+        );
+    }
+    let largest = steps.iter().copied().fold(f64::NAN, f64::max);
+    if largest.is_finite() {
+        let total: f64 = d.m4_profile.iter().map(|(n, _)| n).sum();
+        let _ = writeln!(
+            s,
+            "\nThe largest step takes {} at CPI {M4_CPI} ({} at CPI {M4_CPI_SLOW}); it stays \
+             within 1 s at 168 MHz for any CPI up to {:.2}.",
+            at(largest, M4_CPI),
+            at(largest, M4_CPI_SLOW),
+            M4_HZ / largest
+        );
+        if total > 0.0 {
+            s.push_str(
+                "\nWhere the six steps' instructions go (flat profile: each instruction counts \
+                 for the function holding it, inlined code for the function it was inlined into):\n\n\
+                 | function | instructions (6 steps) | share |\n|---|--:|--:|\n",
+            );
+            for (n, f) in d.m4_profile.iter().take(10) {
+                let _ = writeln!(s, "| `{f}` | {} | {:.1} % |", count(*n), 100.0 * n / total);
+            }
+        }
+    }
+    s
+}
+
 fn conditions(d: &Data) -> String {
     let get = |k: &str| d.conditions.get(k).map_or(DASH, String::as_str);
     format!(
@@ -486,6 +563,8 @@ fn main() {
     let mut experiments = PathBuf::from("target/perf/experiments.tsv");
     let conditions_file = PathBuf::from("target/perf/conditions.tsv");
     let cpu_file = PathBuf::from("target/perf/cputime.tsv");
+    let m4_file = PathBuf::from("target/perf/m4.tsv");
+    let m4_profile_file = PathBuf::from("target/perf/m4-profile.tsv");
     let mut files = Vec::new();
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -529,6 +608,20 @@ fn main() {
             }
         }
     }
+    for row in read_tsv(&m4_file) {
+        if let [op, k, total, ..] = row.as_slice() {
+            if let (Ok(k), Ok(total)) = (k.parse::<f64>(), total.parse::<f64>()) {
+                data.m4.insert(op.clone(), total / k);
+            }
+        }
+    }
+    for row in read_tsv(&m4_profile_file) {
+        if let [n, function, ..] = row.as_slice() {
+            if let Ok(n) = n.parse::<f64>() {
+                data.m4_profile.push((n, function.clone()));
+            }
+        }
+    }
     // A block whose measurements are all missing (e.g. experiments skipped on a fresh
     // clone) keeps what the file already says.
     let (timed, counted) = (!data.times.is_empty(), !data.instructions.is_empty());
@@ -547,6 +640,7 @@ fn main() {
             !data.experiments.is_empty(),
             experiments_table(&data),
         ),
+        ("m4", !data.m4.is_empty(), m4_table(&data)),
     ]
     .into_iter()
     .filter(|(_, measured, _)| *measured)

@@ -265,7 +265,9 @@ pub struct StepReport<T, const I: usize> {
 /// GP's capacity `N`; the capacities of the buffers are the lengths of the slices it
 /// borrows, so its code is the same for every capacity. Built by [`AwfqiBuilder`].
 /// `size_of::<Awfqi<f32, PuddleWorld<f32>, 2, 3, 64>>()` is 468 bytes on
-/// `thumbv7em-none-eabihf` (216 of them the Puddle World model).
+/// `thumbv7em-none-eabihf` (216 of them the Puddle World model; a kernel built over
+/// `&model` — [`GenerativeModel`] is implemented for references — holds 4 bytes instead,
+/// which keeps every frame that holds the kernel small).
 #[derive(Debug)]
 pub struct Awfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     config: ValidAwfqiConfig<T, I>,

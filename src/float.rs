@@ -60,6 +60,10 @@ pub trait Real:
     fn to_f64(self) -> f64;
     /// Converts a count to this type, rounding to nearest.
     fn from_usize(value: usize) -> Self;
+    /// `self as usize`: truncates towards zero and saturates (0 for negative values and NaN,
+    /// `usize::MAX` above it), in the type's own precision — an `f32` converts with one
+    /// hardware instruction on a Cortex-M4F, where a detour through `f64` is software.
+    fn to_usize_saturating(self) -> usize;
     /// Square root (NaN for negative input).
     fn sqrt(self) -> Self;
     /// Exponential function.
@@ -126,6 +130,10 @@ macro_rules! impl_real {
             #[inline]
             fn from_usize(value: usize) -> Self {
                 value as $t
+            }
+            #[inline]
+            fn to_usize_saturating(self) -> usize {
+                self as usize
             }
             #[inline]
             fn sqrt(self) -> Self {
@@ -248,6 +256,43 @@ mod tests {
         assert!((Real::cos(core::f32::consts::FRAC_PI_3) - 0.5).abs() < 1e-6);
         assert_eq!(<f32 as Real>::from_f64(0.5), 0.5f32);
         assert!(Real::max(f64::NAN, 1.0) == 1.0);
+    }
+
+    #[test]
+    fn saturating_index_equals_the_f64_route() {
+        // The cell index of the FQI grid used `t as f64 as usize`; the direct conversion
+        // must give the same integer for every f32, including the edges.
+        let edges = [
+            0.0f32,
+            -0.0,
+            0.999_999_94,
+            1.0,
+            10.999_999,
+            11.0,
+            -1e-30,
+            -5.0,
+            16_777_217.0,
+            3.4e38,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+        ];
+        let mut x = 0x1234_5678u32;
+        let random = (0..10_000).map(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            f32::from_bits(x)
+        });
+        for t in edges.into_iter().chain(random) {
+            assert_eq!(t.to_usize_saturating(), t as f64 as usize, "{t:e}");
+        }
+        assert_eq!(2.5f32.to_usize_saturating(), 2);
+        assert_eq!((-2.5f64).to_usize_saturating(), 0);
+        assert_eq!(f64::NAN.to_usize_saturating(), 0);
+        assert_eq!(1e300f64.to_usize_saturating(), usize::MAX);
     }
 
     #[test]

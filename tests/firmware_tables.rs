@@ -268,62 +268,32 @@ const PUDDLE_TABLES: &str = "tests/on_target/src/puddle_tables.rs";
 
 #[test]
 fn committed_puddle_32k_tables_are_what_the_generator_makes() {
-    use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
-    use awfqi::{AliasEntry, Gp, GpTraining, ScoreTable, SubsetRule};
+    use awfqi::env::Dynamics;
+    use awfqi_harness::transfer::algorithms::awfqi_kernel::{
+        KernelConfig, KernelQFunction, KernelSetup,
+    };
+    use awfqi_harness::transfer::score_tables::Mode;
     use awfqi_harness::transfer::sources::SourceSet;
     use awfqi_harness::transfer::{SCORE_TABLE, stream};
 
+    // The harness kernel path's set-up (its stream) at this GP capacity: the f32 source
+    // records, their stored posteriors and the realistic score table that
+    // `std_harness/examples/kernel_capacity.rs` (`24 11 1.25`) measures the return of.
     let set = SourceSet::published(Dynamics::Shared).expect("published sources");
-    let records: Vec<Vec<Record>> = set
-        .sources
-        .iter()
-        .map(|s| {
-            s.records
-                .iter()
-                .map(|r| Transition {
-                    state: r.state.map(|x| x as f32),
-                    action: r.action,
-                    reward: r.reward as f32,
-                    next_state: r.next_state.map(|x| x as f32),
-                    absorbing: r.absorbing,
-                })
-                .collect()
-        })
-        .collect();
-    let posteriors: Vec<Posterior<f32>> = set
-        .sources
-        .iter()
-        .flat_map(|s| &s.reward)
-        .map(|p| Posterior::new(p.mean as f32, p.std as f32))
-        .collect();
-    let slices: Vec<&[Record]> = records.iter().map(Vec::as_slice).collect();
-    let rows = RowSet::grid(
-        PuddleWorld::score_grid(PUDDLE_SPACING).unwrap(),
-        PUDDLE_ACTIONS,
-    )
-    .unwrap();
-    assert_eq!(rows.len(), 324);
-    // The harness kernel path's realistic table (its stream), at this GP capacity.
-    let mut scores = vec![Scores::ZERO; rows.len()];
-    let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
-    let mut gp = Box::new(Gp::<f32, PUDDLE_GP_POINTS, 3>::empty());
-    ScoreTable::realistic(
-        rows,
-        &slices,
-        &mut gp,
-        &GpTraining::published(),
-        SubsetRule::Spread,
-        &mut scores,
-        &mut scratch,
-        &mut stream(0, &[SCORE_TABLE, 100]),
-        |_, _| Ok(()),
-    )
-    .unwrap();
+    let config = KernelConfig::new(Mode::Grid, f64::from(PUDDLE_SPACING))
+        .with_q(KernelQFunction::Tabular(11));
+    let setup =
+        KernelSetup::<PUDDLE_GP_POINTS>::new(&set, config, &mut stream(0, &[SCORE_TABLE, 100]))
+            .unwrap();
+    let records = setup.source_slices();
+    let posteriors = setup.posteriors();
+    let scores = setup.score_values();
+    assert_eq!(scores.len(), 324);
     assert!(scores.iter().all(|v| v.reward >= 0.0) && scores.iter().any(|v| v.reward > 0.0));
 
     let mut s = String::new();
     let w = &mut s;
-    let lens: Vec<usize> = records.iter().map(Vec::len).collect();
+    let lens: Vec<usize> = records.iter().map(|r| r.len()).collect();
     let _ = writeln!(
         w,
         "//! Source data of the 32 KiB Puddle World footprint image, generated on the host by\n\
@@ -361,7 +331,7 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
             k + 1,
             k + 1
         );
-        for r in source {
+        for r in source.iter() {
             let _ = writeln!(
                 w,
                 "    r({:?}, {}, {:?}, {:?}, {}),",
@@ -375,7 +345,7 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
         "/// The stored reward posteriors, source after source.\n\
          pub static SOURCE_POSTERIORS: [Posterior<f32>; SOURCE_RECORDS] = ["
     );
-    for p in &posteriors {
+    for p in posteriors {
         let _ = writeln!(w, "    p({:?}, {:?}),", p.mean, p.std);
     }
     let _ = writeln!(
@@ -383,7 +353,7 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
         "];\n\n/// The score values of the candidate rows.\n\
          pub static SCORES: [Scores<f32, 2>; SCORE_ROWS] = ["
     );
-    for v in &scores {
+    for v in scores {
         let _ = writeln!(w, "    v({:?}, {:?}),", v.reward, v.next_state);
     }
     let _ = writeln!(w, "];");

@@ -392,18 +392,21 @@ pub fn alias_weights<T: Real>() -> Vec<T> {
 }
 
 /// The AWFQI step benchmark's kernel (thesis configuration, budget 50, 11 × 11 cells,
-/// `N = 64`): the three sources with their stored posteriors, the oracle score table on 484
-/// rows and storage for one step, set up by the core's builder. Everything is leaked so the
-/// kernel can live as long as the process (a benchmark builds one per scalar type).
+/// `N = 64`): the three sources' records ([`Sources`]' data), the whole set-up by the core's
+/// builder — source GPs and their stored posteriors, the oracle score table on 484 rows —
+/// and storage for one step. Everything is leaked so the kernel can live as long as the
+/// process (a benchmark builds one per scalar type).
 pub fn awfqi_kernel<T: Real>() -> Awfqi<'static, T, PuddleWorld<T>, 2, D, SOURCE_GP> {
-    let sources: &'static Sources<T> = Box::leak(Box::new(Sources::new()));
-    let slices: &'static [&'static [Transition<[T; 2], T>]] = sources
-        .records
+    let worlds = PuddleWorld::<T>::sources(Dynamics::Shared);
+    let records: &'static [Vec<Transition<[T; 2], T>>] = worlds
         .iter()
-        .map(Vec::as_slice)
+        .enumerate()
+        .map(|(k, w)| transitions(w, SOURCE_RECORDS, 30 + k as u64))
         .collect::<Vec<_>>()
         .leak();
-    let posteriors = sources.posteriors.concat().leak();
+    let slices: &'static [&'static [Transition<[T; 2], T>]] =
+        records.iter().map(Vec::as_slice).collect::<Vec<_>>().leak();
+    let posteriors = vec![awfqi::weights::Posterior::default(); 3 * SOURCE_RECORDS].leak();
     let rows = score_rows::<T>();
     let scores = vec![Scores::ZERO; rows.len()].leak();
     let storage = Box::leak(Box::new(AwfqiStorage::<
@@ -421,8 +424,8 @@ pub fn awfqi_kernel<T: Real>() -> Awfqi<'static, T, PuddleWorld<T>, 2, D, SOURCE
         .expect("thesis configuration");
     let grid = CellGrid::cube(T::ZERO, T::from_f64(10.0), AWFQI_CELLS).expect("grid");
     Awfqi::builder(config, grid, slices, rows)
-        .stored_posteriors(posteriors)
-        .scores_from(&PuddleWorld::<T>::sources(Dynamics::Shared), scores)
+        .fit_posteriors(posteriors)
+        .scores_from(&worlds, scores)
         .expect("oracle table")
         .build(
             PuddleWorld::target(Dynamics::Shared),

@@ -839,6 +839,66 @@ fn loop_seeds() {
     }
 }
 
+/// Adaptive AWFQI (`fuzz_targets/adaptive_loop.rs`): a well-formed set-up on Puddle World
+/// (shared dynamics, start (0, 0)): budget 6, horizon 10, ε = 0.3, 15 evaluations and 1
+/// restart per search, spread subset, 3 sub-batches, 70 % verification, floor ≈ 0.1, 15
+/// candidates, every factor on; two sources of 6 records with fitted mean functions; grid
+/// rows (`rows` 0) or source rows (2), the table (`tiles` false) or 2 × 2 tiles × 2; 2 steps.
+fn adaptive_seed(f32: bool, rows: u8, tiles: bool) -> Seed {
+    let mut s = Seed::new();
+    s.bool(f32).bool(false).bool(false).u8(1);
+    s.u8(6).u8(10).u8(60).u8(15).u8(1).bool(false).bool(true);
+    s.u8(3).u8(140).bool(false).u8(25).u8(15).u8(1);
+    s.bool(true).bool(true).bool(true);
+    s.u8(2);
+    let mut k = 0u32;
+    let mut coordinate = || {
+        k += 1;
+        ((k * 97) % 251) as u8
+    };
+    for j in 0..2 {
+        s.u8(6);
+        for i in 0..6u8 {
+            s.u8(coordinate()).u8(coordinate()).u8(i % 4);
+            s.num(-1.0 - f64::from(j) * f64::from(i));
+            s.u8(coordinate()).u8(coordinate()).bool(false);
+        }
+    }
+    s.u8(2);
+    for _ in 0..12 {
+        s.num(-1.5).u8(5);
+    }
+    s.u8(7).u8(2).bool(true).bool(true);
+    s.u8(0).u8(coordinate()).u8(coordinate()).u8(1);
+    s.u8(1).u8(rows);
+    if tiles {
+        s.bool(true).u8(2).u8(2);
+    } else {
+        s.bool(false).u8(3);
+    }
+    s.u8(1);
+    for _ in 0..7 {
+        s.u8(2);
+    }
+    s
+}
+
+fn adaptive_seeds() {
+    for f32 in [true, false] {
+        let p = if f32 { "f32" } else { "f64" };
+        write(
+            "adaptive_loop",
+            &format!("grid_table_{p}"),
+            &adaptive_seed(f32, 0, false),
+        );
+        write(
+            "adaptive_loop",
+            &format!("sources_tiles_{p}"),
+            &adaptive_seed(f32, 2, true),
+        );
+    }
+}
+
 fn main() {
     gp_seeds();
     loop_seeds();
@@ -847,5 +907,6 @@ fn main() {
     score_seeds();
     weights_seeds();
     belief_seeds();
+    adaptive_seeds();
     println!("seeds written under fuzz/seeds/");
 }

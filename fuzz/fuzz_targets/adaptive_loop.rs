@@ -69,7 +69,7 @@ fn run<T: Real>(b: &mut Bytes) {
 
     // Configuration.
     let start = if b.bool() { state(b) } else { [T::ZERO; 2] };
-    let bounds = if b.u8() % 8 == 0 {
+    let bounds = if b.u8().is_multiple_of(8) {
         [(real(b), real(b)), (T::ZERO, T::from_f64(10.0))]
     } else {
         [(T::ZERO, T::from_f64(10.0)); 2]
@@ -105,7 +105,7 @@ fn run<T: Real>(b: &mut Bytes) {
         T::from_f64(f64::from(b.u8()) / 255.0)
     };
     config.candidates = b.index(20);
-    config.relevance_width = if b.u8() % 8 == 0 {
+    config.relevance_width = if b.u8().is_multiple_of(8) {
         real(b)
     } else {
         T::from_f64(0.1)

@@ -242,29 +242,36 @@ fn same_seed_same_run() {
     let rows = RowSet::grid(PuddleWorld::score_grid(2.0).unwrap(), 4).unwrap();
     let mut scores = vec![Scores::default(); rows.len()];
     ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
-    let run = |seed: u64| {
+    let target = PuddleWorld::target(Dynamics::Shared);
+    // `lend`: the kernel borrows the plant (`GenerativeModel for &G`) instead of owning it.
+    let run = |seed: u64, lend: bool| {
         let mut heap = Heap::<8>::new(10, fx.source_records(), rows.len(), 100);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut kernel = Awfqi::builder(
+        let builder = Awfqi::builder(
             small_config(10).validate().unwrap(),
             CellGrid::cube(0.0, 10.0, 5).unwrap(),
             &slices,
             rows,
         )
         .stored_posteriors(&fx.posteriors)
-        .stored_scores(&scores)
-        .build(
-            PuddleWorld::target(Dynamics::Shared),
-            heap.buffers(),
-            &mut rng,
-        )
-        .unwrap();
-        let report = kernel.step(&mut rng).unwrap();
-        let q: Vec<f64> = kernel.q().entries().iter().map(|e| e.q()).collect();
-        (report, kernel.target_samples().to_vec(), q)
+        .stored_scores(&scores);
+        let (report, samples, q) = if lend {
+            let mut kernel = builder.build(&target, heap.buffers(), &mut rng).unwrap();
+            let report = kernel.step(&mut rng).unwrap();
+            let q: Vec<f64> = kernel.q().entries().iter().map(|e| e.q()).collect();
+            (report, kernel.target_samples().to_vec(), q)
+        } else {
+            let mut kernel = builder.build(target, heap.buffers(), &mut rng).unwrap();
+            let report = kernel.step(&mut rng).unwrap();
+            let q: Vec<f64> = kernel.q().entries().iter().map(|e| e.q()).collect();
+            (report, kernel.target_samples().to_vec(), q)
+        };
+        (report, samples, q)
     };
-    assert_eq!(run(3), run(3));
-    assert_ne!(run(3).1, run(4).1);
+    assert_eq!(run(3, false), run(3, false));
+    assert_ne!(run(3, false).1, run(4, false).1);
+    // A lent plant is the same plant: the same run, bit for bit.
+    assert_eq!(run(3, true), run(3, false));
 }
 
 #[test]

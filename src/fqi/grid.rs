@@ -145,7 +145,9 @@ fn axis_index<T: Real>(x: T, lo: T, hi: T, n: usize) -> usize {
     // `as` truncates towards zero and saturates: ⌊t⌋ for t ≥ 0; 0 for t < 0 and NaN
     // (as ⌊t⌋ would give after saturating); usize::MAX when huge, then clamp. So no
     // `floor` is needed (libm's is software, and this runs twice per sample per sweep).
-    let i = t.to_f64() as usize;
+    // In `T` itself: the same integer as through `f64` (widening is exact), without the
+    // Cortex-M4F's software `f64` (a conversion and two comparisons per call).
+    let i = t.to_usize_saturating();
     i.min(n.saturating_sub(1))
 }
 

@@ -16,20 +16,22 @@
 //! after every step, each run's step-6 return, and the RAM the configuration's
 //! `AwfqiStorage` takes on a Cortex-M4F (thumbv7em: `usize` 4 bytes, so a record is 28 B).
 
-use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::{
-    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, FqiEntry, Gp, GpTraining, Posterior,
-    RowSet, ScoreTable, Scores, SubsetRule, Transition,
-};
+use awfqi::env::{Dynamics, PUDDLE_ACTIONS};
 use awfqi_harness::domains::puddle::domain;
 use awfqi_harness::transfer::algorithms::Algorithm;
+use awfqi_harness::transfer::algorithms::awfqi_kernel::{
+    KernelConfig, KernelLearner, KernelMemory, KernelQFunction, KernelSetup,
+};
+use awfqi_harness::transfer::protocol::Learner;
+use awfqi_harness::transfer::score_tables::Mode;
 use awfqi_harness::transfer::sources::SourceSet;
 use awfqi_harness::transfer::{RUN, SCORE_TABLE, stream};
 
-type Record32 = Transition<[f32; 2], f32>;
 const STEPS: usize = 6;
 const BUDGET: usize = 50;
 
+/// The harness's kernel path (`awfqi-kernel`'s set-up, memory and learner, which build the
+/// kernel with the core's builder) at GP capacity `N`.
 fn run<const N: usize>(
     cells: usize,
     spacing: f64,
@@ -39,51 +41,12 @@ fn run<const N: usize>(
     let seed = 0;
     let sources = SourceSet::published(Dynamics::Shared)?;
     let domain = domain(Dynamics::Shared);
-    let records: Vec<Vec<Record32>> = sources
-        .sources
-        .iter()
-        .map(|s| {
-            s.records
-                .iter()
-                .map(|r| Transition {
-                    state: r.state.map(|x| x as f32),
-                    action: r.action,
-                    reward: r.reward as f32,
-                    next_state: r.next_state.map(|x| x as f32),
-                    absorbing: r.absorbing,
-                })
-                .collect()
-        })
-        .collect();
-    let posteriors: Vec<Posterior<f32>> = sources
-        .sources
-        .iter()
-        .flat_map(|s| &s.reward)
-        .map(|p| Posterior::new(p.mean as f32, p.std as f32))
-        .collect();
-    let slices: Vec<&[Record32]> = records.iter().map(Vec::as_slice).collect();
-    let rows = || -> anyhow::Result<RowSet<'_, f32, 2>> {
-        Ok(RowSet::grid(
-            PuddleWorld::score_grid(spacing as f32)?,
-            PUDDLE_ACTIONS,
-        )?)
-    };
+    let config = KernelConfig::new(Mode::Grid, spacing).with_q(KernelQFunction::Tabular(cells));
     // The realistic score table, once (as the harness's kernel set-up does).
-    let mut values = vec![Scores::ZERO; rows()?.len()];
-    let mut scratch = vec![AliasEntry::EMPTY; values.len()];
-    let mut gp = Box::new(Gp::<f32, N, 3>::empty());
-    let mut rng = stream(seed, &[SCORE_TABLE, 100]);
-    ScoreTable::realistic(
-        rows()?,
-        &slices,
-        &mut gp,
-        &GpTraining::published(),
-        SubsetRule::Spread,
-        &mut values,
-        &mut scratch,
-        &mut rng,
-        |_, _| Ok(()),
-    )?;
+    let setup = KernelSetup::<N>::new(&sources, config, &mut stream(seed, &[SCORE_TABLE, 100]))?;
+    let slices = setup.source_slices();
+    let rows = setup.score_rows();
+    let records: usize = slices.iter().map(|s| s.len()).sum();
 
     let mut returns = vec![[0.0f64; STEPS]; runs];
     for (i, out) in returns.iter_mut().enumerate() {
@@ -91,31 +54,19 @@ fn run<const N: usize>(
             seed,
             &[RUN, Algorithm::AwfqiKernel.id(), (first + i) as u64],
         );
-        let mut gp = Box::new(Gp::<f32, N, 3>::empty());
-        let mut samples = vec![Transition::EMPTY; STEPS * BUDGET];
-        let mut weights = vec![0.0; posteriors.len()];
-        let mut alias = vec![AliasEntry::EMPTY; values.len()];
-        let mut fqi = vec![FqiEntry::EMPTY; cells * cells * PUDDLE_ACTIONS];
-        let buffers = AwfqiBuffers {
-            gp: &mut gp,
-            samples: &mut samples,
-            weights: &mut weights,
-            alias: &mut alias,
-            fqi: &mut fqi,
-        };
-        let mut kernel = Awfqi::builder(
-            AwfqiConfig::thesis(BUDGET).validate()?,
-            CellGrid::cube(0.0, 10.0, cells)?,
+        let mut memory = KernelMemory::<N>::new(&setup, STEPS, BUDGET, false)?;
+        let mut learner = KernelLearner::new(
+            &setup,
             &slices,
-            rows()?,
-        )
-        .stored_posteriors(&posteriors)
-        .stored_scores(&values)
-        .build(PuddleWorld::target(Dynamics::Shared), buffers, &mut rng)?;
-        for r in out.iter_mut() {
-            kernel.step(&mut rng)?;
-            let q = kernel.q();
-            let greedy = |s: &[f64; 2]| q.greedy_action([s[0] as f32, s[1] as f32]).unwrap_or(0);
+            &mut memory,
+            BUDGET,
+            Dynamics::Shared,
+            None,
+            &mut rng,
+        )?;
+        for (k, r) in out.iter_mut().enumerate() {
+            learner.step(k, &mut rng)?;
+            let greedy = |s: &[f64; 2]| learner.greedy_action(s);
             *r = domain.evaluate(&greedy, &mut rng)?.mean_return;
         }
     }
@@ -127,14 +78,14 @@ fn run<const N: usize>(
     let parts = [
         ("GP", gp_bytes),
         ("target records", STEPS * BUDGET * 28),
-        ("weights", posteriors.len() * 4),
-        ("alias", values.len() * 8),
+        ("weights", records * 4),
+        ("alias", rows * 8),
         ("FQI", cells * cells * PUDDLE_ACTIONS * 20),
     ];
     let total: usize = parts.iter().map(|p| p.1).sum();
     println!(
         "N = {N}, {cells} x {cells} cells, spacing {spacing} ({} rows), runs {first}..{}",
-        values.len(),
+        rows,
         first + runs
     );
     println!("AwfqiStorage on thumbv7em: {total} B ({parts:?})");

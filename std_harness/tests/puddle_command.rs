@@ -14,7 +14,12 @@ struct Cli {
 }
 
 fn args(out: &Path, runs: &str, algorithms: &str) -> Args {
-    Cli::parse_from([
+    args_with(out, runs, algorithms, &[])
+}
+
+/// [`args`] followed by `extra` options.
+fn args_with(out: &Path, runs: &str, algorithms: &str, extra: &[&str]) -> Args {
+    let fixed = [
         "puddle",
         "--setting",
         "source",
@@ -37,8 +42,8 @@ fn args(out: &Path, runs: &str, algorithms: &str) -> Args {
         "--quiet",
         "--out",
         out.to_str().unwrap(),
-    ])
-    .args
+    ];
+    Cli::parse_from(fixed.iter().chain(extra)).args
 }
 
 fn read(dir: &Path, name: &str) -> String {
@@ -110,14 +115,23 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     assert_eq!(summary.lines().count(), 1 + 2 * algorithms.len());
     // IWFQI and the kernel report their weight diagnostics, RBT its compliances.
     let d = base.join("d");
-    run(&args(&d, "1", "iwfqi,awfqi-kernel")).unwrap();
-    for name in ["iwfqi", "awfqi-kernel"] {
+    run(&args(&d, "1", "iwfqi,awfqi-kernel,awfqi-adaptive-kernel")).unwrap();
+    for name in ["iwfqi", "awfqi-kernel", "awfqi-adaptive-kernel"] {
         let json: serde_json::Value =
             serde_json::from_str(&read(&d, &format!("{name}.json"))).unwrap();
         let step = &json["runs"][0]["steps"][1];
         assert!(step["wr_eff"].as_f64().unwrap() > 0.0, "{name}");
         assert!(step["reward_gp"]["noise_variance"].is_number(), "{name}");
     }
+    // The adaptive kernel spends 50 queries per step and names its own approximator.
+    let adaptive: serde_json::Value =
+        serde_json::from_str(&read(&d, "awfqi-adaptive-kernel.json")).unwrap();
+    let steps = &adaptive["runs"][0]["steps"];
+    assert_eq!(steps[0]["n_target_samples"].as_f64(), Some(50.0));
+    assert_eq!(steps[1]["n_target_samples"].as_f64(), Some(100.0));
+    let kernel = &adaptive["runs"][0]["parameters"]["kernel"];
+    assert_eq!(kernel["fqi_tiles"], serde_json::json!([12, 12]), "{kernel}");
+    assert_eq!(kernel["fqi_tilings"], serde_json::json!(8));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
         .as_array()
@@ -125,4 +139,38 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     let total: f64 = c0.iter().map(|v| v.as_f64().unwrap()).sum();
     assert!((total - 1.0).abs() < 1e-9);
     std::fs::remove_dir_all(&base).unwrap();
+}
+
+/// iwfqi's default GP search: the screened one without transition weights (its result
+/// file says so), the spec's with them and whenever `--gp-search` names one. Below 300
+/// points the screened search is the spec's (docs/algorithms.md §4.6), so on this small
+/// budget both give the same returns.
+#[test]
+fn iwfqi_defaults_to_the_screened_search_without_transition_weights() {
+    let base = std::env::temp_dir().join(format!("awfqi-gp-search-{}", std::process::id()));
+    let one = ["--episodes-per-step", "1"];
+    let run_in = |name: &str, extra: &[&str]| -> serde_json::Value {
+        let dir = base.join(name);
+        let all: Vec<&str> = one.iter().chain(extra).copied().collect();
+        run(&args_with(&dir, "1", "iwfqi", &all)).unwrap();
+        serde_json::from_str(&read(&dir, "iwfqi.json")).unwrap()
+    };
+    let default = run_in("default", &[]);
+    let spec = run_in("spec", &["--gp-search", "spec"]);
+    let puddle = run_in("puddle", &["--dynamics", "puddle"]);
+    let parameters = |v: &serde_json::Value| v["runs"][0]["parameters"].clone();
+    assert_eq!(parameters(&default)["gp_search"], "screened");
+    assert!(parameters(&spec).get("gp_search").is_none());
+    assert!(parameters(&puddle).get("gp_search").is_none());
+    // The experiment says which search was asked for, so the two files do not merge.
+    assert!(
+        default["experiment"]["options"]["gp"]
+            .get("search")
+            .is_none()
+    );
+    assert_eq!(spec["experiment"]["options"]["gp"]["search"], "spec");
+    let returns = |v: &serde_json::Value| v["runs"][0]["steps"][0]["perf_disc_greedy_mean"].clone();
+    assert!(returns(&default).is_number());
+    assert_eq!(returns(&default), returns(&spec));
+    let _ = std::fs::remove_dir_all(&base);
 }

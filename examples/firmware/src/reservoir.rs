@@ -123,7 +123,8 @@ pub fn learn_and_compare(
     let mut kernel = Awfqi::builder(config.validate()?, grid, &sources, candidates)
         .stored_posteriors(&tables::SOURCE_POSTERIORS)
         .stored_scores(&tables::SCORES)
-        .build(plant, storage, &mut rng)?;
+        // The plant lent, not moved: the kernel then holds a reference, not a copy.
+        .build(&plant, storage, &mut rng)?;
 
     // 3. The active loop. A step that fails leaves the previous Q-table in place.
     for _ in 0..STEPS {

@@ -85,9 +85,10 @@ pub struct GpOptions {
     pub restarts: usize,
     /// Only the last this many training records are used (spec `max_gp`: 4000).
     pub max_gp: usize,
-    /// The search strategy (absent from result files when it is the spec's).
-    #[serde(default, skip_serializing_if = "GpSearch::is_spec")]
-    pub search: GpSearch,
+    /// The search strategy asked for (`--gp-search`); `None`: each learner's default
+    /// ([`GpOptions::resolved`]). Absent from result files when not asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search: Option<GpSearch>,
     /// Also run the other search (spec ↔ screened) on every fit, on the same data and
     /// starts, and record both optima in [`search_checks`]. The kept GP is `search`'s, so
     /// the results do not change; never written to result files.
@@ -139,33 +140,41 @@ pub enum GpSearch {
     Screened,
 }
 
-impl GpSearch {
-    /// `true` for [`GpSearch::Spec`].
-    pub fn is_spec(&self) -> bool {
-        *self == GpSearch::Spec
-    }
-}
-
 impl GpOptions {
-    /// Spec §4.2: 10 restarts, `max_gp` 4000.
+    /// Spec §4.2: 10 restarts, `max_gp` 4000, each learner's default search.
     pub fn published() -> Self {
         Self {
             restarts: gp_large::DEFAULT_RESTARTS,
             max_gp: gp_large::MAX_GP,
-            search: GpSearch::Spec,
+            search: None,
             check: false,
         }
+    }
+
+    /// These options with the search fixed: the one asked for, else `default` (a learner's
+    /// default: [`GpSearch::Screened`] where it was checked to land on the spec's optimum,
+    /// [`GpSearch::Spec`] elsewhere).
+    pub fn resolved(&self, default: GpSearch) -> Self {
+        Self {
+            search: Some(self.search.unwrap_or(default)),
+            ..*self
+        }
+    }
+
+    /// The search these options run (the spec's when none was resolved).
+    pub fn search(&self) -> GpSearch {
+        self.search.unwrap_or(GpSearch::Spec)
     }
 
     fn fit_options(&self) -> FitOptions {
         FitOptions {
             restarts: self.restarts,
             max_points: self.max_gp,
-            strategy: match self.search {
+            strategy: match self.search() {
                 GpSearch::Spec => gp_large::FitStrategy::AllStarts,
                 GpSearch::Screened => gp_large::FitStrategy::SCREENED,
             },
-            compare: self.check.then_some(match self.search {
+            compare: self.check.then_some(match self.search() {
                 GpSearch::Spec => gp_large::FitStrategy::SCREENED,
                 GpSearch::Screened => gp_large::FitStrategy::AllStarts,
             }),
@@ -221,7 +230,7 @@ impl RecordGp {
                     && let Ok(mut checks) = SEARCH_CHECKS.lock()
                 {
                     checks.push(SearchCheck {
-                        search: options.search,
+                        search: options.search(),
                         points: gp.len(),
                         comparison,
                     });

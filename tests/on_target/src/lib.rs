@@ -3,6 +3,8 @@
 //! high-water mark and reports through semihosting without pulling in `core::fmt`.
 #![no_std]
 
+#[cfg(feature = "compare")]
+pub mod cholesky_size;
 pub mod golden;
 pub mod probe;
 #[rustfmt::skip]

@@ -140,6 +140,8 @@ pub fn awfqi_puddle<
         kernel,
     } = storage;
     let worlds = PuddleWorld::<f32>::sources(Dynamics::Shared);
+    // The plant lent to the kernel, not moved into it (see `awfqi_puddle_32k`).
+    let target = PuddleWorld::target(Dynamics::Shared);
     let mut config = AwfqiConfig::thesis(run.budget);
     config.gp_training.search.max_evaluations = run.search.0;
     config.gp_training.search.restarts = run.search.1;
@@ -176,13 +178,12 @@ pub fn awfqi_puddle<
     )
     .fit_posteriors(posteriors.get_mut(..total).unwrap_or(&mut []))
     .scores_from(&worlds, scores)?
-    .build(PuddleWorld::target(Dynamics::Shared), kernel, &mut rng)?;
+    .build(&target, kernel, &mut rng)?;
     let mut report = None;
     for _ in 0..run.steps {
         report = Some(kernel.step(&mut rng)?);
     }
-    let target = kernel.target();
-    let evaluation = evaluate_greedy(target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
+    let evaluation = evaluate_greedy(&target, kernel.q(), &target.evaluation_protocol(), &mut rng)?;
     inspect(kernel.target_samples());
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
@@ -569,3 +570,20 @@ pub fn adaptive_puddle<
     inspect(&kernel);
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
+
+/// The recommended Puddle World configuration of adaptive AWFQI (the one the harness
+/// measures as `awfqi-adaptive-kernel`): the sources' 64-point mean functions and the
+/// kernel's memory — a 64-point target GP, 6 steps × 50 target records, one weight per
+/// published source record, 4 000 candidate slots (and their alias table), 12 × 12 tiles
+/// × 8 tilings of FQI entries (13² · 8 · 4 = 5 408), 50 verified states, 3 beliefs.
+pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 5408, 50>;
+
+/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 12 × 8
+/// tiles, the thesis's GP search.
+pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
+    budget: 50,
+    steps: 6,
+    candidates: 4000,
+    tiles: (12, 8),
+    search: None,
+};

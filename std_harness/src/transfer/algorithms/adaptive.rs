@@ -31,7 +31,7 @@ use super::Experiment;
 use super::episodic::Episodic;
 use crate::domains::{GpInput, Record, Rows};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::transfer::gp::{GpSummary, Output, RecordGp, SourceGps};
+use crate::transfer::gp::{GpOptions, GpSearch, GpSummary, Output, RecordGp, SourceGps};
 use crate::transfer::protocol::{Diagnostics, Learner};
 
 /// The switches and sizes of `awfqi-adaptive` (each ingredient can be turned off for the
@@ -74,6 +74,15 @@ pub struct AdaptiveOptions {
     /// Multiply every source record's weights by its source's plausibility (relative to the
     /// most plausible source), in every FQI iteration.
     pub source_weights: bool,
+    /// Hyperparameter search of this algorithm's own GP fits (the residual GP and the
+    /// weights' GP; refitted at every sub-batch). `Screened` is the spec's search up to 300
+    /// target points (sub-setting (b) unchanged) and keeps sub-setting (a), up to 3 000
+    /// points and six fits per step, affordable.
+    pub gp_search: GpSearch,
+    /// Exploration of the verification rollouts after a sub-batch's first (`None`: the
+    /// protocol's ε; 0: greedy, so they visit what the evaluation's noisy greedy rollouts
+    /// visit).
+    pub verify_epsilon: Option<f64>,
 }
 
 impl Default for AdaptiveOptions {
@@ -92,6 +101,8 @@ impl Default for AdaptiveOptions {
             model_rewards: false,
             source_weights: false,
             surprise_stop: false,
+            gp_search: GpSearch::Screened,
+            verify_epsilon: None,
         }
     }
 }
@@ -246,6 +257,12 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             "--adaptive-verify and --adaptive-floor must lie in [0, 1]"
         );
         anyhow::ensure!(options.candidates >= 1, "--adaptive-candidates must be ≥ 1");
+        anyhow::ensure!(
+            options
+                .verify_epsilon
+                .is_none_or(|e| (0.0..=1.0).contains(&e)),
+            "--adaptive-verify-epsilon must lie in [0, 1]"
+        );
         let (v_r, _) = experiment.variances()?;
         let sources = experiment.sources.union();
         Ok(Self {
@@ -261,6 +278,14 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             model: None,
             last: Diagnostics::default(),
         })
+    }
+
+    /// The experiment's GP options with this algorithm's hyperparameter search.
+    fn gp_options(&self) -> GpOptions {
+        GpOptions {
+            search: Some(self.options.gp_search),
+            ..self.experiment.options.gp
+        }
     }
 
     /// Sources' reward-GP means at `zs`: `[k][i]`.
@@ -313,7 +338,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             &residuals,
             Output::Reward,
             &spec,
-            &self.experiment.options.gp,
+            &self.gp_options(),
             rng,
         )?;
         Ok(RewardModel {
@@ -343,7 +368,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
                 &self.run.data,
                 Output::Reward,
                 &spec,
-                &options.gp,
+                &self.gp_options(),
                 rng,
             )?)
         };
@@ -480,7 +505,10 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         let threshold = 3.0 * self.reward_variance.sqrt();
         let domain = self.run.domain;
         let num_actions = domain.num_actions();
-        let epsilon = self.run.protocol.epsilon;
+        let epsilon = self
+            .options
+            .verify_epsilon
+            .unwrap_or(self.run.protocol.epsilon);
         let mut left = n;
         let mut first = true;
         while left > 0 {

@@ -5,8 +5,10 @@
 //! It runs as on a microcontroller, in `f32`, in fixed storage sized once per run: the
 //! kernel path's set-up ([`KernelSetup`]: the `f32` source records, their stored posteriors,
 //! the candidate rows of the setting and one `Gp<f32, 64, 3>` reward GP per source, whose
-//! posterior means are the sources' [`MeanFunction`]s), the kernel path's FQI approximator
-//! (`--kernel-q`), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
+//! posterior means are the sources' [`MeanFunction`]s), tile coding with
+//! [`ADAPTIVE_TILINGS`] offset tilings of [`ADAPTIVE_TILES`] tiles per axis (chosen on the
+//! tuning runs `--seed 100`, `docs/active-budget.md`; `--kernel-resolution` given
+//! explicitly sets the approximator of both kernels), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
 //! verification share, surprise, uncertainty, decision relevance, floor, candidates,
 //! relevance width; the others must keep their defaults).
 
@@ -23,6 +25,13 @@ use super::awfqi_kernel::{GP_POINTS, KernelSetup, Record32, T, row_set, to_f64};
 use crate::transfer::gp::GpSummary;
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
+
+/// Tiles per axis of the adaptive kernel's FQI by default: chosen on the tuning runs
+/// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
+/// 16 × 8, 20 × 8; 12 × 8 best at every step but one, see `docs/active-budget.md`).
+pub const ADAPTIVE_TILES: usize = 12;
+/// Offset tilings of the adaptive kernel's FQI by default.
+pub const ADAPTIVE_TILINGS: usize = 8;
 
 /// The core's configuration for `experiment`: the recommended one with the harness's
 /// adaptive options.
@@ -150,7 +159,7 @@ pub fn with_learner(
     let config = config(experiment)?.validate()?;
     let sources = setup.source_slices();
     let rows = row_set(&setup.config, &sources)?;
-    let approximator = setup.config.q.approximator()?;
+    let approximator = setup.config.adaptive_q.approximator()?;
     let entries = approximator
         .required_entries(awfqi::env::PUDDLE_ACTIONS)
         .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;

@@ -118,6 +118,8 @@ pub struct KernelConfig {
     pub spacing: f64,
     /// The FQI approximator.
     pub q: KernelQFunction,
+    /// The FQI approximator of `awfqi-adaptive-kernel`.
+    pub adaptive_q: KernelQFunction,
 }
 
 impl KernelConfig {
@@ -128,20 +130,30 @@ impl KernelConfig {
             mode,
             spacing,
             q: KernelQFunction::Tiles(TILES, TILINGS),
+            adaptive_q: KernelQFunction::Tiles(
+                super::adaptive_kernel::ADAPTIVE_TILES,
+                super::adaptive_kernel::ADAPTIVE_TILINGS,
+            ),
         }
     }
 
-    /// The same configuration with another FQI approximator.
+    /// The same configuration with another FQI approximator (for `awfqi-kernel`).
     pub fn with_q(self, q: KernelQFunction) -> Self {
         Self { q, ..self }
+    }
+
+    /// The same configuration with another FQI approximator for `awfqi-adaptive-kernel`.
+    pub fn with_adaptive_q(self, adaptive_q: KernelQFunction) -> Self {
+        Self { adaptive_q, ..self }
     }
 }
 
 /// What the kernel path builds once per experiment and shares by all runs (§11.2): the
 /// `f32` source data with their stored posteriors, and the values of its realistic score
-/// table.
+/// table, from source GPs of capacity `N` (the kernel's GP capacity; [`GP_POINTS`] unless a
+/// capacity study such as `examples/kernel_capacity.rs` asks for another).
 #[derive(Debug, Clone)]
-pub struct KernelSetup {
+pub struct KernelSetup<const N: usize = GP_POINTS> {
     /// The kernel's configuration.
     pub config: KernelConfig,
     records: Vec<Vec<Record32>>,
@@ -153,14 +165,14 @@ pub struct KernelSetup {
     transition_posteriors: Vec<Posterior<T>>,
     /// Each source's reward-GP posterior mean (the score table's GPs), for
     /// `awfqi-adaptive-kernel`.
-    means: Vec<MeanFunction<T, GP_POINTS, 3>>,
+    means: Vec<MeanFunction<T, N, 3>>,
     /// Wall time of the set-up (source GP fits and score table), seconds.
     pub setup_seconds: f64,
 }
 
-impl KernelSetup {
+impl<const N: usize> KernelSetup<N> {
     /// Converts the sources and builds the realistic score table from one
-    /// `Gp<f32, 64, 3>` reward GP per source (an even spread of its records, the core's
+    /// `Gp<f32, N, 3>` reward GP per source (an even spread of its records, the core's
     /// published training, [`ScoreTable::realistic`]), from the stream `rng`.
     pub fn new(
         sources: &SourceSet,
@@ -183,7 +195,7 @@ impl KernelSetup {
         let rows = row_set(&config, &slices)?;
         let mut values = vec![Scores::ZERO; rows.len()];
         let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
-        let mut gp = Box::new(Gp::<T, GP_POINTS, 3>::empty());
+        let mut gp = Box::new(Gp::<T, N, 3>::empty());
         let mut means = vec![MeanFunction::EMPTY; slices.len()];
         ScoreTable::realistic(
             rows,
@@ -224,15 +236,20 @@ impl KernelSetup {
 
     /// The kernel's fixed parameters for the result files.
     pub fn parameters(&self) -> serde_json::Value {
+        self.parameters_with(self.config.q)
+    }
+
+    /// The fixed parameters with the FQI approximator `q` (`awfqi-adaptive-kernel`'s).
+    pub fn parameters_with(&self, q: KernelQFunction) -> serde_json::Value {
         let mut out = serde_json::json!({
             "scalar": "f32",
-            "gp_capacity": GP_POINTS,
+            "gp_capacity": N,
             "gp_subset": "spread",
             "gp_search": "core Nelder-Mead, 10 restarts",
             "score_rows": self.values.len(),
             "score_spacing": self.config.spacing,
         });
-        match self.config.q {
+        match q {
             KernelQFunction::Tabular(n) => out["fqi_cells"] = serde_json::json!([n, n]),
             KernelQFunction::Tiles(n, k) => {
                 out["fqi_tiles"] = serde_json::json!([n, n]);
@@ -242,18 +259,29 @@ impl KernelSetup {
         out
     }
 
-    /// The stored reward posteriors of all sources, source after source.
-    pub(super) fn posteriors(&self) -> &[Posterior<T>] {
+    /// Rows of the score table (one alias entry each in a kernel's memory).
+    pub fn score_rows(&self) -> usize {
+        self.values.len()
+    }
+
+    /// The realistic score table's values, one per row (what the builder's
+    /// `stored_scores` reads; a firmware keeps them in flash).
+    pub fn score_values(&self) -> &[Scores<T, 2>] {
+        &self.values
+    }
+
+    /// The stored reward posteriors of all source records, source after source.
+    pub fn posteriors(&self) -> &[Posterior<T>] {
         &self.posteriors
     }
 
     /// Each source's reward mean function.
-    pub(super) fn means(&self) -> &[MeanFunction<T, GP_POINTS, 3>] {
+    pub(super) fn means(&self) -> &[MeanFunction<T, N, 3>] {
         &self.means
     }
 
     /// The source records, one slice per source (what the kernel borrows).
-    pub(super) fn source_slices(&self) -> Vec<&[Record32]> {
+    pub fn source_slices(&self) -> Vec<&[Record32]> {
         self.records.iter().map(Vec::as_slice).collect()
     }
 }
@@ -270,8 +298,8 @@ pub(super) fn row_set<'a>(
 /// The memory one run of the kernel writes, on the heap and sized at run time: what a
 /// firmware holds in an [`awfqi::AwfqiStorage`].
 #[derive(Debug)]
-pub struct KernelMemory {
-    gp: Box<Gp<T, GP_POINTS, 3>>,
+pub struct KernelMemory<const N: usize = GP_POINTS> {
+    gp: Box<Gp<T, N, 3>>,
     samples: Vec<Record32>,
     weights: Vec<T>,
     alias: Vec<AliasEntry<T>>,
@@ -279,14 +307,14 @@ pub struct KernelMemory {
     transition_weights: Vec<T>,
 }
 
-impl KernelMemory {
+impl<const N: usize> KernelMemory<N> {
     /// Room for `steps × budget` target samples, one weight per stored posterior, one alias
     /// entry per score row, the FQI entries of `setup`'s approximator and, with
     /// `transition_weights`, one transition weight per source record.
     ///
     /// Errors: an approximator too large for memory.
     pub fn new(
-        setup: &KernelSetup,
+        setup: &KernelSetup<N>,
         steps: usize,
         budget: usize,
         transition_weights: bool,
@@ -299,7 +327,7 @@ impl KernelMemory {
             .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
         let records = setup.posteriors.len();
         Ok(Self {
-            gp: Box::new(Gp::<T, GP_POINTS, 3>::empty()),
+            gp: Box::new(Gp::<T, N, 3>::empty()),
             samples: vec![Transition::EMPTY; steps * budget],
             weights: vec![0.0; records],
             alias: vec![AliasEntry::EMPTY; setup.values.len()],
@@ -309,7 +337,7 @@ impl KernelMemory {
     }
 
     /// The kernel's buffers and the transition-weight buffer.
-    fn buffers(&mut self) -> (AwfqiBuffers<'_, T, 2, 3, GP_POINTS>, &mut [T]) {
+    fn buffers(&mut self) -> (AwfqiBuffers<'_, T, 2, 3, N>, &mut [T]) {
         (
             AwfqiBuffers {
                 gp: &mut self.gp,
@@ -326,20 +354,20 @@ impl KernelMemory {
 /// `awfqi-kernel` as a [`Learner`]: each protocol step is one [`Awfqi::step`] (score →
 /// draw → query → weights → weighted FQI); the greedy action is the `f32` table's, and `D₀`
 /// is kept in `f64` for the result files.
-pub struct KernelLearner<'a> {
-    kernel: Awfqi<'a, T, PuddleWorld<T>, 2, 3, GP_POINTS>,
+pub struct KernelLearner<'a, const N: usize = GP_POINTS> {
+    kernel: Awfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
     collected: Vec<Record>,
 }
 
-impl<'a> KernelLearner<'a> {
+impl<'a, const N: usize> KernelLearner<'a, N> {
     /// The builder's set-up from the shared source data and score values (`sources` are
     /// `setup`'s [`KernelSetup::source_slices`]) over `memory`, with a per-step budget, on
     /// the Puddle World target of `dynamics`, from the stream `rng`; with `transition` (the
     /// estimator variance `v_s`), transition weights on every coordinate.
-    fn new(
-        setup: &'a KernelSetup,
+    pub fn new(
+        setup: &'a KernelSetup<N>,
         sources: &'a [&'a [Record32]],
-        memory: &'a mut KernelMemory,
+        memory: &'a mut KernelMemory<N>,
         budget: usize,
         dynamics: Dynamics,
         transition: Option<f64>,
@@ -372,7 +400,7 @@ impl<'a> KernelLearner<'a> {
     }
 }
 
-impl Learner for KernelLearner<'_> {
+impl<const N: usize> Learner for KernelLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.kernel.step(rng)?;
         let new = &self.kernel.target_samples()[self.collected.len()..];

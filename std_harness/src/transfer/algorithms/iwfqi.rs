@@ -32,7 +32,7 @@ use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::{Domain, GpInput, IdealMeans};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::transfer::gp::{Output, RecordGp};
+use crate::transfer::gp::{GpOptions, GpSearch, Output, RecordGp};
 use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::ScoreTableData;
 use crate::transfer::sources::SourceSet;
@@ -61,6 +61,8 @@ pub struct Iwfqi<'e, const D: usize = 2> {
     /// The score table for active collection (AWFQI); `None` for episodes (IWFQI).
     table: Option<Arc<ScoreTableData<D>>>,
     sources: Dataset<D>,
+    /// The target GPs' options (the experiment's, with the search this learner runs).
+    gp: GpOptions,
 }
 
 impl<'e, const D: usize> Iwfqi<'e, D> {
@@ -88,7 +90,13 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
             },
             table,
             sources: experiment.sources.union(),
+            gp: experiment.options.gp.resolved(GpSearch::Spec),
         })
+    }
+
+    /// The same learner with other GP options (iwfqi's default search).
+    pub fn with_gp(self, gp: GpOptions) -> Self {
+        Self { gp, ..self }
     }
 
     /// IWFQI with the ideal weights of §7.7 (computed once per experiment).
@@ -103,6 +111,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
             weights: Weights::Ideal(weights),
             table: None,
             sources: experiment.sources.union(),
+            gp: experiment.options.gp.resolved(GpSearch::Spec),
         })
     }
 
@@ -145,7 +154,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
             .map(|s| s.records.iter().map(|r| domain.input(r)).collect())
             .collect();
         let spec = domain.gp_spec(Output::Reward);
-        let gp = RecordGp::fit_records(domain, target, Output::Reward, &spec, &options.gp, rng)?;
+        let gp = RecordGp::fit_records(domain, target, Output::Reward, &spec, &self.gp, rng)?;
         let mut wr = Vec::with_capacity(self.sources.len());
         for (s, zs) in sources.iter().zip(&zs) {
             let post = gp.posteriors(zs, spec.noise(options.noise));
@@ -158,7 +167,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         for &d in transition_dims {
             let output = Output::Next(d);
             let spec = domain.gp_spec(output);
-            let gp_d = RecordGp::fit_records(domain, target, output, &spec, &options.gp, rng)?;
+            let gp_d = RecordGp::fit_records(domain, target, output, &spec, &self.gp, rng)?;
             let mut offset = 0;
             for (k, (s, zs)) in sources.iter().zip(&zs).enumerate() {
                 let stored = s.next_state.get(d).ok_or_else(|| {

@@ -1,0 +1,32 @@
+//! Footprint image: adaptive AWFQI (`awfqi-adaptive-kernel`) on Puddle World in its
+//! recommended configuration (f32): the published source data and their posteriors in
+//! flash, each source's 64-point reward GP fitted on the device and kept as a mean
+//! function, a 64-point target GP, 4 000 candidate rows of the spacing-0.1 grid per
+//! sub-batch, 12 × 12 tiles × 8 tilings, 6 steps of 50 queries (3 sub-batches of 70 %
+//! verification each) with the thesis's GP search; the greedy policy's evaluation. The
+//! memory is one zero-initialised static (`.bss`).
+#![no_std]
+#![no_main]
+
+use awfqi::AdaptiveAwfqi;
+use awfqi::env::PuddleWorld;
+use awfqi_on_target::workloads::{ADAPTIVE_RECOMMENDED, AdaptiveRecommended, adaptive_puddle};
+
+static mut MEMORY: AdaptiveRecommended = AdaptiveRecommended::new();
+
+awfqi_on_target::footprint_image!({
+    // SAFETY: the only reference to MEMORY.
+    let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+    let report = awfqi_on_target::probe::report;
+    report("memory bytes", core::mem::size_of::<AdaptiveRecommended>());
+    report(
+        "kernel bytes",
+        core::mem::size_of::<AdaptiveAwfqi<'static, f32, PuddleWorld<f32>, 2, 3, 64>>(),
+    );
+    adaptive_puddle(
+        memory,
+        ADAPTIVE_RECOMMENDED,
+        core::hint::black_box(1),
+        |_| {},
+    )
+});
