@@ -21,8 +21,9 @@ use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::adaptive::AdaptiveOptions;
-use super::awfqi_kernel::{GP_POINTS, KernelSetup, Record32, T, row_set, to_f64};
-use crate::transfer::gp::GpSummary;
+use super::awfqi_kernel::{
+    GP_POINTS, KernelSetup, Record32, T, reward_gp_summary, row_set, to_f64,
+};
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
 
@@ -115,18 +116,11 @@ impl Learner for AdaptiveKernelLearner<'_> {
         let report = self.kernel.step(rng)?;
         let new = &self.kernel.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
-        let hyper = &report.gp_hyperparameters;
         Ok(Diagnostics {
             n_source_samples: Some(report.n_source_samples),
             wr_mean: Some(f64::from(report.wr_mean)),
             wr_eff: Some(f64::from(report.wr_eff)),
-            reward_gp: Some(GpSummary {
-                points: report.gp_points,
-                signal_variance: f64::from(hyper.signal_variance),
-                length_scale: f64::from(hyper.length_scales[0]),
-                noise_variance: f64::from(hyper.noise_variance),
-                log_marginal_likelihood: f64::from(report.gp_log_likelihood),
-            }),
+            reward_gp: Some(reward_gp_summary(&report)),
             ..Diagnostics::default()
         })
     }

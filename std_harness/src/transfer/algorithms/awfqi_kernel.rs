@@ -405,20 +405,13 @@ impl<const N: usize> Learner for KernelLearner<'_, N> {
         let report = self.kernel.step(rng)?;
         let new = &self.kernel.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
-        let hyper = &report.gp_hyperparameters;
         Ok(Diagnostics {
             n_source_samples: Some(report.n_source_samples),
             wr_mean: Some(f64::from(report.wr_mean)),
             wr_eff: Some(f64::from(report.wr_eff)),
             ws_mean: Some(f64::from(report.ws_mean)),
             ws_eff: Some(f64::from(report.ws_eff)),
-            reward_gp: Some(GpSummary {
-                points: report.gp_points,
-                signal_variance: f64::from(hyper.signal_variance),
-                length_scale: f64::from(hyper.length_scales[0]),
-                noise_variance: f64::from(hyper.noise_variance),
-                log_marginal_likelihood: f64::from(report.gp_log_likelihood),
-            }),
+            reward_gp: Some(reward_gp_summary(&report)),
             ..Diagnostics::default()
         })
     }
@@ -430,6 +423,19 @@ impl<const N: usize> Learner for KernelLearner<'_, N> {
 
     fn target_samples(&self) -> &[Record] {
         &self.collected
+    }
+}
+
+/// The target reward GP of a kernel step, as the result files record it (shared by the
+/// embedded learners, `awfqi-kernel` and `awfqi-adaptive-kernel`).
+pub(super) fn reward_gp_summary<const I: usize>(report: &awfqi::StepReport<T, I>) -> GpSummary {
+    let hyper = &report.gp_hyperparameters;
+    GpSummary {
+        points: report.gp_points,
+        signal_variance: f64::from(hyper.signal_variance),
+        length_scale: f64::from(hyper.length_scales[0]),
+        noise_variance: f64::from(hyper.noise_variance),
+        log_marginal_likelihood: f64::from(report.gp_log_likelihood),
     }
 }
 
