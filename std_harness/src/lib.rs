@@ -10,6 +10,7 @@ pub mod domains;
 pub mod forest_fqi;
 pub mod gp_large;
 pub mod identification;
+pub mod joint_q;
 pub mod plot;
 pub mod run_range;
 pub mod seeding;

@@ -167,6 +167,11 @@ pub struct Args {
     /// reference code's ε-greedy around a zero Q-function: mostly the first action).
     #[arg(long, value_enum)]
     pub first_step: Option<protocol::FirstStep>,
+    /// FQI's Q-function: `per-action` forests (spec §5, the default) or `joint`, one forest
+    /// over (state, action value) as the reference code fits on the Dam (whose action
+    /// space it leaves undeclared). An ablation; FQI on 2-D states (Dam, Puddle World) only.
+    #[arg(long, value_enum)]
+    pub q_function: Option<crate::joint_q::QFunctionKind>,
     /// Grid spacing of the score tables. Default: Puddle World 0.1 (both coordinates), Dam
     /// 10 (storage; every day), Acrobot π/6 (angles; 9 values per velocity).
     #[arg(long)]
@@ -522,6 +527,13 @@ pub fn build_experiment<const D: usize>(
     protocol.iterations = config.iterations;
     protocol.trees = config.trees;
     protocol.first_step = config.args.first_step.unwrap_or_default();
+    protocol.q_function = config.args.q_function.unwrap_or_default();
+    anyhow::ensure!(
+        protocol.q_function.is_per_action()
+            || (D == 2 && config.algorithms.iter().all(|&a| a == Algorithm::Fqi)),
+        "--q-function joint is an ablation of FQI on 2-D states: use it with --algorithms fqi \
+         on the Dam or Puddle World"
+    );
     let options = TransferOptions {
         variances: args.variances,
         noise: match args.noise {

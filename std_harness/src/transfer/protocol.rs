@@ -14,6 +14,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::domains::{Domain, Record};
+use crate::joint_q::QFunctionKind;
 use crate::trees::TreeParams;
 
 /// The protocol's parameters (spec §3.2, §13).
@@ -44,6 +45,10 @@ pub struct Protocol {
     /// The collection policy of step 1 (absent when uniform, spec §3.2).
     #[serde(default, skip_serializing_if = "FirstStep::is_uniform")]
     pub first_step: FirstStep,
+    /// How FQI represents Q (absent when per action, spec §5; `joint` is the reference
+    /// code's single forest over state and action value on the Dam, an ablation).
+    #[serde(default, skip_serializing_if = "QFunctionKind::is_per_action")]
+    pub q_function: QFunctionKind,
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
@@ -89,6 +94,7 @@ impl Protocol {
             trees: p.trees,
             tree: p.tree,
             first_step: FirstStep::Uniform,
+            q_function: QFunctionKind::PerAction,
         }
     }
 }

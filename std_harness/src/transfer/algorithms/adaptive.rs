@@ -436,7 +436,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         }
         let mut options = self.run.options(FqiOptions::iwfqi(&wr, &ws));
         options.n_trees = trees;
-        self.run.q = Some(fqi(&union, &options, rng)?.q);
+        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
         let mut s = WeightSummary::<f64>::new();
         s.add(&wr)?;
         self.last = Diagnostics {

@@ -7,8 +7,8 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use crate::domains::{Domain, Record};
 use crate::forest_fqi::FqiOptions;
+use crate::joint_q::QFunction;
 use crate::transfer::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
-use crate::trees::ActionForests;
 
 /// The episodic part every baseline shares: the domain, `D₀` and the last Q-function.
 #[derive(Debug, Clone)]
@@ -20,7 +20,7 @@ pub struct Episodic<'e, const D: usize = 2> {
     /// `D₀`.
     pub data: Vec<Record<D>>,
     /// The Q-function of the last step (`None` before the first).
-    pub q: Option<ActionForests<D>>,
+    pub q: Option<QFunction<D>>,
 }
 
 impl<'e, const D: usize> Episodic<'e, D> {

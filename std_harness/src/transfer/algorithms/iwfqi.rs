@@ -249,7 +249,7 @@ impl<const D: usize> EpisodicLearner<D> for Iwfqi<'_, D> {
         let mut ws = vec![1.0; n_target];
         ws.extend_from_slice(&ws_source);
         let options = self.run.options(FqiOptions::iwfqi(&wr, &ws));
-        self.run.q = Some(fqi(&union, &options, rng)?.q);
+        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
         let summary = |w: &[f64]| -> anyhow::Result<(f64, f64)> {
             let mut s = WeightSummary::<f64>::new();
             s.add(w)?;

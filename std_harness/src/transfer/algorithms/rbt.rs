@@ -257,7 +257,7 @@ impl<const D: usize> EpisodicLearner<D> for Rbt<'_, D> {
             transferred += n_k;
         }
         let options = self.run.options(FqiOptions::plain());
-        self.run.q = Some(fqi(&union, &options, rng)?.q);
+        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
         Ok(Diagnostics {
             n_source_samples: Some(transferred),
             compliances: Some(compliances),

@@ -35,7 +35,7 @@ impl<const D: usize> EpisodicLearner<D> for Sdt<'_, D> {
         let n_target = union.len();
         union.extend_from(&self.sources);
         let options = self.run.options(FqiOptions::sdt(n_target));
-        self.run.q = Some(fqi(&union, &options, rng)?.q);
+        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
         Ok(Diagnostics {
             n_source_samples: Some(self.sources.len()),
             n_eff: Some(union.len()),
