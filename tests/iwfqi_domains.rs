@@ -306,3 +306,127 @@ fn bad_input_is_a_typed_error_and_draws_nothing() {
         })
     );
 }
+
+/// Values worked out by hand from the published equations (module docs of `awfqi::env::dam`),
+/// independent of the Python golden script.
+#[test]
+fn dam_hand_computed_values() {
+    let env = Dam::<f64>::target(); // α = 0.3, β = 0.7, profile 1
+    // s = 350, release 5: flooding −(350 − 300)/4 = −12.5, demand −(10 − 5)² = −25,
+    // r = 0.3·(−12.5) + 0.7·(−25) = −21.25.
+    assert!((env.mean_reward([350.0, 10.0], 2).unwrap() + 21.25).abs() < 1e-12);
+    // s = 100 (no flood), release 10 meets the demand: r = 0.
+    assert_eq!(env.mean_reward([100.0, 10.0], 4).unwrap(), 0.0);
+    // s = 60 can release at most 60 − 50 = 10: asking 30 releases 10, r = 0.
+    assert_eq!(env.mean_reward([60.0, 10.0], 7).unwrap(), 0.0);
+    // s = 40 releases nothing whatever is asked: r = 0.7·(−100) = −70.
+    assert!((env.mean_reward([40.0, 10.0], 7).unwrap() + 70.0).abs() < 1e-12);
+    // Profile 1 on day 1 (x = 0): (sin 0 + 0.5)·8 + 4 = 8; from s = 100 releasing 3 the
+    // mean next storage is 100 + 8 − 3 = 105 (far from 0, the clip at 0 does not bite:
+    // P(𝒩(105, 4) < 0) is below 10⁻³⁰⁰).
+    let next = env.mean_next_state([100.0, 1.0], 1).unwrap();
+    assert!(
+        (next[0] - 105.0).abs() < 1e-12 && next[1] == 2.0,
+        "{next:?}"
+    );
+    // Day 121 (x = 120) of profile 1: (sin(120·3π/359)/2 + 0.5)·8 + 4.
+    let x = 120.0 * 3.0 * std::f64::consts::PI / 359.0;
+    let want = (x.sin() / 2.0 + 0.5) * 8.0 + 4.0;
+    assert!((env.inflow_mean([100.0, 121.0]).unwrap() - want).abs() < 1e-12);
+}
+
+/// The Acrobot's equations are symmetric under the mirror `s ↦ −s` with the torque
+/// reversed (action `a ↦ 1 − a`): the step of the mirrored state is the mirrored step,
+/// and the swing-up reward (`−cos θ₁ − cos(θ₁ + θ₂) − 2`, even) is unchanged. A closed-form
+/// property of the published dynamics, checked on every task and on states away from the
+/// ±π wrap.
+#[test]
+fn acrobot_steps_are_mirror_symmetric() {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let mut checked = 0;
+    for k in 0..3 {
+        let env = acrobot::<f64>(k);
+        for _ in 0..200 {
+            let u =
+                |rng: &mut ChaCha8Rng, h: f64| (2.0 * awfqi::rng::uniform::<f64, _>(rng) - 1.0) * h;
+            let s = [
+                u(&mut rng, 2.0),
+                u(&mut rng, 2.0),
+                u(&mut rng, 4.0),
+                u(&mut rng, 8.0),
+            ];
+            let mirrored = s.map(|x| -x);
+            for a in 0..2 {
+                let t = env.step(s, a).unwrap();
+                let m = env.step(mirrored, 1 - a).unwrap();
+                if t.next_state[..2].iter().any(|x| x.abs() > 3.0) {
+                    continue; // near the wrap, ±π may land on either side
+                }
+                for d in 0..4 {
+                    assert!(
+                        (m.next_state[d] + t.next_state[d]).abs() < 1e-9,
+                        "task {k} {s:?} a {a} dim {d}: {:?} vs {:?}",
+                        t.next_state,
+                        m.next_state
+                    );
+                }
+                checked += 1;
+                if k < 2 {
+                    assert!((m.reward - t.reward).abs() < 1e-12);
+                    assert_eq!(m.absorbing, t.absorbing);
+                }
+            }
+        }
+    }
+    assert!(
+        checked > 900,
+        "only {checked} of 1200 pairs away from the wrap"
+    );
+    // Hanging at rest: reward −1 − 1 − 2 = −4; upright: 1 + 1 − 2 = 0 (and in the goal).
+    let target = Acrobot::<f64>::target();
+    assert_eq!(target.mean_reward([0.0; 4]).unwrap(), -4.0);
+    assert!(
+        target
+            .mean_reward([std::f64::consts::PI, 0.0, 0.0, 0.0])
+            .unwrap()
+            .abs()
+            < 1e-15
+    );
+}
+
+#[test]
+fn mean_functions_reject_bad_actions_and_states() {
+    let dam = Dam::<f64>::target();
+    let action_err: awfqi::Result<()> = Err(Error::OutOfRange {
+        parameter: "action",
+    });
+    assert_eq!(
+        dam.mean_reward([100.0, 5.0], DAM_ACTIONS).map(|_| ()),
+        action_err
+    );
+    assert_eq!(
+        dam.mean_next_state([100.0, 5.0], DAM_ACTIONS).map(|_| ()),
+        action_err
+    );
+    assert_eq!(
+        dam.release([100.0, 5.0], DAM_ACTIONS).map(|_| ()),
+        action_err
+    );
+    assert_eq!(
+        dam.inflow_mean([f64::NAN, 5.0]),
+        Err(Error::NonFinite { parameter: "state" })
+    );
+    let acro = Acrobot::<f64>::target();
+    assert_eq!(acro.mean_next_state([0.0; 4], 2).map(|_| ()), action_err);
+    let nan = Err(Error::NonFinite { parameter: "state" });
+    assert_eq!(acro.mean_reward([f64::NAN, 0.0, 0.0, 0.0]), nan);
+    assert_eq!(
+        acro.in_goal([0.0, 0.0, f64::INFINITY, 0.0]),
+        nan.map(|_: f64| false)
+    );
+    assert_eq!(
+        acro.mean_next_state([0.0, 0.0, 0.0, f64::NEG_INFINITY], 0)
+            .map(|_| ()),
+        Err(Error::NonFinite { parameter: "state" })
+    );
+}
