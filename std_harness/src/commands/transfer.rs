@@ -865,7 +865,8 @@ fn run_in_pool<const D: usize>(
                     | Algorithm::AwfqiAdaptiveKernel
             )
         });
-        figures::learning_curves(&title, &std_path, &embedded)
+        let clip = experiment.protocol.dynamics.map(|_| figures::PUDDLE_CLIP);
+        figures::learning_curves(&title, &std_path, &embedded, clip)
             .save(&out.join("learning_curves"))?;
         let samples: Vec<(Algorithm, String, usize, Vec<[f64; 3]>)> = files
             .iter()

@@ -82,12 +82,37 @@ fn clipped(mut panel: Panel, lo: f64, hi: Option<f64>, from: f64) -> Panel {
     panel
 }
 
+/// Where the learning curves are clipped: Puddle World's returns live in [−50, 0] once
+/// learned, with stuck runs far below; the Dam's (≈ −2 000) and Acrobot's (≈ −50) scales
+/// need no clip ([`learning_curves`] with `None`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clip {
+    /// Means below this are drawn on the main panel's bottom edge ([`CLIP_BELOW`]).
+    pub below: f64,
+    /// The zoom panel never reaches below this (−50).
+    pub zoom_floor: f64,
+}
+
+/// Puddle World's clip: [`CLIP_BELOW`] and a zoom floor of −50.
+pub const PUDDLE_CLIP: Clip = Clip {
+    below: CLIP_BELOW,
+    zoom_floor: -50.0,
+};
+
 /// Learning curves: the faithful std algorithms with the main panel clipped at
-/// [`CLIP_BELOW`] (clipped means marked) and a zoom on the asymptote (the second half of
-/// the steps, as the thesis's figures do); FQI, AWFQI, AWFQI_oracle, awfqi-adaptive and
-/// the core's embedded versions of AWFQI and of awfqi-adaptive in a last panel (omitted
-/// without either kernel).
-pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Figure {
+/// `clip.below` (clipped means marked; no clip with `None`) and a zoom on the asymptote
+/// (the second half of the steps, as the thesis's figures do, floored at
+/// `clip.zoom_floor`); FQI, AWFQI, AWFQI_oracle, awfqi-adaptive and the core's embedded
+/// versions of AWFQI and of awfqi-adaptive in a last panel (omitted without either
+/// kernel).
+pub fn learning_curves(
+    title: &str,
+    std_path: &Curves,
+    embedded: &Curves,
+    clip: Option<Clip>,
+) -> Figure {
+    let below = clip.map_or(f64::NEG_INFINITY, |c| c.below);
+    let zoom_floor = clip.map_or(f64::NEG_INFINITY, |c| c.zoom_floor);
     let full = curve_panel(title.to_string(), std_path);
     let min = std_path
         .iter()
@@ -98,19 +123,19 @@ pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Fig
         .flat_map(|(_, _, rows)| rows.iter().map(|r| r.n_episodes as f64))
         .fold(0.0, f64::max);
     let mut panels = Vec::new();
-    if min < CLIP_BELOW {
-        panels.push(clipped(full.clone(), CLIP_BELOW, None, 0.0));
+    if min < below {
+        panels.push(clipped(full.clone(), below, None, 0.0));
     } else {
         panels.push(full.clone());
     }
-    // The zoom: from the middle step on, down to the lowest of those means (or −50).
+    // The zoom: from the middle step on, down to the lowest of those means (or the floor).
     let from = (last / 2.0).ceil();
     let zoom_lo = std_path
         .iter()
         .flat_map(|(_, _, rows)| rows.iter().filter(|r| r.n_episodes as f64 >= from))
         .map(|r| r.mean - r.stderr)
         .fold(f64::INFINITY, f64::min)
-        .max(-50.0);
+        .max(zoom_floor);
     if last >= 2.0 && zoom_lo.is_finite() {
         let mut zoom = clipped(full, zoom_lo.floor() - 1.0, None, from);
         zoom.title = "zoom: the second half of the steps".into();
@@ -125,8 +150,8 @@ pub fn learning_curves(title: &str, std_path: &Curves, embedded: &Curves) -> Fig
             .iter()
             .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))
             .fold(f64::INFINITY, f64::min);
-        panels.push(if min < CLIP_BELOW {
-            clipped(panel, CLIP_BELOW, None, 0.0)
+        panels.push(if min < below {
+            clipped(panel, below, None, 0.0)
         } else {
             panel
         });
@@ -211,7 +236,7 @@ mod tests {
     #[test]
     fn clipped_points_sit_on_the_edge_and_are_marked() {
         let curves = vec![("a".to_string(), 0, rows(&[-400.0, -60.0, -25.0, -20.0]))];
-        let figure = learning_curves("t", &curves, &[]);
+        let figure = learning_curves("t", &curves, &[], Some(PUDDLE_CLIP));
         assert_eq!(figure.panels.len(), 2);
         let main = &figure.panels[0];
         let (lo, hi) = main.y_range.unwrap();
@@ -237,8 +262,24 @@ mod tests {
     #[test]
     fn unclipped_curves_keep_their_automatic_range() {
         let curves = vec![("a".to_string(), 0, rows(&[-40.0, -30.0]))];
-        let figure = learning_curves("t", &curves, &[]);
+        let figure = learning_curves("t", &curves, &[], Some(PUDDLE_CLIP));
         assert_eq!(figure.panels[0].y_range, None);
         assert_eq!(figure.panels[0].series.len(), 1);
+    }
+
+    #[test]
+    fn unclipped_domains_zoom_on_their_own_scale() {
+        // The Dam's scale: nothing clipped, the zoom (steps 2–4) starts just below the
+        // lowest mean − s.e. there (−1 950 − 2 → −1 953), not at −50.
+        let curves = vec![(
+            "a".to_string(),
+            0,
+            rows(&[-2500.0, -1950.0, -1900.0, -1920.0]),
+        )];
+        let figure = learning_curves("t", &curves, &[], None);
+        assert_eq!(figure.panels[0].y_range, None);
+        let zoom = &figure.panels[1];
+        assert_eq!(zoom.y_range.unwrap().0, -1953.0);
+        assert_eq!(zoom.series.len(), 1, "no clipped marks");
     }
 }
