@@ -163,7 +163,11 @@ pub fn domain() -> Domain<4> {
                 min_samples_leaf: 2,
             },
             variances: (0.01, 1.0),
-            ideal_variances: (0.01, 0.01),
+            // What the published result file records (`acrobot-multitask/results/
+            // wfqi-ideal.json` @ c1a1f7d: `var_rw` 0.0001, `var_st` 1.0, batch 10, 20 steps);
+            // the run script stored at 8d9352e says 0.1², 0.1² with batch 20 and 10 steps,
+            // a configuration whose results are not published.
+            ideal_variances: (0.0001, 1.0),
             ideal_means: IdealMeans::Exact,
             max_gp: 10_000,
             rbt_total: 10_000,
