@@ -994,18 +994,22 @@ fn timing_report(
     Ok(out)
 }
 
-/// The GP search of the report's header: the one asked for, else the default and, when
-/// this configuration runs it, iwfqi's.
+/// The GP search of the report's header: the one asked for, else the spec's and the
+/// algorithms of this configuration whose default differs from it.
 fn search_description<const D: usize>(config: &Config, experiment: &Experiment<D>) -> String {
-    let gp = &experiment.options.gp;
-    match gp.search {
-        Some(search) => format!("{search:?}"),
-        None if config.algorithms.contains(&Algorithm::Iwfqi)
-            && experiment.iwfqi_search() == GpSearch::Screened =>
-        {
-            "Spec (iwfqi: Screened)".into()
-        }
-        None => format!("{:?}", GpSearch::Spec),
+    if let Some(search) = experiment.options.gp.search {
+        return format!("{search:?}");
+    }
+    let screened: Vec<&str> = config
+        .algorithms
+        .iter()
+        .filter(|&&a| experiment.default_search(a) == GpSearch::Screened)
+        .map(|a| a.name())
+        .collect();
+    if screened.is_empty() {
+        format!("{:?}", GpSearch::Spec)
+    } else {
+        format!("Spec ({}: Screened)", screened.join(", "))
     }
 }
 
