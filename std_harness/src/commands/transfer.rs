@@ -76,6 +76,16 @@ pub enum KernelQ {
     Tiles,
 }
 
+/// The Q-function approximator of `awfqi-adaptive-kernel`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AdaptiveKernelQ {
+    /// Tile coding (12 × 12 tiles × 8 tilings unless `--kernel-resolution` is given).
+    Tiles,
+    /// Kernel averaging over the `--kernel-neighbours` nearest records (the core's
+    /// `KnnFqi`), uniform or Gaussian (`--kernel-bandwidth`).
+    Knn,
+}
+
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
 /// the domain's default (see each command's help).
 #[derive(Debug, Clone, ClapArgs)]
@@ -187,6 +197,16 @@ pub struct Args {
     /// Offset tilings of `--kernel-q tiles`.
     #[arg(long, default_value_t = 4)]
     pub kernel_tilings: usize,
+    /// Q-function approximator of awfqi-adaptive-kernel's FQI.
+    #[arg(long, value_enum, default_value = "tiles")]
+    pub adaptive_kernel_q: AdaptiveKernelQ,
+    /// Neighbours per prediction of `--adaptive-kernel-q knn`.
+    #[arg(long, default_value_t = 4)]
+    pub kernel_neighbours: usize,
+    /// Gaussian bandwidth of `--adaptive-kernel-q knn`, as a share of each coordinate's
+    /// range (absent: the neighbours weigh equally).
+    #[arg(long)]
+    pub kernel_bandwidth: Option<f64>,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -587,6 +607,12 @@ pub fn build_experiment<const D: usize>(
             // An explicit resolution sets both kernels' approximators.
             if args.kernel_resolution.is_some() {
                 kernel = kernel.with_adaptive_q(q);
+            }
+            if args.adaptive_kernel_q == AdaptiveKernelQ::Knn {
+                kernel = kernel.with_adaptive_q(KernelQFunction::knn(
+                    args.kernel_neighbours,
+                    args.kernel_bandwidth,
+                )?);
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }

@@ -18,8 +18,8 @@ use std::time::Instant;
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
     AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, FqiEntry, Gp,
-    GpTraining, MeanFunction, Posterior, RowSet, ScoreTable, Scores, SubsetRule, Tilings,
-    Transition, WeightParams,
+    GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores,
+    SubsetRule, Tilings, Transition, WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -43,12 +43,15 @@ pub const TILINGS: usize = 4;
 
 /// The Q-function approximator of the kernel's FQI (`--kernel-q`, `--kernel-resolution`,
 /// `--kernel-tilings`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum KernelQFunction {
     /// A table of this many cells per axis.
     Tabular(usize),
     /// Tile coding: tiles per axis, tilings.
     Tiles(usize, usize),
+    /// Kernel averaging over this many nearest records, with a Gaussian bandwidth (share of
+    /// the range) or uniform weights (`None`); `awfqi-adaptive-kernel` only.
+    Knn(usize, Option<f64>),
 }
 
 impl KernelQFunction {
@@ -74,11 +77,24 @@ impl KernelQFunction {
         }
     }
 
+    /// Kernel averaging over `k` neighbours (`--kernel-neighbours`, `--kernel-bandwidth`).
+    ///
+    /// Errors: those of [`awfqi::Neighbours::new`].
+    pub fn knn(k: usize, bandwidth: Option<f64>) -> anyhow::Result<Self> {
+        let out = Self::Knn(k, bandwidth);
+        out.approximator()?;
+        Ok(out)
+    }
+
     /// The core's approximator over Puddle World's `[0, 10]²`.
     pub(super) fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
             Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
             Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
+            Self::Knn(k, h) => {
+                let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
+                Neighbours::cube(k, 0.0, 10.0, kernel)?.into()
+            }
         })
     }
 }
@@ -254,6 +270,10 @@ impl<const N: usize> KernelSetup<N> {
             KernelQFunction::Tiles(n, k) => {
                 out["fqi_tiles"] = serde_json::json!([n, n]);
                 out["fqi_tilings"] = k.into();
+            }
+            KernelQFunction::Knn(k, h) => {
+                out["fqi_neighbours"] = k.into();
+                out["fqi_bandwidth"] = h.into();
             }
         }
         out
