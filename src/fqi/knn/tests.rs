@@ -206,7 +206,7 @@ fn bad_input_is_refused_and_leaves_the_fit_intact() {
         })
     );
     samples[2].action = 0;
-    samples[0].reward = 1e300;
+    samples[0].reward = 1e307;
     assert!(q.fit(&[SampleSet::unweighted(&samples)], &config).is_err());
     assert_eq!(q.fit(&[], &config), Err(Error::EmptyData));
     assert_eq!(q.records(), &before[..]);
