@@ -444,7 +444,9 @@ fn kernel_averaging_plans_on_d0_and_the_weighted_sources() {
     )
     .unwrap();
     let mut reference = KnnStorage::<f64, 2, 156, { 156 * 4 * 3 }>::new();
-    let mut q = Approximator::from(nb).build(4, reference.storage()).unwrap();
+    let mut q = Approximator::from(nb)
+        .build(4, reference.storage())
+        .unwrap();
     let plain: Vec<_> = slices.iter().map(|s| SampleSet::unweighted(s)).collect();
     q.fit(&plain, &valid.awfqi.fqi).unwrap();
     kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
@@ -454,7 +456,11 @@ fn kernel_averaging_plans_on_d0_and_the_weighted_sources() {
     let mut sets = vec![SampleSet::unweighted(&d0)];
     let mut offset = 0;
     for s in &slices {
-        sets.push(SampleSet::weighted(s, Some(&w[offset..offset + s.len()]), None));
+        sets.push(SampleSet::weighted(
+            s,
+            Some(&w[offset..offset + s.len()]),
+            None,
+        ));
         offset += s.len();
     }
     q.fit(&sets, &valid.awfqi.fqi).unwrap();

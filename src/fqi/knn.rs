@@ -66,6 +66,8 @@ pub struct Neighbours<T, const D: usize> {
     k: usize,
     scale: [T; D],
     kernel: Kernel<T>,
+    /// Squared reach (∞: off), see [`Neighbours::with_reach`].
+    reach2: T,
 }
 
 impl<T: Real, const D: usize> Neighbours<T, D> {
@@ -98,7 +100,12 @@ impl<T: Real, const D: usize> Neighbours<T, D> {
                 });
             }
         }
-        Ok(Self { k, scale, kernel })
+        Ok(Self {
+            k,
+            scale,
+            kernel,
+            reach2: T::INFINITY,
+        })
     }
 
     /// [`Neighbours::new`] on the cube `[lower, upper]^D`.
@@ -106,6 +113,28 @@ impl<T: Real, const D: usize> Neighbours<T, D> {
     /// Errors: as [`Neighbours::new`].
     pub fn cube(k: usize, lower: T, upper: T, kernel: Kernel<T>) -> Result<Self> {
         Self::new(k, [lower; D], [upper; D], kernel)
+    }
+
+    /// The same geometry with pessimism for actions without nearby records: where some
+    /// action has a record within `reach` (range units) of the state, an action whose
+    /// nearest record is farther is valued at most the lowest value of those that do (the
+    /// kNN counterpart of [`EmptyCells::CappedNearest`](super::EmptyCells): an action
+    /// never tried near a visited state is not preferred to the tried ones), in every
+    /// iteration and prediction.
+    ///
+    /// Errors: a `reach` that is not positive, or whose square is not finite
+    /// ([`Error::InvalidParameter`] `reach`).
+    pub fn with_reach(self, reach: T) -> Result<Self> {
+        let reach2 = reach.squared();
+        if !(reach > T::ZERO && reach2.is_finite() && reach2 > T::ZERO) {
+            return Err(Error::InvalidParameter { parameter: "reach" });
+        }
+        Ok(Self { reach2, ..self })
+    }
+
+    /// The reach of [`Neighbours::with_reach`] (∞ when off).
+    pub fn reach(&self) -> T {
+        self.reach2.sqrt()
     }
 
     /// Neighbours per prediction.
@@ -241,6 +270,32 @@ impl<T: Real> Nearest<T> {
     fn as_slice(&self) -> &[(T, u16)] {
         self.items.get(..self.len).unwrap_or(&[])
     }
+}
+
+/// The radius of the reward model at a record: that of the `k` nearest records of
+/// positive weight (`nearest`, ascending, the record's action), widened until their total
+/// weight reaches `min`; past [`MAX_NEIGHBOURS`] records, the nearest record whose own
+/// weight reaches `min` (`trusted`) bounds it instead. `None`: no record of positive
+/// weight.
+fn reward_radius<T: Real, const D: usize>(
+    nearest: &[(T, u16)],
+    trusted: &[(T, u16)],
+    records: &[KnnRecord<T, D>],
+    k: usize,
+    min: T,
+) -> Option<T> {
+    let mut mass = T::ZERO;
+    for (taken, &(d2, j)) in nearest.iter().enumerate() {
+        mass += records.get(usize::from(j)).map_or(T::ZERO, |r| r.value);
+        if taken + 1 >= k && mass >= min {
+            return Some(d2);
+        }
+    }
+    let widest = nearest.last().map(|&(d2, _)| d2)?;
+    Some(match trusted.first() {
+        Some(&(d2, _)) if nearest.len() == MAX_NEIGHBOURS => widest.max(d2),
+        _ => widest,
+    })
 }
 
 /// A Q-function by kernel averaging over the records (module docs), over caller-lent
@@ -407,9 +462,9 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
                 break;
             };
             let records = self.live();
-            // Pass 1: the radius of the k nearest trusted records (or of any positive weight).
-            let mut trusted = Nearest::new(nb.k);
-            let mut positive = Nearest::new(nb.k);
+            // Pass 1: the nearest records of positive reward weight, ascending.
+            let mut nearest = Nearest::new(MAX_NEIGHBOURS);
+            let mut trusted = Nearest::new(1);
             let mut d2_min = T::INFINITY;
             for (j, r) in records.iter().enumerate() {
                 if r.action != me.action || r.value <= T::ZERO {
@@ -417,13 +472,12 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
                 }
                 let d2 = nb.distance2(&me.state, &r.state);
                 d2_min = d2_min.min(d2);
-                positive.offer(d2, j as u16);
+                nearest.offer(d2, j as u16);
                 if r.value >= min {
                     trusted.offer(d2, j as u16);
                 }
             }
-            let pick = if trusted.len > 0 { &trusted } else { &positive };
-            let radius = pick.as_slice().last().map(|&(d2, _)| d2);
+            let radius = reward_radius(nearest.as_slice(), trusted.as_slice(), records, nb.k, min);
             // Pass 2: the weighted mean within the radius.
             let mut sum = T::ZERO;
             let mut mass = T::ZERO;
@@ -482,9 +536,9 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         }
     }
 
-    /// The kernel mean of the targets of `links` (ascending by distance to `point`), or
-    /// `None` when there are none.
-    fn mean_of(&self, point: &[T; D], links: impl Iterator<Item = u16>) -> Option<T> {
+    /// The kernel mean of the targets of `links` (ascending by distance to `point`) and the
+    /// squared distance of the nearest, or `None` when there are none.
+    fn mean_of(&self, point: &[T; D], links: impl Iterator<Item = u16>) -> Option<(T, T)> {
         let records = self.live();
         let mut d2_min = None;
         let mut sum = T::ZERO;
@@ -499,7 +553,35 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
             sum += w * r.target;
             mass += w;
         }
-        (mass > T::ZERO).then(|| sum / mass)
+        match d2_min {
+            Some(d2) if mass > T::ZERO => Some((sum / mass, d2)),
+            _ => None,
+        }
+    }
+
+    /// The values of every action at a point, from `raw(a)` (a kernel mean and its
+    /// nearest squared distance), with the reach cap applied; `visit(a, value)` gets
+    /// `None` for an action without records.
+    fn capped_values(
+        &self,
+        raw: impl Fn(usize) -> Option<(T, T)>,
+        mut visit: impl FnMut(usize, Option<T>),
+    ) {
+        let reach2 = self.neighbours.reach2;
+        let mut cap = T::INFINITY;
+        if reach2.is_finite() {
+            for a in 0..self.actions {
+                if let Some((q, d2)) = raw(a) {
+                    if d2 <= reach2 {
+                        cap = cap.min(q);
+                    }
+                }
+            }
+        }
+        for a in 0..self.actions {
+            let value = raw(a).map(|(q, d2)| if d2 > reach2 { q.min(cap) } else { q });
+            visit(a, value);
+        }
     }
 
     /// One iteration k ≥ 2: `V_{k−1}` at every next state from the links, then the
@@ -512,17 +594,19 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
             };
             let mut best = None::<T>;
             if !me.absorbing {
-                for a in 0..self.actions {
+                let raw = |a: usize| {
                     let start = (i * self.actions + a) * k;
                     let links = self.links.get(start..start + k).unwrap_or(&[]);
-                    let q = self.mean_of(
+                    self.mean_of(
                         &me.next_state,
                         links.iter().copied().take_while(|&j| j != NO_LINK),
-                    );
+                    )
+                };
+                self.capped_values(raw, |_, q| {
                     if let Some(q) = q {
                         best = Some(best.map_or(q, |b: T| b.max(q)));
                     }
-                }
+                });
             }
             if let Some(r) = self.records.get_mut(i) {
                 r.value = best.unwrap_or(T::ZERO);
@@ -534,10 +618,15 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         }
     }
 
-    /// `Q(state, action)`, `None` when the action has no eligible record.
-    fn value_finite(&self, state: &[T; D], action: usize) -> Option<T> {
+    /// The kernel mean at `state` for `action` and its nearest squared distance.
+    fn raw_value(&self, state: &[T; D], action: usize) -> Option<(T, T)> {
         let found = self.nearest(state, action);
         self.mean_of(state, found.as_slice().iter().map(|&(_, j)| j))
+    }
+
+    /// `Q(state, a)` of every action (`None`: no records) to `visit`.
+    fn values(&self, state: &[T; D], visit: impl FnMut(usize, Option<T>)) {
+        self.capped_values(|a| self.raw_value(state, a), visit);
     }
 
     /// `Q(state, action)` (0 for an action without records).
@@ -550,7 +639,13 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
                 parameter: "action",
             });
         }
-        Ok(self.value_finite(&state, action).unwrap_or(T::ZERO))
+        let mut out = T::ZERO;
+        self.values(&state, |a, q| {
+            if a == action {
+                out = q.unwrap_or(T::ZERO);
+            }
+        });
+        Ok(out)
     }
 
     /// `maxₐ Q(state, a)`.
@@ -559,9 +654,7 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
     pub fn max_value(&self, state: [T; D]) -> Result<T> {
         ensure_all_finite(&state, "state")?;
         let mut best = T::NEG_INFINITY;
-        for a in 0..self.actions {
-            best = best.max(self.value_finite(&state, a).unwrap_or(T::ZERO));
-        }
+        self.values(&state, |_, q| best = best.max(q.unwrap_or(T::ZERO)));
         Ok(best)
     }
 
@@ -574,8 +667,7 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         let mut best = 0;
         let mut best_q = T::NEG_INFINITY;
         let mut best_has_data = false;
-        for a in 0..self.actions {
-            let fitted = self.value_finite(&state, a);
+        self.values(&state, |a, fitted| {
             let has_data = fitted.is_some();
             let q = fitted.unwrap_or(T::ZERO);
             let better = a == 0 || q > best_q || (q == best_q && has_data && !best_has_data);
@@ -584,7 +676,7 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
                 best_q = q;
                 best_has_data = has_data;
             }
-        }
+        });
         Ok(best)
     }
 }

@@ -218,3 +218,32 @@ fn bad_input_is_refused_and_leaves_the_fit_intact() {
     q.clear();
     assert_eq!(q.value([0.3], 0).unwrap(), 0.0);
 }
+
+#[test]
+fn the_reach_caps_an_action_without_nearby_records() {
+    // Action 0 tried at 0 (reward −1), action 1 only at 5 (reward +10), k = 1, unit
+    // range. Without a reach, Q(0, 1) = 10 is copied from 5 units away and wins; with reach
+    // 1 it is capped at the tried action's −1, and the tie goes to the smaller index. At 5
+    // the roles swap: action 0's −1 is below the cap 10 and stays.
+    let samples = [at(0.0, 0, -1.0, 0.0, true), at(5.0, 1, 10.0, 0.0, true)];
+    let (mut records, mut links) = storage(2, 1);
+    let nb = Neighbours::cube(1, 0.0, 1.0, Kernel::Uniform).unwrap();
+    let config = FqiConfig::new(0.9, 3, EmptyCells::Nearest).unwrap();
+    let mut q = KnnFqi::new(nb, 2, &mut records, &mut links).unwrap();
+    q.fit(&[SampleSet::unweighted(&samples)], &config).unwrap();
+    assert_eq!(q.greedy_action([0.0]).unwrap(), 1);
+    assert_eq!(q.value([0.0], 1).unwrap(), 10.0);
+    let (mut records, mut links) = storage(2, 1);
+    let mut q = KnnFqi::new(nb.with_reach(1.0).unwrap(), 2, &mut records, &mut links).unwrap();
+    q.fit(&[SampleSet::unweighted(&samples)], &config).unwrap();
+    assert_eq!(q.value([0.0], 1).unwrap(), -1.0);
+    assert_eq!(q.greedy_action([0.0]).unwrap(), 0);
+    assert_eq!(q.max_value([0.0]).unwrap(), -1.0);
+    assert_eq!(q.value([5.0], 0).unwrap(), -1.0);
+    assert_eq!(q.greedy_action([5.0]).unwrap(), 1);
+    // Nobody within reach: no cap.
+    assert_eq!(q.value([2.5], 1).unwrap(), 10.0);
+    for r in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e200] {
+        assert!(nb.with_reach(r).is_err());
+    }
+}

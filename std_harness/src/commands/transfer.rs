@@ -207,6 +207,11 @@ pub struct Args {
     /// range (absent: the neighbours weigh equally).
     #[arg(long)]
     pub kernel_bandwidth: Option<f64>,
+    /// Reach of `--adaptive-kernel-q knn`, as a share of each coordinate's range: an action
+    /// whose nearest record is farther, where another's is nearer, is valued at most that
+    /// one's value (absent: no cap).
+    #[arg(long)]
+    pub kernel_reach: Option<f64>,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -612,6 +617,7 @@ pub fn build_experiment<const D: usize>(
                 kernel = kernel.with_adaptive_q(KernelQFunction::knn(
                     args.kernel_neighbours,
                     args.kernel_bandwidth,
+                    args.kernel_reach,
                 )?);
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))

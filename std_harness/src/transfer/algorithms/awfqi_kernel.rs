@@ -50,8 +50,9 @@ pub enum KernelQFunction {
     /// Tile coding: tiles per axis, tilings.
     Tiles(usize, usize),
     /// Kernel averaging over this many nearest records, with a Gaussian bandwidth (share of
-    /// the range) or uniform weights (`None`); `awfqi-adaptive-kernel` only.
-    Knn(usize, Option<f64>),
+    /// the range) or uniform weights (`None`), and a reach (share of the range) or none;
+    /// `awfqi-adaptive-kernel` only.
+    Knn(usize, Option<f64>, Option<f64>),
 }
 
 impl KernelQFunction {
@@ -80,8 +81,8 @@ impl KernelQFunction {
     /// Kernel averaging over `k` neighbours (`--kernel-neighbours`, `--kernel-bandwidth`).
     ///
     /// Errors: those of [`awfqi::Neighbours::new`].
-    pub fn knn(k: usize, bandwidth: Option<f64>) -> anyhow::Result<Self> {
-        let out = Self::Knn(k, bandwidth);
+    pub fn knn(k: usize, bandwidth: Option<f64>, reach: Option<f64>) -> anyhow::Result<Self> {
+        let out = Self::Knn(k, bandwidth, reach);
         out.approximator()?;
         Ok(out)
     }
@@ -91,9 +92,13 @@ impl KernelQFunction {
         Ok(match self {
             Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
             Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
-            Self::Knn(k, h) => {
+            Self::Knn(k, h, reach) => {
                 let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
-                Neighbours::cube(k, 0.0, 10.0, kernel)?.into()
+                let mut nb = Neighbours::cube(k, 0.0, 10.0, kernel)?;
+                if let Some(r) = reach {
+                    nb = nb.with_reach(r as T)?;
+                }
+                nb.into()
             }
         })
     }
@@ -271,9 +276,10 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_tiles"] = serde_json::json!([n, n]);
                 out["fqi_tilings"] = k.into();
             }
-            KernelQFunction::Knn(k, h) => {
+            KernelQFunction::Knn(k, h, reach) => {
                 out["fqi_neighbours"] = k.into();
                 out["fqi_bandwidth"] = h.into();
+                out["fqi_reach"] = reach.into();
             }
         }
         out
