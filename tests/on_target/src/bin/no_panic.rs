@@ -37,10 +37,10 @@ use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
     FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
-    Hyperparameters, MeanFunction, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
-    ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
-    TabularFqi, TileFqi, Tilings, Transition, Kernel, KnnFqi, KnnRecord, KnnStorage,
-    Neighbours, WhenFull, evaluate, evaluate_greedy, rollout,
+    Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, Neighbours, Output,
+    QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData,
+    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, WhenFull,
+    evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
