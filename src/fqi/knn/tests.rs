@@ -106,7 +106,7 @@ fn a_discarded_record_does_not_count_towards_k() {
     let mut q = KnnFqi::new(nb, 2, &mut records, &mut links).unwrap();
     let base = FqiConfig::new(0.9, 1, EmptyCells::Nearest).unwrap();
     q.fit(&sets, &base.with_min_weight(0.5).unwrap()).unwrap();
-    let want = (1e-6 * -1.0 + -10.0) / (1.0 + 1e-6);
+    let want = (-1e-6 - 10.0) / (1.0 + 1e-6);
     assert!((q.value([0.0], 0).unwrap() - want).abs() < 1e-12);
     q.fit(&sets, &base).unwrap();
     assert!((q.value([0.0], 0).unwrap() + 1.0).abs() < 1e-12);
