@@ -42,6 +42,10 @@ pub enum Approximator<T, const D: usize> {
     Tiles(Tilings<T, D>),
     /// Kernel averaging over the `k` nearest records ([`KnnFqi`]).
     Knn(Neighbours<T, D>),
+    /// Both tile coding and kernel averaging, each fitted by FQI on the same data, their
+    /// Q-values averaged (an ensemble of two averagers: the tiles' coarse, consistent
+    /// values where the records are sparse, the records' local ones where they are dense).
+    Hybrid(Tilings<T, D>, Neighbours<T, D>),
 }
 
 impl<T: Real, const D: usize> From<Neighbours<T, D>> for Approximator<T, D> {
@@ -70,6 +74,7 @@ impl<T: Real, const D: usize> Approximator<T, D> {
             Approximator::Table(grid) => TabularFqi::required_entries(grid, actions),
             Approximator::Tiles(tilings) => TileFqi::required_entries(tilings, actions),
             Approximator::Knn(_) => Some(0),
+            Approximator::Hybrid(tilings, _) => TileFqi::required_entries(tilings, actions),
         }
     }
 
@@ -96,6 +101,10 @@ impl<T: Real, const D: usize> Approximator<T, D> {
                 storage.records,
                 storage.links,
             )?),
+            Approximator::Hybrid(tilings, neighbours) => QFunction::Hybrid(
+                TileFqi::new(tilings, actions, storage.entries)?,
+                KnnFqi::new(neighbours, actions, storage.records, storage.links)?,
+            ),
         })
     }
 }
@@ -109,6 +118,8 @@ pub enum QFunction<'a, T, const D: usize> {
     Tiles(TileFqi<'a, T, D>),
     /// Kernel averaging over the records.
     Knn(KnnFqi<'a, T, D>),
+    /// The mean of tile coding and kernel averaging.
+    Hybrid(TileFqi<'a, T, D>, KnnFqi<'a, T, D>),
 }
 
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
@@ -118,6 +129,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.actions(),
             QFunction::Tiles(q) => q.actions(),
             QFunction::Knn(q) => q.actions(),
+            QFunction::Hybrid(q, _) => q.actions(),
         }
     }
 
@@ -126,7 +138,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     pub fn entries(&self) -> &[FqiEntry<T>] {
         match self {
             QFunction::Tabular(q) => q.entries(),
-            QFunction::Tiles(q) => q.entries(),
+            QFunction::Tiles(q) | QFunction::Hybrid(q, _) => q.entries(),
             QFunction::Knn(_) => &[],
         }
     }
@@ -135,7 +147,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     pub fn as_tabular(&self) -> Option<&TabularFqi<'a, T, D>> {
         match self {
             QFunction::Tabular(q) => Some(q),
-            QFunction::Tiles(_) | QFunction::Knn(_) => None,
+            QFunction::Tiles(_) | QFunction::Knn(_) | QFunction::Hybrid(..) => None,
         }
     }
 
@@ -145,6 +157,10 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.clear(),
             QFunction::Tiles(q) => q.clear(),
             QFunction::Knn(q) => q.clear(),
+            QFunction::Hybrid(t, k) => {
+                t.clear();
+                k.clear();
+            }
         }
     }
 
@@ -160,6 +176,12 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.fit_sets(sets, config),
             QFunction::Tiles(q) => q.fit_sets(sets, config),
             QFunction::Knn(q) => q.fit_sets(sets, config),
+            QFunction::Hybrid(t, k) => {
+                // Checked by the kNN fit first (its capacity can be short), so a refused
+                // fit leaves both as they were.
+                k.fit_sets(sets.clone(), config)?;
+                t.fit_sets(sets, config)
+            }
         }
     }
 
@@ -178,6 +200,9 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.value(state, action),
             QFunction::Tiles(q) => q.value(state, action),
             QFunction::Knn(q) => q.value(state, action),
+            QFunction::Hybrid(t, k) => {
+                Ok((t.value(state, action)? + k.value(state, action)?) / T::from_f64(2.0))
+            }
         }
     }
 
@@ -189,6 +214,13 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.max_value(state),
             QFunction::Tiles(q) => q.max_value(state),
             QFunction::Knn(q) => q.max_value(state),
+            QFunction::Hybrid(..) => {
+                let mut best = T::NEG_INFINITY;
+                for a in 0..self.actions() {
+                    best = best.max(self.value(state, a)?);
+                }
+                Ok(best)
+            }
         }
     }
 
@@ -200,6 +232,19 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.greedy_action(state),
             QFunction::Tiles(q) => q.greedy_action(state),
             QFunction::Knn(q) => q.greedy_action(state),
+            QFunction::Hybrid(..) => {
+                // The largest mean value, ties to the smallest index.
+                let mut best = 0;
+                let mut best_q = T::NEG_INFINITY;
+                for a in 0..self.actions() {
+                    let q = self.value(state, a)?;
+                    if a == 0 || q > best_q {
+                        best = a;
+                        best_q = q;
+                    }
+                }
+                Ok(best)
+            }
         }
     }
 }

@@ -247,3 +247,61 @@ fn the_reach_caps_an_action_without_nearby_records() {
         assert!(nb.with_reach(r).is_err());
     }
 }
+
+#[test]
+fn the_hybrid_is_the_mean_of_its_two_fits() {
+    // The chain of the first test with a Gaussian kNN and two tilings: the hybrid's value is
+    // the mean of a separately fitted tile Q and kNN Q on the same data, its greedy action
+    // the argmax of that mean, and a refused fit (records too few) leaves both parts as
+    // they were.
+    use crate::fqi::{Approximator, FqiEntry, QStorage, TileFqi, Tilings};
+    let gamma = 0.9f64;
+    let mut samples = Vec::new();
+    for c in 0..4 {
+        let x = c as f64 + 0.5;
+        samples.push(at(x, 0, -1.0, x + 1.0, c + 1 == 4));
+        samples.push(at(x, 1, -1.0, (x - 1.0).max(0.5), false));
+    }
+    let sets = [SampleSet::unweighted(&samples)];
+    let config = FqiConfig::new(gamma, 30, EmptyCells::Nearest).unwrap();
+    let tilings = Tilings::<f64, 1>::cube(0.0, 5.0, 3, 2).unwrap();
+    let nb = Neighbours::cube(2, 0.0, 5.0, Kernel::Gaussian(0.1)).unwrap();
+    let (mut e1, mut e2) = (vec![FqiEntry::EMPTY; 16], vec![FqiEntry::EMPTY; 16]);
+    let (mut r1, mut l1) = storage(8, 2);
+    let (mut r2, mut l2) = storage(8, 2);
+    let mut hybrid = Approximator::Hybrid(tilings, nb)
+        .build(
+            2,
+            QStorage {
+                entries: &mut e1,
+                records: &mut r1,
+                links: &mut l1,
+            },
+        )
+        .unwrap();
+    hybrid.fit(&sets, &config).unwrap();
+    let mut tiles = TileFqi::new(tilings, 2, &mut e2).unwrap();
+    tiles.fit(&sets, &config).unwrap();
+    let mut knn = KnnFqi::new(nb, 2, &mut r2, &mut l2).unwrap();
+    knn.fit(&sets, &config).unwrap();
+    for x in [0.1, 0.5, 1.7, 2.5, 3.9, 4.9] {
+        let mut best = (0, f64::NEG_INFINITY);
+        for a in 0..2 {
+            let want = (tiles.value([x], a).unwrap() + knn.value([x], a).unwrap()) / 2.0;
+            let got = hybrid.value([x], a).unwrap();
+            assert!((got - want).abs() < 1e-12, "{x} {a}: {got} {want}");
+            if want > best.1 {
+                best = (a, want);
+            }
+        }
+        assert_eq!(hybrid.greedy_action([x]).unwrap(), best.0);
+        assert!((hybrid.max_value([x]).unwrap() - best.1).abs() < 1e-12);
+    }
+    let before = hybrid.value([1.7], 0).unwrap();
+    let nine = [samples.clone(), vec![samples[0]]].concat();
+    assert_eq!(
+        hybrid.fit(&[SampleSet::unweighted(&nine)], &config),
+        Err(Error::CapacityExceeded { capacity: 8 })
+    );
+    assert_eq!(hybrid.value([1.7], 0).unwrap(), before);
+}

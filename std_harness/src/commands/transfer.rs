@@ -84,6 +84,8 @@ pub enum AdaptiveKernelQ {
     /// Kernel averaging over the `--kernel-neighbours` nearest records (the core's
     /// `KnnFqi`), uniform or Gaussian (`--kernel-bandwidth`).
     Knn,
+    /// The mean of both, each fitted on the same data (tiles as for `tiles`).
+    Hybrid,
 }
 
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
@@ -613,12 +615,26 @@ pub fn build_experiment<const D: usize>(
             if args.kernel_resolution.is_some() {
                 kernel = kernel.with_adaptive_q(q);
             }
-            if args.adaptive_kernel_q == AdaptiveKernelQ::Knn {
-                kernel = kernel.with_adaptive_q(KernelQFunction::knn(
+            let knn = || {
+                KernelQFunction::knn(
                     args.kernel_neighbours,
                     args.kernel_bandwidth,
                     args.kernel_reach,
-                )?);
+                )
+            };
+            match (args.adaptive_kernel_q, knn()?, kernel.adaptive_q) {
+                (AdaptiveKernelQ::Knn, q, _) => kernel = kernel.with_adaptive_q(q),
+                (
+                    AdaptiveKernelQ::Hybrid,
+                    KernelQFunction::Knn(k, h, r),
+                    KernelQFunction::Tiles(n, t),
+                ) => {
+                    kernel = kernel.with_adaptive_q(KernelQFunction::Hybrid((n, t), (k, h, r)));
+                }
+                (AdaptiveKernelQ::Hybrid, _, _) => {
+                    anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")
+                }
+                (AdaptiveKernelQ::Tiles, _, _) => {}
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }

@@ -167,7 +167,7 @@ pub fn with_learner(
     let slots = config.candidates.min(rows.len());
     // Kernel averaging holds every target and source record of a fit.
     let (records, links) = match approximator {
-        awfqi::Approximator::Knn(nb) => {
+        awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
             let n = experiment.protocol.steps * budget + setup.posteriors().len();
             let links = nb
                 .required_links(n, awfqi::env::PUDDLE_ACTIONS)

@@ -53,6 +53,9 @@ pub enum KernelQFunction {
     /// the range) or uniform weights (`None`), and a reach (share of the range) or none;
     /// `awfqi-adaptive-kernel` only.
     Knn(usize, Option<f64>, Option<f64>),
+    /// The mean of tile coding (tiles per axis, tilings) and kernel averaging (as
+    /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
+    Hybrid((usize, usize), (usize, Option<f64>, Option<f64>)),
 }
 
 impl KernelQFunction {
@@ -92,17 +95,25 @@ impl KernelQFunction {
         Ok(match self {
             Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
             Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
-            Self::Knn(k, h, reach) => {
-                let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
-                let mut nb = Neighbours::cube(k, 0.0, 10.0, kernel)?;
-                if let Some(r) = reach {
-                    nb = nb.with_reach(r as T)?;
-                }
-                nb.into()
+            Self::Knn(k, h, reach) => neighbours(k, h, reach)?.into(),
+            Self::Hybrid((n, t), (k, h, reach)) => {
+                Approximator::Hybrid(Tilings::cube(0.0, 10.0, n, t)?, neighbours(k, h, reach)?)
             }
         })
     }
 }
+
+/// The kNN geometry over Puddle World's `[0, 10]²`.
+fn neighbours(k: usize, h: Option<f64>, reach: Option<f64>) -> anyhow::Result<Neighbours<T, 2>> {
+    let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
+    let mut nb = Neighbours::cube(k, 0.0, 10.0, kernel)?;
+    if let Some(r) = reach {
+        nb = nb.with_reach(r as T)?;
+    }
+    Ok(nb)
+}
+
+impl KernelQFunction {}
 
 /// The kernels' scalar.
 pub(super) type T = f32;
@@ -277,6 +288,13 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_tilings"] = k.into();
             }
             KernelQFunction::Knn(k, h, reach) => {
+                out["fqi_neighbours"] = k.into();
+                out["fqi_bandwidth"] = h.into();
+                out["fqi_reach"] = reach.into();
+            }
+            KernelQFunction::Hybrid((n, t), (k, h, reach)) => {
+                out["fqi_tiles"] = serde_json::json!([n, n]);
+                out["fqi_tilings"] = t.into();
                 out["fqi_neighbours"] = k.into();
                 out["fqi_bandwidth"] = h.into();
                 out["fqi_reach"] = reach.into();
