@@ -3,9 +3,9 @@
 //! horizon, exploration, bounds, switches) and its `validate`; source records and
 //! posteriors from the fuzzer (NaN, ±∞ and huge values included); each source's
 //! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
-//! pairs or source rows); the approximator (table, tiles, or kernel averaging with a fuzzed
-//! `k`, kernel and reach); buffers of every size (one short of what is needed too); then
-//! steps and `reset`.
+//! pairs or source rows); the approximator (table, tiles, kernel averaging with a fuzzed
+//! `k`, kernel and reach, or the hybrid of tiles and kernel averaging); buffers of every
+//! size (one short of what is needed too); then steps and `reset`.
 //!
 //! Invariants: no panic; errors only of the documented kinds; a successful step spends the
 //! whole budget (`D₀` grows by it), reports finite diagnostics, leaves finite weights and
@@ -200,7 +200,7 @@ fn run<T: Real>(b: &mut Bytes) {
             return;
         }
     };
-    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 3 {
+    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 4 {
         0 => match Tilings::cube(T::ZERO, T::from_f64(10.0), b.index(4), b.index(4)) {
             Ok(t) => t.into(),
             Err(e) => {
@@ -220,9 +220,17 @@ fn run<T: Real>(b: &mut Bytes) {
             let reach = b.bool().then(|| real::<T>(b));
             let nb = Neighbours::cube(b.index(8), T::ZERO, T::from_f64(10.0), kernel)
                 .and_then(|n| reach.map_or(Ok(n), |r| n.with_reach(r)));
-            match nb {
-                Ok(n) => n.into(),
-                Err(e) => {
+            let tilings = b
+                .bool()
+                .then(|| Tilings::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(3), 1 + b.index(3)));
+            match (nb, tilings) {
+                (Ok(n), None) => n.into(),
+                (Ok(n), Some(Ok(t))) => awfqi::Approximator::Hybrid(t, n),
+                (Ok(_), Some(Err(e))) => {
+                    expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
+                    return;
+                }
+                (Err(e), _) => {
                     expect_kind("Neighbours", &e, &[Kind::Invalid, Kind::NonFinite]);
                     return;
                 }
@@ -245,9 +253,12 @@ fn run<T: Real>(b: &mut Bytes) {
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
     // Kernel averaging: one record slot per target and source record, and their links.
     let (records_needed, links_needed) = match approximator {
-        awfqi::Approximator::Knn(nb) => {
+        awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
             let r = samples.len() + total;
-            (r, nb.required_links(r, 4).unwrap_or(usize::MAX).min(1 << 16))
+            (
+                r,
+                nb.required_links(r, 4).unwrap_or(usize::MAX).min(1 << 16),
+            )
         }
         _ => (0, 0),
     };

@@ -735,6 +735,22 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
             }
             fqi.clear();
         }
+        let tilings = Tilings::<T, D>::cube(num(0.0), high, index(2), index(2));
+        if let Ok(tilings) = tilings {
+            let mut entries = [FqiEntry::<T>::EMPTY; 400];
+            let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
+            let mut storage = block.storage();
+            storage.entries = &mut entries;
+            let hybrid = Approximator::Hybrid(tilings, neighbours);
+            keep(hybrid.required_entries(actions));
+            if let Ok(mut q) = hybrid.build(actions, storage) {
+                keep(q.fit(&sets, &config));
+                let s = [num::<T>(0.4); D];
+                keep((q.value(s, 0), q.max_value(s), q.greedy_action(s)));
+                keep((q.actions(), q.entries().len()));
+                q.clear();
+            }
+        }
         let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
         let approximator: Approximator<T, D> = neighbours.into();
         if let Ok(mut q) = approximator.build(actions, block.storage()) {
