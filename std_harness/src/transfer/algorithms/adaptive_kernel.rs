@@ -8,7 +8,9 @@
 //! posterior means are the sources' [`MeanFunction`]s), tile coding with
 //! [`ADAPTIVE_TILINGS`] offset tilings of [`ADAPTIVE_TILES`] tiles per axis (chosen on the
 //! tuning runs `--seed 100`, `docs/active-budget.md`; `--kernel-resolution` given
-//! explicitly sets the approximator of both kernels), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
+//! explicitly sets the approximator of both kernels; `--adaptive-kernel-q knn|hybrid` selects
+//! the core's kernel averaging over the records, or its mean with the tiles, measured in
+//! `docs/active-budget.md`), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
 //! verification share, surprise, uncertainty, decision relevance, floor, candidates,
 //! relevance width; the others must keep their defaults).
 
