@@ -68,6 +68,8 @@ pub struct Neighbours<T, const D: usize> {
     kernel: Kernel<T>,
     /// Squared reach (∞: off), see [`Neighbours::with_reach`].
     reach2: T,
+    /// One ball for every action, see [`Neighbours::with_common_ball`].
+    common: bool,
 }
 
 impl<T: Real, const D: usize> Neighbours<T, D> {
@@ -105,6 +107,7 @@ impl<T: Real, const D: usize> Neighbours<T, D> {
             scale,
             kernel,
             reach2: T::INFINITY,
+            common: false,
         })
     }
 
@@ -130,6 +133,25 @@ impl<T: Real, const D: usize> Neighbours<T, D> {
             return Err(Error::InvalidParameter { parameter: "reach" });
         }
         Ok(Self { reach2, ..self })
+    }
+
+    /// The same geometry with one ball for every action: at a state, the radius of the `k`
+    /// nearest records of *any* action bounds every action's mean (an action with records
+    /// inside averages only those) and acts as the reach (an action with none inside is
+    /// valued at most the lowest of those that have some). Like a tile centred on the
+    /// state, every action's value then comes from the same neighbourhood, so two
+    /// neighbouring states cannot each prefer the other on values taken from different
+    /// places.
+    pub fn with_common_ball(self) -> Self {
+        Self {
+            common: true,
+            ..self
+        }
+    }
+
+    /// `true` after [`Neighbours::with_common_ball`].
+    pub fn common_ball(&self) -> bool {
+        self.common
     }
 
     /// The reach of [`Neighbours::with_reach`] (∞ when off).
@@ -559,15 +581,38 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         }
     }
 
-    /// The values of every action at a point, from `raw(a)` (a kernel mean and its
-    /// nearest squared distance), with the reach cap applied; `visit(a, value)` gets
-    /// `None` for an action without records.
+    /// The values of every action at `point` from `list(a)`, the action's nearest
+    /// records (ascending), with the common ball and the reach cap applied; `visit(a,
+    /// value)` gets `None` for an action without records.
     fn capped_values(
         &self,
-        raw: impl Fn(usize) -> Option<(T, T)>,
+        point: &[T; D],
+        list: impl Fn(usize) -> Nearest<T>,
         mut visit: impl FnMut(usize, Option<T>),
     ) {
-        let reach2 = self.neighbours.reach2;
+        let mut ball2 = T::INFINITY;
+        if self.neighbours.common {
+            let mut all = Nearest::new(self.neighbours.k);
+            for a in 0..self.actions {
+                for &(d2, j) in list(a).as_slice() {
+                    all.offer(d2, j);
+                }
+            }
+            if let Some(&(d2, _)) = all.as_slice().last() {
+                ball2 = d2;
+            }
+        }
+        let reach2 = self.neighbours.reach2.min(ball2);
+        let raw = |a: usize| {
+            let found = list(a);
+            let items = found.as_slice();
+            let inside = items
+                .iter()
+                .take_while(|&&(d2, _)| d2 <= ball2)
+                .map(|&(_, j)| j);
+            self.mean_of(point, inside)
+                .or_else(|| self.mean_of(point, items.iter().map(|&(_, j)| j)))
+        };
         let mut cap = T::INFINITY;
         if reach2.is_finite() {
             for a in 0..self.actions {
@@ -594,15 +639,19 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
             };
             let mut best = None::<T>;
             if !me.absorbing {
-                let raw = |a: usize| {
+                let records = self.live();
+                let list = |a: usize| {
                     let start = (i * self.actions + a) * k;
                     let links = self.links.get(start..start + k).unwrap_or(&[]);
-                    self.mean_of(
-                        &me.next_state,
-                        links.iter().copied().take_while(|&j| j != NO_LINK),
-                    )
+                    let mut found = Nearest::new(k);
+                    for &j in links.iter().take_while(|&&j| j != NO_LINK) {
+                        if let Some(r) = records.get(usize::from(j)) {
+                            found.offer(self.neighbours.distance2(&me.next_state, &r.state), j);
+                        }
+                    }
+                    found
                 };
-                self.capped_values(raw, |_, q| {
+                self.capped_values(&me.next_state, list, |_, q| {
                     if let Some(q) = q {
                         best = Some(best.map_or(q, |b: T| b.max(q)));
                     }
@@ -618,15 +667,9 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         }
     }
 
-    /// The kernel mean at `state` for `action` and its nearest squared distance.
-    fn raw_value(&self, state: &[T; D], action: usize) -> Option<(T, T)> {
-        let found = self.nearest(state, action);
-        self.mean_of(state, found.as_slice().iter().map(|&(_, j)| j))
-    }
-
     /// `Q(state, a)` of every action (`None`: no records) to `visit`.
     fn values(&self, state: &[T; D], visit: impl FnMut(usize, Option<T>)) {
-        self.capped_values(|a| self.raw_value(state, a), visit);
+        self.capped_values(state, |a| self.nearest(state, a), visit);
     }
 
     /// `Q(state, action)` (0 for an action without records).

@@ -305,3 +305,41 @@ fn the_hybrid_is_the_mean_of_its_two_fits() {
     );
     assert_eq!(hybrid.value([1.7], 0).unwrap(), before);
 }
+
+#[test]
+fn the_common_ball_bounds_every_action_by_the_same_radius() {
+    // Action 0 at 0 and 0.1 (reward −1) and at 3 (reward −9); action 1 at 0.05 (−2); k = 2,
+    // one iteration. R̂: −1 at 0 and 0.1, (−9 − 1)/2 = −5 at 3 (radius 2.9 holds 3 and
+    // 0.1), −2 at 0.05. At 2: action 0's two nearest are 3 and 0.1 → Q = (−5 − 1)/2 = −3;
+    // action 1's is 0.05 → −2, which wins without the common ball. With it, the ball of
+    // the 2 nearest of any action has radius 1.9 (3 and 0.1): action 1's record (1.95
+    // away) is outside, so its value is capped at −3, and the tie goes to action 0.
+    let samples = [
+        at(0.0, 0, -1.0, 0.0, true),
+        at(0.1, 0, -1.0, 0.0, true),
+        at(3.0, 0, -9.0, 0.0, true),
+        at(0.05, 1, -2.0, 0.0, true),
+    ];
+    let config = FqiConfig::new(0.9, 1, EmptyCells::Nearest).unwrap();
+    let nb = Neighbours::cube(2, 0.0, 1.0, Kernel::Uniform).unwrap();
+    let (mut records, mut links) = storage(4, 2);
+    let mut q = KnnFqi::new(nb, 2, &mut records, &mut links).unwrap();
+    q.fit(&[SampleSet::unweighted(&samples)], &config).unwrap();
+    let fitted: Vec<f64> = q.records().iter().map(KnnRecord::reward_model).collect();
+    assert_eq!(fitted, [-1.0, -1.0, -5.0, -2.0]);
+    assert_eq!(q.value([2.0], 0).unwrap(), -3.0);
+    assert_eq!(q.value([2.0], 1).unwrap(), -2.0);
+    assert_eq!(q.greedy_action([2.0]).unwrap(), 1);
+    let (mut records, mut links) = storage(4, 2);
+    let common = nb.with_common_ball();
+    assert!(common.common_ball());
+    let mut q = KnnFqi::new(common, 2, &mut records, &mut links).unwrap();
+    q.fit(&[SampleSet::unweighted(&samples)], &config).unwrap();
+    assert_eq!(q.value([2.0], 0).unwrap(), -3.0);
+    assert_eq!(q.value([2.0], 1).unwrap(), -3.0);
+    assert_eq!(q.greedy_action([2.0]).unwrap(), 0);
+    // Near 0 both actions have records inside the ball (0 and 0.05): no cap, and the
+    // ball (radius 0.05 at 0.02: records 0 and 0.05) leaves action 0 only its record at 0.
+    assert_eq!(q.value([0.02], 1).unwrap(), -2.0);
+    assert_eq!(q.value([0.02], 0).unwrap(), -1.0);
+}

@@ -214,6 +214,11 @@ pub struct Args {
     /// one's value (absent: no cap).
     #[arg(long)]
     pub kernel_reach: Option<f64>,
+    /// `--adaptive-kernel-q knn`: one ball for every action (the radius of the
+    /// `--kernel-neighbours` nearest records of any action bounds every action's mean and
+    /// acts as the reach).
+    #[arg(long)]
+    pub kernel_common_ball: bool,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -620,16 +625,17 @@ pub fn build_experiment<const D: usize>(
                     args.kernel_neighbours,
                     args.kernel_bandwidth,
                     args.kernel_reach,
+                    args.kernel_common_ball,
                 )
             };
             match (args.adaptive_kernel_q, knn()?, kernel.adaptive_q) {
                 (AdaptiveKernelQ::Knn, q, _) => kernel = kernel.with_adaptive_q(q),
                 (
                     AdaptiveKernelQ::Hybrid,
-                    KernelQFunction::Knn(k, h, r),
+                    KernelQFunction::Knn(k, h, r, c),
                     KernelQFunction::Tiles(n, t),
                 ) => {
-                    kernel = kernel.with_adaptive_q(KernelQFunction::Hybrid((n, t), (k, h, r)));
+                    kernel = kernel.with_adaptive_q(KernelQFunction::Hybrid((n, t), (k, h, r, c)));
                 }
                 (AdaptiveKernelQ::Hybrid, _, _) => {
                     anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")

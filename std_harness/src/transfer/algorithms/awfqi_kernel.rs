@@ -50,12 +50,12 @@ pub enum KernelQFunction {
     /// Tile coding: tiles per axis, tilings.
     Tiles(usize, usize),
     /// Kernel averaging over this many nearest records, with a Gaussian bandwidth (share of
-    /// the range) or uniform weights (`None`), and a reach (share of the range) or none;
-    /// `awfqi-adaptive-kernel` only.
-    Knn(usize, Option<f64>, Option<f64>),
+    /// the range) or uniform weights (`None`), a reach (share of the range) or none, and
+    /// one ball for every action or not; `awfqi-adaptive-kernel` only.
+    Knn(usize, Option<f64>, Option<f64>, bool),
     /// The mean of tile coding (tiles per axis, tilings) and kernel averaging (as
     /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
-    Hybrid((usize, usize), (usize, Option<f64>, Option<f64>)),
+    Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
 }
 
 impl KernelQFunction {
@@ -84,8 +84,13 @@ impl KernelQFunction {
     /// Kernel averaging over `k` neighbours (`--kernel-neighbours`, `--kernel-bandwidth`).
     ///
     /// Errors: those of [`awfqi::Neighbours::new`].
-    pub fn knn(k: usize, bandwidth: Option<f64>, reach: Option<f64>) -> anyhow::Result<Self> {
-        let out = Self::Knn(k, bandwidth, reach);
+    pub fn knn(
+        k: usize,
+        bandwidth: Option<f64>,
+        reach: Option<f64>,
+        common: bool,
+    ) -> anyhow::Result<Self> {
+        let out = Self::Knn(k, bandwidth, reach, common);
         out.approximator()?;
         Ok(out)
     }
@@ -95,20 +100,29 @@ impl KernelQFunction {
         Ok(match self {
             Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
             Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
-            Self::Knn(k, h, reach) => neighbours(k, h, reach)?.into(),
-            Self::Hybrid((n, t), (k, h, reach)) => {
-                Approximator::Hybrid(Tilings::cube(0.0, 10.0, n, t)?, neighbours(k, h, reach)?)
-            }
+            Self::Knn(k, h, reach, common) => neighbours(k, h, reach, common)?.into(),
+            Self::Hybrid((n, t), (k, h, reach, common)) => Approximator::Hybrid(
+                Tilings::cube(0.0, 10.0, n, t)?,
+                neighbours(k, h, reach, common)?,
+            ),
         })
     }
 }
 
 /// The kNN geometry over Puddle World's `[0, 10]²`.
-fn neighbours(k: usize, h: Option<f64>, reach: Option<f64>) -> anyhow::Result<Neighbours<T, 2>> {
+fn neighbours(
+    k: usize,
+    h: Option<f64>,
+    reach: Option<f64>,
+    common: bool,
+) -> anyhow::Result<Neighbours<T, 2>> {
     let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
     let mut nb = Neighbours::cube(k, 0.0, 10.0, kernel)?;
     if let Some(r) = reach {
         nb = nb.with_reach(r as T)?;
+    }
+    if common {
+        nb = nb.with_common_ball();
     }
     Ok(nb)
 }
@@ -287,12 +301,18 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_tiles"] = serde_json::json!([n, n]);
                 out["fqi_tilings"] = k.into();
             }
-            KernelQFunction::Knn(k, h, reach) => {
+            KernelQFunction::Knn(k, h, reach, common) => {
                 out["fqi_neighbours"] = k.into();
                 out["fqi_bandwidth"] = h.into();
                 out["fqi_reach"] = reach.into();
+                if common {
+                    out["fqi_common_ball"] = true.into();
+                }
             }
-            KernelQFunction::Hybrid((n, t), (k, h, reach)) => {
+            KernelQFunction::Hybrid((n, t), (k, h, reach, common)) => {
+                if common {
+                    out["fqi_common_ball"] = true.into();
+                }
                 out["fqi_tiles"] = serde_json::json!([n, n]);
                 out["fqi_tilings"] = t.into();
                 out["fqi_neighbours"] = k.into();
