@@ -4,8 +4,8 @@
 //! posteriors from the fuzzer (NaN, ±∞ and huge values included); each source's
 //! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
 //! pairs or source rows); the approximator (table, tiles, kernel averaging with a fuzzed
-//! `k`, kernel and reach, or the hybrid of tiles and kernel averaging); buffers of every
-//! size (one short of what is needed too); then steps and `reset`.
+//! `k`, kernel, reach and common ball, or the hybrid of tiles and kernel averaging);
+//! buffers of every size (one short of what is needed too); then steps and `reset`.
 //!
 //! Invariants: no panic; errors only of the documented kinds; a successful step spends the
 //! whole budget (`D₀` grows by it), reports finite diagnostics, leaves finite weights and
@@ -218,8 +218,10 @@ fn run<T: Real>(b: &mut Bytes) {
                 Kernel::Uniform
             };
             let reach = b.bool().then(|| real::<T>(b));
+            let common = b.bool();
             let nb = Neighbours::cube(b.index(8), T::ZERO, T::from_f64(10.0), kernel)
-                .and_then(|n| reach.map_or(Ok(n), |r| n.with_reach(r)));
+                .and_then(|n| reach.map_or(Ok(n), |r| n.with_reach(r)))
+                .map(|n| if common { n.with_common_ball() } else { n });
             let tilings = b
                 .bool()
                 .then(|| Tilings::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(3), 1 + b.index(3)));

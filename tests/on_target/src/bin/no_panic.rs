@@ -705,9 +705,17 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
     };
     let neighbours = Neighbours::<T, D>::new(index(3), [num(0.0); D], [high; D], weighting)
         .or_else(|_| Neighbours::cube(index(2), num(0.0), high, Kernel::Uniform))
-        .and_then(|n| n.with_reach(num(0.3)));
+        .and_then(|n| n.with_reach(num(0.3)))
+        .map(|n| {
+            if opaque(true) {
+                n.with_common_ball()
+            } else {
+                n
+            }
+        });
     if let Ok(neighbours) = neighbours {
         keep((neighbours.k(), neighbours.kernel(), neighbours.reach()));
+        keep(neighbours.common_ball());
         keep(neighbours.required_links(index(12), actions));
         let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
             .and_then(|c| c.with_min_weight(num(0.5)))
