@@ -44,8 +44,8 @@ pub use awfqi::{
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
 pub use fqi::{
-    Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, QFunction, SampleSet,
-    TabularFqi, TileFqi, Tilings,
+    Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, Kernel, KnnFqi, KnnRecord,
+    KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi, Tilings,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};

@@ -319,3 +319,43 @@ fn awfqi_with_tile_coding_recovers_the_closed_form_policy_at_four_dimensions() {
     assert!(checked >= 100, "only {checked} points checked");
     assert_eq!(wrong, 0);
 }
+
+/// Kernel-averaging FQI (`KnnFqi`) at four dimensions on the same plant, without the loop:
+/// the twin's records (weight 1) and those of a source with set-point 3 (reward weight 0,
+/// so the reward model must ignore them; transition weight 1, as with shared dynamics),
+/// `k = 2` (the two records of each lattice pair). Every lattice point where the closed
+/// form decides gets π*'s action (with that source at reward weight 1 some do not: checked
+/// while writing the test).
+#[test]
+fn knn_fqi_recovers_the_closed_form_policy_at_four_dimensions() {
+    use awfqi::{Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet};
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let twin = records(&SumPlant { c: 0.0 }, &mut rng);
+    let shifted = records(&SumPlant { c: 3.0 }, &mut rng);
+    let ignore = vec![0.0; shifted.len()];
+    let sets = [
+        SampleSet::unweighted(&twin),
+        SampleSet::weighted(&shifted, Some(&ignore), None),
+    ];
+    let nb = Neighbours::cube(2, -1.0, 1.0, Kernel::Uniform).unwrap();
+    let n = twin.len() + shifted.len();
+    let mut slots = vec![KnnRecord::EMPTY; n];
+    let mut links = vec![0u16; nb.required_links(n, 2).unwrap()];
+    let mut q = KnnFqi::new(nb, 2, &mut slots, &mut links).unwrap();
+    let config = FqiConfig::new(0.9, 40, EmptyCells::Nearest)
+        .unwrap()
+        .with_min_weight(0.5)
+        .unwrap();
+    q.fit(&sets, &config).unwrap();
+    let lattice = lattice();
+    let mut checked = 0;
+    for p in 0..lattice.len() {
+        let s = lattice.point(p).unwrap();
+        if let Some(best) = optimal_action(&s) {
+            assert_eq!(q.greedy_action(s).unwrap(), best, "at {s:?}");
+            checked += 1;
+        }
+    }
+    // Σ s ≥ 1 or ≤ −1 on the 4⁴ lattice of centres ±0.25, ±0.75.
+    assert!(checked > 100, "{checked}");
+}

@@ -3,8 +3,9 @@
 //! horizon, exploration, bounds, switches) and its `validate`; source records and
 //! posteriors from the fuzzer (NaN, ±∞ and huge values included); each source's
 //! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
-//! pairs or source rows); buffers of every size (one short of what is needed too); then
-//! steps and `reset`.
+//! pairs or source rows); the approximator (table, tiles, kernel averaging with a fuzzed
+//! `k`, kernel, reach and common ball, or the hybrid of tiles and kernel averaging);
+//! buffers of every size (one short of what is needed too); then steps and `reset`.
 //!
 //! Invariants: no panic; errors only of the documented kinds; a successful step spends the
 //! whole budget (`D₀` grows by it), reports finite diagnostics, leaves finite weights and
@@ -16,8 +17,8 @@ use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::record_gp::GpTraining;
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, CellGrid, EmptyCells, Error,
-    FqiConfig, FqiEntry, Gp, MeanFunction, PointGrid, Posterior, Real, RowSet, SourceData,
-    SubsetRule, Tilings, Transition,
+    FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, Neighbours, PointGrid, Posterior,
+    QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition,
 };
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
@@ -199,18 +200,44 @@ fn run<T: Real>(b: &mut Bytes) {
             return;
         }
     };
-    let approximator: awfqi::Approximator<T, 2> = if b.bool() {
-        match Tilings::cube(T::ZERO, T::from_f64(10.0), b.index(4), b.index(4)) {
+    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 4 {
+        0 => match Tilings::cube(T::ZERO, T::from_f64(10.0), b.index(4), b.index(4)) {
             Ok(t) => t.into(),
             Err(e) => {
                 expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
                 return;
             }
-        }
-    } else {
-        CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(4))
+        },
+        1 => CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(4))
             .expect("a valid cube")
-            .into()
+            .into(),
+        _ => {
+            let kernel = if b.bool() {
+                Kernel::Gaussian(real(b))
+            } else {
+                Kernel::Uniform
+            };
+            let reach = b.bool().then(|| real::<T>(b));
+            let common = b.bool();
+            let nb = Neighbours::cube(b.index(8), T::ZERO, T::from_f64(10.0), kernel)
+                .and_then(|n| reach.map_or(Ok(n), |r| n.with_reach(r)))
+                .map(|n| if common { n.with_common_ball() } else { n });
+            let tilings = b
+                .bool()
+                .then(|| Tilings::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(3), 1 + b.index(3)));
+            match (nb, tilings) {
+                (Ok(n), None) => n.into(),
+                (Ok(n), Some(Ok(t))) => awfqi::Approximator::Hybrid(t, n),
+                (Ok(_), Some(Err(e))) => {
+                    expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
+                    return;
+                }
+                (Err(e), _) => {
+                    expect_kind("Neighbours", &e, &[Kind::Invalid, Kind::NonFinite]);
+                    return;
+                }
+            }
+        }
     };
 
     // The kernel's memory.
@@ -226,6 +253,20 @@ fn run<T: Real>(b: &mut Bytes) {
     let mut candidates = vec![Candidate::EMPTY; size(b, slots)];
     let mut alias = vec![AliasEntry::EMPTY; size(b, slots)];
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
+    // Kernel averaging: one record slot per target and source record, and their links.
+    let (records_needed, links_needed) = match approximator {
+        awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
+            let r = samples.len() + total;
+            (
+                r,
+                nb.required_links(r, 4).unwrap_or(usize::MAX).min(1 << 16),
+            )
+        }
+        _ => (0, 0),
+    };
+    let record_slots = size(b, records_needed);
+    let mut records = vec![KnnRecord::EMPTY; record_slots];
+    let mut links = vec![0u16; size(b, links_needed)];
     let mut path = vec![[T::ZERO; 2]; size(b, budget)];
     let mut beliefs = vec![SourceBelief::EMPTY; size(b, slices.len())];
     let buffers = AdaptiveBuffers {
@@ -234,7 +275,11 @@ fn run<T: Real>(b: &mut Bytes) {
         weights: &mut weights,
         candidates: &mut candidates,
         alias: &mut alias,
-        fqi: &mut fqi,
+        fqi: QStorage {
+            entries: &mut fqi,
+            records: &mut records,
+            links: &mut links,
+        },
         path: &mut path,
         beliefs: &mut beliefs,
     };
@@ -262,6 +307,10 @@ fn run<T: Real>(b: &mut Bytes) {
                     for e in kernel.q().entries() {
                         finite("step", "q", e.q().to_f64());
                     }
+                    for s in [[0.0, 0.0], [3.3, 7.1], [10.0, 10.0]] {
+                        let v = kernel.q().max_value(s.map(T::from_f64));
+                        finite("step", "max q", v.expect("a finite state").to_f64());
+                    }
                     for &w in kernel.reward_weights() {
                         finite("step", "weight", w.to_f64());
                     }
@@ -277,8 +326,11 @@ fn run<T: Real>(b: &mut Bytes) {
                     expect_kind("step", &e, ANY);
                     assert_eq!(kernel.steps(), done, "a failed step advanced the count");
                     if let Error::CapacityExceeded { .. } = e {
-                        // The only capacity a step can lack is D₀'s, refused up front.
-                        assert_eq!(kernel.target_samples().len(), len);
+                        // The only capacity a step can lack is D₀'s, refused up front —
+                        // or, for kernel averaging, the record slots of a re-plan.
+                        if record_slots >= records_needed {
+                            assert_eq!(kernel.target_samples().len(), len);
+                        }
                     }
                 }
             }

@@ -63,7 +63,7 @@ fn run<T: Real, const D: usize>(b: &mut Bytes, tiles: bool) {
         (grid.into(), MAX_CELLS.pow(D as u32) * 4)
     };
     let mut storage = vec![FqiEntry::<T>::EMPTY; entries];
-    let mut fqi = match approximator.build(actions, &mut storage) {
+    let mut fqi = match approximator.build(actions, &mut storage[..]) {
         Ok(f) => f,
         Err(e) => {
             expect_kind("Approximator::build", &e, &[Kind::Invalid, Kind::Capacity]);

@@ -34,8 +34,9 @@
 //!
 //! **Differences from the harness's `awfqi-adaptive`** (its default configuration is what is
 //! ported; its options `prior`, `model_rewards`, `source_weights`, `surprise_stop` and
-//! `plan_trees` are left out, all off by default): the Q-function is the core's table or
-//! tile coding instead of Extra-Trees; every GP has a fixed capacity `N` fitted on an even
+//! `plan_trees` are left out, all off by default): the Q-function is the core's table, tile
+//! coding or kernel averaging over the records ([`crate::fqi::KnnFqi`]) instead of
+//! Extra-Trees; every GP has a fixed capacity `N` fitted on an even
 //! spread of its data ([`crate::SubsetRule`]) instead of up to 4 000 points; the residual GP
 //! is fitted after the weights' GP (one GP in memory), so the random streams differ.
 //!

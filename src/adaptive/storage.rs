@@ -6,7 +6,7 @@ use super::plausibility::SourceBelief;
 use crate::Real;
 use crate::alias::AliasEntry;
 use crate::env::Transition;
-use crate::fqi::FqiEntry;
+use crate::fqi::{FqiEntry, QStorage};
 use crate::gp::Gp;
 
 /// All the memory an [`AdaptiveAwfqi`](super::AdaptiveAwfqi) run writes, as one block:
@@ -76,7 +76,7 @@ impl<
             weights: &mut self.weights,
             candidates: &mut self.candidates,
             alias: &mut self.alias,
-            fqi: &mut self.fqi,
+            fqi: QStorage::from(&mut self.fqi[..]),
             path: &mut self.path,
             beliefs: &mut self.beliefs,
         }
@@ -116,8 +116,9 @@ pub struct AdaptiveBuffers<'a, T, const D: usize, const I: usize, const N: usize
     pub candidates: &'a mut [Candidate<T>],
     /// The alias table of the slots (as many entries).
     pub alias: &'a mut [AliasEntry<T>],
-    /// Room for the FQI entries of the approximator.
-    pub fqi: &'a mut [FqiEntry<T>],
+    /// Room for the approximator: FQI entries (table, tiles) or records and links (kernel
+    /// averaging: one record slot per target and source record).
+    pub fqi: QStorage<'a, T, D>,
     /// Room for one step's verified states (at least the budget).
     pub path: &'a mut [[T; D]],
     /// One belief per source.

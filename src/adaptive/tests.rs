@@ -285,7 +285,9 @@ fn a_step_spends_its_budget_on_verified_paths_and_drawn_rows() {
     .unwrap();
     // The first verification follows the plan fitted on the unweighted sources alone.
     let mut entries = vec![FqiEntry::EMPTY; 144];
-    let mut q = Approximator::from(grid()).build(4, &mut entries).unwrap();
+    let mut q = Approximator::from(grid())
+        .build(4, &mut entries[..])
+        .unwrap();
     let sets: Vec<_> = slices
         .iter()
         .map(|s| crate::fqi::SampleSet::unweighted(s))
@@ -414,4 +416,79 @@ fn the_source_that_answers_like_the_target_becomes_plausible() {
     for (e, b) in expect.iter().zip(b) {
         assert!((e.squared_errors - b.squared_errors).abs() < 1e-9);
     }
+}
+
+#[test]
+fn kernel_averaging_plans_on_d0_and_the_weighted_sources() {
+    // The kNN approximator in the loop: the first verification follows the kNN plan on the
+    // unweighted sources, and after a step the kernel's Q is the kNN fit on D₀ and the
+    // sources with the reward weights the kernel reports (rebuilt here independently).
+    use crate::fqi::{Kernel, KnnStorage, Neighbours, SampleSet};
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let valid = config(12).validate().unwrap();
+    let nb = Neighbours::cube(3, 0.0, 10.0, Kernel::Gaussian(0.1)).unwrap();
+    let mut storage =
+        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 36, 120, 40, 0, 12, 3>::new());
+    let mut knn = std::boxed::Box::new(KnnStorage::<f64, 2, 156, { 156 * 4 * 3 }>::new());
+    let mut buffers = storage.buffers();
+    buffers.fqi = knn.storage();
+    let mut kernel = AdaptiveAwfqi::new(
+        valid,
+        nb,
+        SourceData::new(&slices, &fx.posteriors).unwrap(),
+        &fx.means,
+        rows(),
+        PuddleWorld::target(Dynamics::Shared),
+        buffers,
+    )
+    .unwrap();
+    let mut reference = KnnStorage::<f64, 2, 156, { 156 * 4 * 3 }>::new();
+    let mut q = Approximator::from(nb)
+        .build(4, reference.storage())
+        .unwrap();
+    let plain: Vec<_> = slices.iter().map(|s| SampleSet::unweighted(s)).collect();
+    q.fit(&plain, &valid.awfqi.fqi).unwrap();
+    kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
+    let d0 = kernel.target_samples().to_vec();
+    assert_eq!(d0[0].action, q.greedy_action([0.0, 0.0]).unwrap());
+    let w = kernel.reward_weights().to_vec();
+    let mut sets = vec![SampleSet::unweighted(&d0)];
+    let mut offset = 0;
+    for s in &slices {
+        sets.push(SampleSet::weighted(
+            s,
+            Some(&w[offset..offset + s.len()]),
+            None,
+        ));
+        offset += s.len();
+    }
+    q.fit(&sets, &valid.awfqi.fqi).unwrap();
+    for x in [0.0, 1.3, 4.0, 7.7, 9.9] {
+        for y in [0.0, 2.5, 6.1, 9.5] {
+            for a in 0..4 {
+                assert_eq!(kernel.q().value([x, y], a), q.value([x, y], a));
+            }
+        }
+    }
+
+    // Too few record slots: refused at the first plan, before any query.
+    let mut small = KnnStorage::<f64, 2, 100, { 100 * 4 * 3 }>::new();
+    let mut buffers = storage.buffers();
+    buffers.fqi = small.storage();
+    let mut kernel = AdaptiveAwfqi::new(
+        valid,
+        nb,
+        SourceData::new(&slices, &fx.posteriors).unwrap(),
+        &fx.means,
+        rows(),
+        PuddleWorld::target(Dynamics::Shared),
+        buffers,
+    )
+    .unwrap();
+    assert_eq!(
+        kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).err(),
+        Some(Error::CapacityExceeded { capacity: 100 })
+    );
+    assert!(kernel.target_samples().is_empty());
 }

@@ -52,11 +52,13 @@
 //! `f64`. A 21 × 21 grid with 4 actions needs 1 764 entries = 35 280 bytes in `f32`.
 
 mod grid;
+pub mod knn;
 mod q_function;
 mod tiles;
 
 pub use grid::CellGrid;
-pub use q_function::{Approximator, Greedy, QFunction};
+pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
+pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use tiles::{TileFqi, Tilings};
 
 use crate::env::Transition;

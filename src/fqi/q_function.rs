@@ -1,9 +1,36 @@
 //! The Q-function approximators of weighted FQI behind one type, so the AWFQI loop (and a
-//! user) picks one by configuration: the table of [`CellGrid`] cells or tile coding
-//! ([`Tilings`]). Both keep their values in the same [`FqiEntry`] storage.
+//! user) picks one by configuration: the table of [`CellGrid`] cells, tile coding
+//! ([`Tilings`]) or kernel averaging over the records ([`Neighbours`]). The first two keep
+//! their values in [`FqiEntry`] storage, the third in [`KnnRecord`]s and links
+//! ([`QStorage`] lends either).
 
-use super::{CellGrid, FqiConfig, FqiEntry, SampleSet, TabularFqi, TileFqi, Tilings};
+use super::{
+    CellGrid, FqiConfig, FqiEntry, KnnFqi, KnnRecord, Neighbours, SampleSet, TabularFqi, TileFqi,
+    Tilings,
+};
 use crate::{Real, Result};
+
+/// The memory a [`QFunction`] is built in: FQI entries for a table or tiles, records and
+/// links for kernel averaging (what an approximator does not use may be empty).
+#[derive(Debug)]
+pub struct QStorage<'a, T, const D: usize> {
+    /// Entries of a table or tiles ([`Approximator::required_entries`]).
+    pub entries: &'a mut [FqiEntry<T>],
+    /// One record slot per sample a kernel-averaging fit may hold.
+    pub records: &'a mut [KnnRecord<T, D>],
+    /// Its links ([`Neighbours::required_links`] for the record slots).
+    pub links: &'a mut [u16],
+}
+
+impl<'a, T, const D: usize> From<&'a mut [FqiEntry<T>]> for QStorage<'a, T, D> {
+    fn from(entries: &'a mut [FqiEntry<T>]) -> Self {
+        Self {
+            entries,
+            records: &mut [],
+            links: &mut [],
+        }
+    }
+}
 
 /// Which approximator, and its geometry: what a caller chooses before storage exists.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -13,6 +40,18 @@ pub enum Approximator<T, const D: usize> {
     Table(CellGrid<T, D>),
     /// Averaged offset tilings ([`TileFqi`]).
     Tiles(Tilings<T, D>),
+    /// Kernel averaging over the `k` nearest records ([`KnnFqi`]).
+    Knn(Neighbours<T, D>),
+    /// Both tile coding and kernel averaging, each fitted by FQI on the same data, their
+    /// Q-values averaged (an ensemble of two averagers: the tiles' coarse, consistent
+    /// values where the records are sparse, the records' local ones where they are dense).
+    Hybrid(Tilings<T, D>, Neighbours<T, D>),
+}
+
+impl<T: Real, const D: usize> From<Neighbours<T, D>> for Approximator<T, D> {
+    fn from(neighbours: Neighbours<T, D>) -> Self {
+        Approximator::Knn(neighbours)
+    }
 }
 
 impl<T: Real, const D: usize> From<CellGrid<T, D>> for Approximator<T, D> {
@@ -28,25 +67,44 @@ impl<T: Real, const D: usize> From<Tilings<T, D>> for Approximator<T, D> {
 }
 
 impl<T: Real, const D: usize> Approximator<T, D> {
-    /// Number of [`FqiEntry`] it needs with `actions` actions (`None` on overflow).
+    /// Number of [`FqiEntry`] it needs with `actions` actions (`None` on overflow; 0 for
+    /// kernel averaging, which needs records and links instead).
     pub fn required_entries(&self, actions: usize) -> Option<usize> {
         match self {
             Approximator::Table(grid) => TabularFqi::required_entries(grid, actions),
             Approximator::Tiles(tilings) => TileFqi::required_entries(tilings, actions),
+            Approximator::Knn(_) => Some(0),
+            Approximator::Hybrid(tilings, _) => TileFqi::required_entries(tilings, actions),
         }
     }
 
-    /// A Q-function that is 0 everywhere in `storage`.
+    /// A Q-function that is 0 everywhere in `storage` (a slice of [`FqiEntry`] for a table
+    /// or tiles).
     ///
-    /// Errors: those of [`TabularFqi::new`] or [`TileFqi::new`].
-    pub fn build(self, actions: usize, storage: &mut [FqiEntry<T>]) -> Result<QFunction<'_, T, D>> {
+    /// Errors: those of [`TabularFqi::new`], [`TileFqi::new`] or [`KnnFqi::new`].
+    pub fn build<'a>(
+        self,
+        actions: usize,
+        storage: impl Into<QStorage<'a, T, D>>,
+    ) -> Result<QFunction<'a, T, D>> {
+        let storage = storage.into();
         Ok(match self {
             Approximator::Table(grid) => {
-                QFunction::Tabular(TabularFqi::new(grid, actions, storage)?)
+                QFunction::Tabular(TabularFqi::new(grid, actions, storage.entries)?)
             }
             Approximator::Tiles(tilings) => {
-                QFunction::Tiles(TileFqi::new(tilings, actions, storage)?)
+                QFunction::Tiles(TileFqi::new(tilings, actions, storage.entries)?)
             }
+            Approximator::Knn(neighbours) => QFunction::Knn(KnnFqi::new(
+                neighbours,
+                actions,
+                storage.records,
+                storage.links,
+            )?),
+            Approximator::Hybrid(tilings, neighbours) => QFunction::Hybrid(
+                TileFqi::new(tilings, actions, storage.entries)?,
+                KnnFqi::new(neighbours, actions, storage.records, storage.links)?,
+            ),
         })
     }
 }
@@ -58,6 +116,10 @@ pub enum QFunction<'a, T, const D: usize> {
     Tabular(TabularFqi<'a, T, D>),
     /// Tile coding.
     Tiles(TileFqi<'a, T, D>),
+    /// Kernel averaging over the records.
+    Knn(KnnFqi<'a, T, D>),
+    /// The mean of tile coding and kernel averaging.
+    Hybrid(TileFqi<'a, T, D>, KnnFqi<'a, T, D>),
 }
 
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
@@ -66,15 +128,18 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.actions(),
             QFunction::Tiles(q) => q.actions(),
+            QFunction::Knn(q) => q.actions(),
+            QFunction::Hybrid(q, _) => q.actions(),
         }
     }
 
-    /// The storage in use (layout per approximator: [`TabularFqi::entries`],
-    /// [`TileFqi::entries`]).
+    /// The entries in use (layout per approximator: [`TabularFqi::entries`],
+    /// [`TileFqi::entries`]; none for kernel averaging, see [`KnnFqi::records`]).
     pub fn entries(&self) -> &[FqiEntry<T>] {
         match self {
             QFunction::Tabular(q) => q.entries(),
-            QFunction::Tiles(q) => q.entries(),
+            QFunction::Tiles(q) | QFunction::Hybrid(q, _) => q.entries(),
+            QFunction::Knn(_) => &[],
         }
     }
 
@@ -82,7 +147,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     pub fn as_tabular(&self) -> Option<&TabularFqi<'a, T, D>> {
         match self {
             QFunction::Tabular(q) => Some(q),
-            QFunction::Tiles(_) => None,
+            QFunction::Tiles(_) | QFunction::Knn(_) | QFunction::Hybrid(..) => None,
         }
     }
 
@@ -91,6 +156,11 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.clear(),
             QFunction::Tiles(q) => q.clear(),
+            QFunction::Knn(q) => q.clear(),
+            QFunction::Hybrid(t, k) => {
+                t.clear();
+                k.clear();
+            }
         }
     }
 
@@ -105,6 +175,13 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.fit_sets(sets, config),
             QFunction::Tiles(q) => q.fit_sets(sets, config),
+            QFunction::Knn(q) => q.fit_sets(sets, config),
+            QFunction::Hybrid(t, k) => {
+                // Checked by the kNN fit first (its capacity can be short), so a refused
+                // fit leaves both as they were.
+                k.fit_sets(sets.clone(), config)?;
+                t.fit_sets(sets, config)
+            }
         }
     }
 
@@ -122,6 +199,10 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.value(state, action),
             QFunction::Tiles(q) => q.value(state, action),
+            QFunction::Knn(q) => q.value(state, action),
+            QFunction::Hybrid(t, k) => {
+                Ok((t.value(state, action)? + k.value(state, action)?) / T::from_f64(2.0))
+            }
         }
     }
 
@@ -132,6 +213,14 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.max_value(state),
             QFunction::Tiles(q) => q.max_value(state),
+            QFunction::Knn(q) => q.max_value(state),
+            QFunction::Hybrid(..) => {
+                let mut best = T::NEG_INFINITY;
+                for a in 0..self.actions() {
+                    best = best.max(self.value(state, a)?);
+                }
+                Ok(best)
+            }
         }
     }
 
@@ -142,6 +231,20 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.greedy_action(state),
             QFunction::Tiles(q) => q.greedy_action(state),
+            QFunction::Knn(q) => q.greedy_action(state),
+            QFunction::Hybrid(..) => {
+                // The largest mean value, ties to the smallest index.
+                let mut best = 0;
+                let mut best_q = T::NEG_INFINITY;
+                for a in 0..self.actions() {
+                    let q = self.value(state, a)?;
+                    if a == 0 || q > best_q {
+                        best = a;
+                        best_q = q;
+                    }
+                }
+                Ok(best)
+            }
         }
     }
 }
@@ -162,6 +265,12 @@ impl<T: Real, const D: usize> Greedy<T, D> for TabularFqi<'_, T, D> {
 }
 
 impl<T: Real, const D: usize> Greedy<T, D> for TileFqi<'_, T, D> {
+    fn greedy(&self, state: [T; D]) -> Result<usize> {
+        self.greedy_action(state)
+    }
+}
+
+impl<T: Real, const D: usize> Greedy<T, D> for KnnFqi<'_, T, D> {
     fn greedy(&self, state: [T; D]) -> Result<usize> {
         self.greedy_action(state)
     }

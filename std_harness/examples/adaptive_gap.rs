@@ -112,7 +112,7 @@ fn main() -> anyhow::Result<()> {
                 weights: &mut weights,
                 candidates: &mut candidates,
                 alias: &mut alias,
-                fqi: &mut fqi_entries,
+                fqi: (&mut fqi_entries[..]).into(),
                 path: &mut path,
                 beliefs: &mut beliefs,
             },

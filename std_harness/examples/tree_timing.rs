@@ -37,6 +37,9 @@ fn main() {
     let mut out = vec![0.0; n];
     let predict = min_time(20, || forest.predict_into(&queries, &mut out).unwrap());
     let nodes = forest.n_nodes();
+    // A fingerprint of the forest's predictions (bits), to check that a speed-up keeps them.
+    let fingerprint = out.iter().fold(0u64, |h, v| h.rotate_left(5) ^ v.to_bits());
+    println!("fingerprint {fingerprint:016x}");
     println!(
         "fit 50 trees on {per_action} records: {:.3} ms ({:.1} ns/node, {nodes} nodes)",
         fit * 1e3,

@@ -161,6 +161,19 @@ struct Record<const D: usize> {
     y: f64,
 }
 
+impl<const D: usize> Record<D> {
+    /// The value of a leaf holding only this record, `w·y / w` as the weighted mean
+    /// computes it; with `w = 1` that is `y` exactly, without the division.
+    #[inline(always)]
+    fn leaf_value(&self) -> f64 {
+        if self.w == 1.0 {
+            self.y
+        } else {
+            self.w * self.y / self.w
+        }
+    }
+}
+
 /// A node waiting to be grown: its arena index, its records `start..end` and which of the
 /// two record buffers holds them.
 #[derive(Debug, Clone, Copy)]
@@ -553,7 +566,7 @@ impl Tree<'_> {
             };
             let node = p.node as usize;
             if let [only] = src {
-                self.values[node] = only.w * only.y / only.w;
+                self.values[node] = only.leaf_value();
                 continue;
             }
             let st = node_stats(src);
@@ -583,7 +596,8 @@ impl Tree<'_> {
             let Some((feature, threshold)) = split else {
                 continue;
             };
-            let mid = start + partition_into(src, dst, feature, threshold);
+            let n_left = partition_into(src, dst, feature, threshold);
+            let mid = start + n_left;
             let left = self.push_leaf();
             self.push_leaf();
             self.nodes[node] = Node {
@@ -593,18 +607,29 @@ impl Tree<'_> {
             };
             self.values[node] = 0.0;
             let in_second = !p.in_second;
-            stack.push(Pending {
-                node: left + 1,
-                start: mid as u32,
-                end: p.end,
-                in_second,
-            });
-            stack.push(Pending {
-                node: left,
-                start: p.start,
-                end: mid as u32,
-                in_second,
-            });
+            // A child of one record is a leaf: its value is written now instead of when it
+            // would be popped (it draws no random numbers, so the order of the others'
+            // draws is unchanged).
+            if let [only] = &dst[n_left..] {
+                self.values[left as usize + 1] = only.leaf_value();
+            } else {
+                stack.push(Pending {
+                    node: left + 1,
+                    start: mid as u32,
+                    end: p.end,
+                    in_second,
+                });
+            }
+            if let [only] = &dst[..n_left] {
+                self.values[left as usize] = only.leaf_value();
+            } else {
+                stack.push(Pending {
+                    node: left,
+                    start: p.start,
+                    end: mid as u32,
+                    in_second,
+                });
+            }
         }
     }
 }
@@ -641,8 +666,8 @@ impl Tree<'_> {
         };
         let left = self.push_leaf();
         self.push_leaf();
-        self.values[left as usize] = l.w * l.y / l.w;
-        self.values[left as usize + 1] = r.w * r.y / r.w;
+        self.values[left as usize] = l.leaf_value();
+        self.values[left as usize + 1] = r.leaf_value();
         self.nodes[node] = Node {
             threshold,
             feature: feature as u32,
@@ -711,14 +736,20 @@ fn best_split<const D: usize>(
             sr[d] += f64::from_bits(wy & !mask);
         }
     }
-    // The first valid candidate of highest score, in trial order.
+    // Every feature's score at once (the divisions in vector lanes; invalid candidates'
+    // scores are computed and ignored), then the first valid candidate of highest score,
+    // in trial order.
+    let mut scores = [0.0f64; D];
+    for d in 0..D {
+        scores[d] = sl[d] * sl[d] / wl[d] + sr[d] * sr[d] / wr[d];
+    }
     let mut best: Option<(usize, f64)> = None;
     let mut best_score = f64::NEG_INFINITY;
     for &f in &order {
         if !is_candidate[f] || wl[f] <= 0.0 || wr[f] <= 0.0 {
             continue;
         }
-        let score = sl[f] * sl[f] / wl[f] + sr[f] * sr[f] / wr[f];
+        let score = scores[f];
         if score > best_score {
             best_score = score;
             best = Some((f, thresholds[f]));

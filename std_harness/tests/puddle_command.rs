@@ -141,6 +141,24 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     std::fs::remove_dir_all(&base).unwrap();
 }
 
+/// awfqi's default GP search is the screened one as well (checked on 10 reference runs);
+/// awfqi-oracle, never checked, keeps the spec's, and the report's header names both.
+#[test]
+fn awfqi_defaults_to_the_screened_search_and_awfqi_oracle_to_the_spec() {
+    let dir = std::env::temp_dir().join(format!("awfqi-gp-search-awfqi-{}", std::process::id()));
+    let extra = ["--episodes-per-step", "1"];
+    run(&args_with(&dir, "1", "awfqi,awfqi-oracle", &extra)).unwrap();
+    let parameters = |file: &str| -> serde_json::Value {
+        let v: serde_json::Value = serde_json::from_str(&read(&dir, file)).unwrap();
+        v["runs"][0]["parameters"].clone()
+    };
+    assert_eq!(parameters("awfqi.json")["gp_search"], "screened");
+    assert!(parameters("awfqi-oracle.json").get("gp_search").is_none());
+    let report = read(&dir, "report.md");
+    assert!(report.contains("Spec (awfqi: Screened) search"), "{report}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// iwfqi's default GP search: the screened one without transition weights (its result
 /// file says so), the spec's with them and whenever `--gp-search` names one. Below 300
 /// points the screened search is the spec's (docs/algorithms.md §4.6), so on this small

@@ -76,6 +76,18 @@ pub enum KernelQ {
     Tiles,
 }
 
+/// The Q-function approximator of `awfqi-adaptive-kernel`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AdaptiveKernelQ {
+    /// Tile coding (12 × 12 tiles × 8 tilings unless `--kernel-resolution` is given).
+    Tiles,
+    /// Kernel averaging over the `--kernel-neighbours` nearest records (the core's
+    /// `KnnFqi`), uniform or Gaussian (`--kernel-bandwidth`).
+    Knn,
+    /// The mean of both, each fitted on the same data (tiles as for `tiles`).
+    Hybrid,
+}
+
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
 /// the domain's default (see each command's help).
 #[derive(Debug, Clone, ClapArgs)]
@@ -192,6 +204,26 @@ pub struct Args {
     /// Offset tilings of `--kernel-q tiles`.
     #[arg(long, default_value_t = 4)]
     pub kernel_tilings: usize,
+    /// Q-function approximator of awfqi-adaptive-kernel's FQI.
+    #[arg(long, value_enum, default_value = "tiles")]
+    pub adaptive_kernel_q: AdaptiveKernelQ,
+    /// Neighbours per prediction of `--adaptive-kernel-q knn`.
+    #[arg(long, default_value_t = 4)]
+    pub kernel_neighbours: usize,
+    /// Gaussian bandwidth of `--adaptive-kernel-q knn`, as a share of each coordinate's
+    /// range (absent: the neighbours weigh equally).
+    #[arg(long)]
+    pub kernel_bandwidth: Option<f64>,
+    /// Reach of `--adaptive-kernel-q knn`, as a share of each coordinate's range: an action
+    /// whose nearest record is farther, where another's is nearer, is valued at most that
+    /// one's value (absent: no cap).
+    #[arg(long)]
+    pub kernel_reach: Option<f64>,
+    /// `--adaptive-kernel-q knn`: one ball for every action (the radius of the
+    /// `--kernel-neighbours` nearest records of any action bounds every action's mean and
+    /// acts as the reach).
+    #[arg(long)]
+    pub kernel_common_ball: bool,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -600,6 +632,28 @@ pub fn build_experiment<const D: usize>(
             if args.kernel_resolution.is_some() {
                 kernel = kernel.with_adaptive_q(q);
             }
+            let knn = || {
+                KernelQFunction::knn(
+                    args.kernel_neighbours,
+                    args.kernel_bandwidth,
+                    args.kernel_reach,
+                    args.kernel_common_ball,
+                )
+            };
+            match (args.adaptive_kernel_q, knn()?, kernel.adaptive_q) {
+                (AdaptiveKernelQ::Knn, q, _) => kernel = kernel.with_adaptive_q(q),
+                (
+                    AdaptiveKernelQ::Hybrid,
+                    KernelQFunction::Knn(k, h, r, c),
+                    KernelQFunction::Tiles(n, t),
+                ) => {
+                    kernel = kernel.with_adaptive_q(KernelQFunction::Hybrid((n, t), (k, h, r, c)));
+                }
+                (AdaptiveKernelQ::Hybrid, _, _) => {
+                    anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")
+                }
+                (AdaptiveKernelQ::Tiles, _, _) => {}
+            }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }
         _ => None,
@@ -1007,18 +1061,22 @@ fn timing_report(
     Ok(out)
 }
 
-/// The GP search of the report's header: the one asked for, else the default and, when
-/// this configuration runs it, iwfqi's.
+/// The GP search of the report's header: the one asked for, else the spec's and the
+/// algorithms of this configuration whose default differs from it.
 fn search_description<const D: usize>(config: &Config, experiment: &Experiment<D>) -> String {
-    let gp = &experiment.options.gp;
-    match gp.search {
-        Some(search) => format!("{search:?}"),
-        None if config.algorithms.contains(&Algorithm::Iwfqi)
-            && experiment.iwfqi_search() == GpSearch::Screened =>
-        {
-            "Spec (iwfqi: Screened)".into()
-        }
-        None => format!("{:?}", GpSearch::Spec),
+    if let Some(search) = experiment.options.gp.search {
+        return format!("{search:?}");
+    }
+    let screened: Vec<&str> = config
+        .algorithms
+        .iter()
+        .filter(|&&a| experiment.default_search(a) == GpSearch::Screened)
+        .map(|a| a.name())
+        .collect();
+    if screened.is_empty() {
+        format!("{:?}", GpSearch::Spec)
+    } else {
+        format!("Spec ({}: Screened)", screened.join(", "))
     }
 }
 

@@ -960,6 +960,79 @@ mod tests {
         assert!(fqi.value([f32::NAN], 0).is_err());
     }
 
+    /// Kernel averaging (`KnnFqi`, f32) on the same chain: with one neighbour, every next
+    /// state's nearest record of each action is the record at that very state, so FQI is
+    /// value iteration and Q is the closed-form Q* at the states and 0.3 past them; a
+    /// reach of 0.1 of the range caps an action tried only far away (hand-computed).
+    #[test]
+    fn knn_q_on_a_chain() {
+        use awfqi::{
+            EmptyCells, FqiConfig, Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet, Transition,
+        };
+        let at = |c: usize| [c as f32 + 0.5];
+        let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 8];
+        for c in 0..4 {
+            samples[2 * c] = Transition {
+                state: at(c),
+                action: 0,
+                reward: -1.0,
+                next_state: at(c + 1),
+                absorbing: c == 3,
+            };
+            samples[2 * c + 1] = Transition {
+                state: at(c),
+                action: 1,
+                reward: -1.0,
+                next_state: at(c.saturating_sub(1)),
+                absorbing: false,
+            };
+        }
+        let nb = Neighbours::<f32, 1>::cube(1, 0.0, 5.0, Kernel::Uniform).unwrap();
+        let mut records = [KnnRecord::<f32, 1>::EMPTY; 8];
+        let mut links = [0u16; 16];
+        let mut fqi = KnnFqi::new(nb, 2, &mut records, &mut links).unwrap();
+        let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
+        fqi.fit(&[SampleSet::unweighted(&samples)], &config)
+            .unwrap();
+        let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
+        for c in 0..4 {
+            let right = fqi.value(at(c), 0).unwrap() as f64;
+            assert!(close(right, v(c), 1e-5, 1e-5), "Q({}, right) {}", c, right);
+            let past = fqi.value([c as f32 + 0.8], 0).unwrap() as f64;
+            assert!(close(past, v(c), 1e-5, 1e-5), "past {}", c);
+            let left = fqi.value(at(c), 1).unwrap() as f64;
+            assert!(close(left, -1.0 + 0.9 * v(c.saturating_sub(1)), 1e-5, 1e-5));
+            assert!(fqi.greedy_action(at(c)) == Ok(0));
+        }
+        assert!(fqi.value([f32::NAN], 0).is_err());
+        // Action 1 tried only at 4.5 (reward +10): copied to 0.5 without a reach, capped at
+        // action 0's −1 with reach 0.1 (0.5 units).
+        let far = [
+            Transition {
+                state: [0.5],
+                action: 0,
+                reward: -1.0,
+                next_state: [0.5],
+                absorbing: true,
+            },
+            Transition {
+                state: [4.5],
+                action: 1,
+                reward: 10.0,
+                next_state: [4.5],
+                absorbing: true,
+            },
+        ];
+        let mut records = [KnnRecord::<f32, 1>::EMPTY; 2];
+        let mut links = [0u16; 4];
+        let capped = nb.with_reach(0.1).unwrap();
+        let mut fqi = KnnFqi::new(capped, 2, &mut records, &mut links).unwrap();
+        fqi.fit(&[SampleSet::unweighted(&far)], &config).unwrap();
+        assert!(fqi.value([0.5], 1) == Ok(-1.0));
+        assert!(fqi.greedy_action([0.5]) == Ok(0));
+        assert!(fqi.value([4.5], 1) == Ok(10.0));
+    }
+
     /// Transition weights in the loop, on a 1-D plant whose two sources share the target's
     /// reward: the twin (same dynamics) keeps far more weight than the source whose moves
     /// are 2.5 instead of 1, the report's `ws_mean` is theirs, and FQI used them (an

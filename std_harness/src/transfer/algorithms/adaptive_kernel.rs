@@ -8,14 +8,16 @@
 //! posterior means are the sources' [`MeanFunction`]s), tile coding with
 //! [`ADAPTIVE_TILINGS`] offset tilings of [`ADAPTIVE_TILES`] tiles per axis (chosen on the
 //! tuning runs `--seed 100`, `docs/active-budget.md`; `--kernel-resolution` given
-//! explicitly sets the approximator of both kernels), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
+//! explicitly sets the approximator of both kernels; `--adaptive-kernel-q knn|hybrid` selects
+//! the core's kernel averaging over the records, or its mean with the tiles, measured in
+//! `docs/active-budget.md`), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
 //! verification share, surprise, uncertainty, decision relevance, floor, candidates,
 //! relevance width; the others must keep their defaults).
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, MeanFunction,
-    SourceData, Transition,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, KnnRecord,
+    MeanFunction, QStorage, SourceData, Transition,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -84,6 +86,8 @@ struct Memory {
     candidates: Vec<awfqi::adaptive::Candidate<T>>,
     alias: Vec<AliasEntry<T>>,
     fqi: Vec<FqiEntry<T>>,
+    records: Vec<KnnRecord<T, 2>>,
+    links: Vec<u16>,
     path: Vec<[T; 2]>,
     beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
 }
@@ -96,7 +100,11 @@ impl Memory {
             weights: &mut self.weights,
             candidates: &mut self.candidates,
             alias: &mut self.alias,
-            fqi: &mut self.fqi,
+            fqi: QStorage {
+                entries: &mut self.fqi,
+                records: &mut self.records,
+                links: &mut self.links,
+            },
             path: &mut self.path,
             beliefs: &mut self.beliefs,
         }
@@ -159,6 +167,17 @@ pub fn with_learner(
         .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
     let budget = experiment.budget();
     let slots = config.candidates.min(rows.len());
+    // Kernel averaging holds every target and source record of a fit.
+    let (records, links) = match approximator {
+        awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
+            let n = experiment.protocol.steps * budget + setup.posteriors().len();
+            let links = nb
+                .required_links(n, awfqi::env::PUDDLE_ACTIONS)
+                .ok_or_else(|| anyhow::anyhow!("kNN links overflow"))?;
+            (n, links)
+        }
+        _ => (0, 0),
+    };
     let mut memory = Memory {
         gp: Box::new(Gp::empty()),
         samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
@@ -166,6 +185,8 @@ pub fn with_learner(
         candidates: vec![awfqi::adaptive::Candidate::EMPTY; slots],
         alias: vec![AliasEntry::EMPTY; slots],
         fqi: vec![FqiEntry::EMPTY; entries],
+        records: vec![KnnRecord::EMPTY; records],
+        links: vec![0; links],
         path: vec![[0.0; 2]; budget],
         beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
     };

@@ -18,8 +18,8 @@ use std::time::Instant;
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
     AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, FqiEntry, Gp,
-    GpTraining, MeanFunction, Posterior, RowSet, ScoreTable, Scores, SubsetRule, Tilings,
-    Transition, WeightParams,
+    GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores,
+    SubsetRule, Tilings, Transition, WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -43,12 +43,19 @@ pub const TILINGS: usize = 4;
 
 /// The Q-function approximator of the kernel's FQI (`--kernel-q`, `--kernel-resolution`,
 /// `--kernel-tilings`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum KernelQFunction {
     /// A table of this many cells per axis.
     Tabular(usize),
     /// Tile coding: tiles per axis, tilings.
     Tiles(usize, usize),
+    /// Kernel averaging over this many nearest records, with a Gaussian bandwidth (share of
+    /// the range) or uniform weights (`None`), a reach (share of the range) or none, and
+    /// one ball for every action or not; `awfqi-adaptive-kernel` only.
+    Knn(usize, Option<f64>, Option<f64>, bool),
+    /// The mean of tile coding (tiles per axis, tilings) and kernel averaging (as
+    /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
+    Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
 }
 
 impl KernelQFunction {
@@ -74,14 +81,53 @@ impl KernelQFunction {
         }
     }
 
+    /// Kernel averaging over `k` neighbours (`--kernel-neighbours`, `--kernel-bandwidth`).
+    ///
+    /// Errors: those of [`awfqi::Neighbours::new`].
+    pub fn knn(
+        k: usize,
+        bandwidth: Option<f64>,
+        reach: Option<f64>,
+        common: bool,
+    ) -> anyhow::Result<Self> {
+        let out = Self::Knn(k, bandwidth, reach, common);
+        out.approximator()?;
+        Ok(out)
+    }
+
     /// The core's approximator over Puddle World's `[0, 10]²`.
     pub(super) fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
             Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
             Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
+            Self::Knn(k, h, reach, common) => neighbours(k, h, reach, common)?.into(),
+            Self::Hybrid((n, t), (k, h, reach, common)) => Approximator::Hybrid(
+                Tilings::cube(0.0, 10.0, n, t)?,
+                neighbours(k, h, reach, common)?,
+            ),
         })
     }
 }
+
+/// The kNN geometry over Puddle World's `[0, 10]²`.
+fn neighbours(
+    k: usize,
+    h: Option<f64>,
+    reach: Option<f64>,
+    common: bool,
+) -> anyhow::Result<Neighbours<T, 2>> {
+    let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
+    let mut nb = Neighbours::cube(k, 0.0, 10.0, kernel)?;
+    if let Some(r) = reach {
+        nb = nb.with_reach(r as T)?;
+    }
+    if common {
+        nb = nb.with_common_ball();
+    }
+    Ok(nb)
+}
+
+impl KernelQFunction {}
 
 /// The kernels' scalar.
 pub(super) type T = f32;
@@ -254,6 +300,24 @@ impl<const N: usize> KernelSetup<N> {
             KernelQFunction::Tiles(n, k) => {
                 out["fqi_tiles"] = serde_json::json!([n, n]);
                 out["fqi_tilings"] = k.into();
+            }
+            KernelQFunction::Knn(k, h, reach, common) => {
+                out["fqi_neighbours"] = k.into();
+                out["fqi_bandwidth"] = h.into();
+                out["fqi_reach"] = reach.into();
+                if common {
+                    out["fqi_common_ball"] = true.into();
+                }
+            }
+            KernelQFunction::Hybrid((n, t), (k, h, reach, common)) => {
+                if common {
+                    out["fqi_common_ball"] = true.into();
+                }
+                out["fqi_tiles"] = serde_json::json!([n, n]);
+                out["fqi_tilings"] = t.into();
+                out["fqi_neighbours"] = k.into();
+                out["fqi_bandwidth"] = h.into();
+                out["fqi_reach"] = reach.into();
             }
         }
         out

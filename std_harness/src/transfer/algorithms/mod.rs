@@ -267,14 +267,16 @@ impl<const D: usize> Experiment<D> {
         !self.transition_dims().is_empty()
     }
 
-    /// The GP search of iwfqi's fits when none is asked for: `screened` without transition
-    /// weights, where it was checked on every fit of the reference runs to reach the spec's
-    /// optimum (relative LML within 10⁻⁶); the spec's with them (not checked).
-    pub fn iwfqi_search(&self) -> GpSearch {
-        if self.transition_weights() {
-            GpSearch::Spec
-        } else {
+    /// The GP search of `algorithm`'s fits when none is asked for: `screened` for `iwfqi`
+    /// and `awfqi` without transition weights, where it was checked on every fit of the
+    /// reference runs (20 of iwfqi, 10 of awfqi) to reach the spec's optimum (relative LML
+    /// within 10⁻⁶); the spec's everywhere else (not checked).
+    pub fn default_search(&self, algorithm: Algorithm) -> GpSearch {
+        let checked = matches!(algorithm, Algorithm::Iwfqi | Algorithm::Awfqi);
+        if checked && !self.transition_weights() {
             GpSearch::Screened
+        } else {
+            GpSearch::Spec
         }
     }
 
@@ -338,9 +340,8 @@ impl<const D: usize> Experiment<D> {
                 o["max_weight"] = self.options.max_weight.into();
                 o["max_gp"] = self.options.gp.max_gp.into();
                 o["gp_restarts"] = self.options.gp.restarts.into();
-                if algorithm == Algorithm::Iwfqi
-                    && self.options.gp.search.is_none()
-                    && self.iwfqi_search() == GpSearch::Screened
+                if self.options.gp.search.is_none()
+                    && self.default_search(algorithm) == GpSearch::Screened
                 {
                     // Only where the default differs from the spec's, so the other
                     // algorithms' files stay as they were.
@@ -455,7 +456,7 @@ impl<const D: usize> Experiment<D> {
             Algorithm::Fqi => Box::new(plain_fqi::Fqi::new(self)),
             Algorithm::Iwfqi => Box::new(
                 iwfqi::Iwfqi::estimated(self, Mean, None)?
-                    .with_gp(self.options.gp.resolved(self.iwfqi_search())),
+                    .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
             ),
             Algorithm::IwfqiHeuristic => Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None)?),
             Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),
@@ -464,7 +465,10 @@ impl<const D: usize> Experiment<D> {
             Algorithm::Awfqi => {
                 let table = self.realistic_table.clone();
                 let table = table.ok_or_else(|| anyhow::anyhow!("no realistic score table"))?;
-                Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
+                Box::new(
+                    iwfqi::Iwfqi::estimated(self, Mean, Some(table))?
+                        .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
+                )
             }
             Algorithm::AwfqiOracle => {
                 let table = self.oracle_table.clone();

@@ -37,9 +37,10 @@ use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
     FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
-    Hyperparameters, MeanFunction, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn,
-    ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
-    TabularFqi, TileFqi, Tilings, Transition, WhenFull, evaluate, evaluate_greedy, rollout,
+    Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, Neighbours, Output,
+    QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData,
+    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, WhenFull,
+    evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -679,7 +680,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         };
         keep(approximator.required_entries(actions));
         let mut storage = [FqiEntry::<T>::EMPTY; 400];
-        if let Ok(mut q) = approximator.build(actions, &mut storage) {
+        if let Ok(mut q) = approximator.build(actions, &mut storage[..]) {
             keep(q.fit(&sets, &config));
             let s = [num::<T>(0.7); D];
             keep((
@@ -693,6 +694,80 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
                 keep(t.tilings().tiles());
             }
             q.clear();
+        }
+    }
+
+    // fqi: kernel averaging over the records, directly and behind QFunction
+    let weighting = if opaque(true) {
+        Kernel::Gaussian(num::<T>(0.1))
+    } else {
+        Kernel::Uniform
+    };
+    let neighbours = Neighbours::<T, D>::new(index(3), [num(0.0); D], [high; D], weighting)
+        .or_else(|_| Neighbours::cube(index(2), num(0.0), high, Kernel::Uniform))
+        .and_then(|n| n.with_reach(num(0.3)))
+        .map(|n| {
+            if opaque(true) {
+                n.with_common_ball()
+            } else {
+                n
+            }
+        });
+    if let Ok(neighbours) = neighbours {
+        keep((neighbours.k(), neighbours.kernel(), neighbours.reach()));
+        keep(neighbours.common_ball());
+        keep(neighbours.required_links(index(12), actions));
+        let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
+            .and_then(|c| c.with_min_weight(num(0.5)))
+            .unwrap_or_else(|_| FqiConfig::published());
+        let w = [num::<T>(0.5); 12];
+        let sets = [
+            SampleSet::unweighted(&records[..6]),
+            SampleSet::weighted(&records[6..], Some(&w[6..]), Some(&w[..6])),
+        ];
+        let mut slots = [KnnRecord::<T, D>::EMPTY; 12];
+        let mut links = [0u16; 12 * 4 * 3];
+        if let Ok(mut fqi) = KnnFqi::new(neighbours, actions, &mut slots, &mut links) {
+            keep(fqi.fit(&sets, &config));
+            keep(fqi.fit_sets(sets.iter().copied(), &config));
+            keep((fqi.neighbours().k(), fqi.actions(), fqi.records().len()));
+            let s = [num::<T>(0.2); D];
+            keep((
+                fqi.value(s, index(1)),
+                fqi.max_value(s),
+                fqi.greedy_action(s),
+            ));
+            keep(fqi.greedy(s));
+            if let Some(r) = fqi.records().get(index(2)) {
+                keep((r.reward_model(), r.target()));
+            }
+            fqi.clear();
+        }
+        let tilings = Tilings::<T, D>::cube(num(0.0), high, index(2), index(2));
+        if let Ok(tilings) = tilings {
+            let mut entries = [FqiEntry::<T>::EMPTY; 400];
+            let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
+            let mut storage = block.storage();
+            storage.entries = &mut entries;
+            let hybrid = Approximator::Hybrid(tilings, neighbours);
+            keep(hybrid.required_entries(actions));
+            if let Ok(mut q) = hybrid.build(actions, storage) {
+                keep(q.fit(&sets, &config));
+                let s = [num::<T>(0.4); D];
+                keep((q.value(s, 0), q.max_value(s), q.greedy_action(s)));
+                keep((q.actions(), q.entries().len()));
+                q.clear();
+            }
+        }
+        let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
+        let approximator: Approximator<T, D> = neighbours.into();
+        if let Ok(mut q) = approximator.build(actions, block.storage()) {
+            keep(q.fit(&sets, &config));
+            keep((
+                q.value([num(0.7); D], 0),
+                q.greedy_action([num(0.7); D]),
+                q.entries().len(),
+            ));
         }
     }
 
@@ -924,6 +999,19 @@ fn adaptive<T, G, const D: usize, const I: usize>(
         ));
         kernel.reset();
         keep(kernel.steps());
+    }
+    // The kernel with kernel-averaging Q: records for the target and source records.
+    let neighbours = Neighbours::cube(index(3), num::<T>(0.0), high, Kernel::Uniform);
+    if let Ok(neighbours) = neighbours {
+        let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
+        let mut knn = KnnStorage::<T, D, 24, { 24 * 4 * 3 }>::new();
+        let mut buffers = storage.buffers();
+        buffers.fqi = knn.storage();
+        let built = AdaptiveAwfqi::new(config, neighbours, data, &means, rows, plant, buffers);
+        if let Ok(mut kernel) = built {
+            keep(kernel.step(rng));
+            keep(kernel.q().greedy_action([num(0.5); D]));
+        }
     }
     let mut heap = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 400, 6, 2>::default();
     let buffers: AdaptiveBuffers<'_, T, D, I, 8> = heap.buffers();
