@@ -206,13 +206,14 @@ pub fn awfqi_puddle_32k(
 ) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
     use crate::puddle_tables as t;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // The list of the source tables in flash too, not built on the stack.
+    static SOURCES: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
     let target = PuddleWorld::target(Dynamics::Shared);
-    let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
     let rows = RowSet::grid(PuddleWorld::score_grid(1.25)?, PUDDLE_ACTIONS)?;
     let mut kernel = Awfqi::builder(
         AwfqiConfig::thesis(50).validate()?,
         CellGrid::cube(0.0, 10.0, 11)?,
-        &sources,
+        &SOURCES,
         rows,
     )
     .stored_posteriors(&t::SOURCE_POSTERIORS)
