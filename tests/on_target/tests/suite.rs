@@ -43,6 +43,35 @@ fn instance(i: usize, dynamics: Dynamics) -> PuddleWorld<f32> {
     }
 }
 
+/// State `c` of the 4-state chain of the FQI tests: the centre of cell `c` of [0, 5].
+fn chain_state(c: usize) -> [f32; 1] {
+    [c as f32 + 0.5]
+}
+
+/// The chain's 8 samples: from each state, action 0 steps right for reward −1 (the
+/// step out of state 3 is absorbing), action 1 steps left (clipped at state 0).
+fn chain_samples() -> [awfqi::Transition<[f32; 1], f32>; 8] {
+    use awfqi::Transition;
+    let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 8];
+    for c in 0..4 {
+        samples[2 * c] = Transition {
+            state: chain_state(c),
+            action: 0,
+            reward: -1.0,
+            next_state: chain_state(c + 1),
+            absorbing: c == 3,
+        };
+        samples[2 * c + 1] = Transition {
+            state: chain_state(c),
+            action: 1,
+            reward: -1.0,
+            next_state: chain_state(c.saturating_sub(1)),
+            absorbing: false,
+        };
+    }
+    samples
+}
+
 fn gp_hyper() -> Hyperparameters<f32, 3> {
     let l = golden::GP_LENGTH_SCALES;
     Hyperparameters {
@@ -917,25 +946,9 @@ mod tests {
     /// states, the mean of their values.
     #[test]
     fn tile_coding_on_a_chain() {
-        use awfqi::{EmptyCells, FqiConfig, FqiEntry, SampleSet, TileFqi, Tilings, Transition};
-        let at = |c: usize| [c as f32 + 0.5];
-        let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 8];
-        for c in 0..4 {
-            samples[2 * c] = Transition {
-                state: at(c),
-                action: 0,
-                reward: -1.0,
-                next_state: at(c + 1),
-                absorbing: c == 3,
-            };
-            samples[2 * c + 1] = Transition {
-                state: at(c),
-                action: 1,
-                reward: -1.0,
-                next_state: at(c.saturating_sub(1)),
-                absorbing: false,
-            };
-        }
+        use awfqi::{EmptyCells, FqiConfig, FqiEntry, SampleSet, TileFqi, Tilings};
+        let at = super::chain_state;
+        let samples = super::chain_samples();
         let tilings = Tilings::<f32, 1>::cube(0.0, 5.0, 5, 2).unwrap();
         let mut storage = [FqiEntry::<f32>::EMPTY; 24];
         let mut fqi = TileFqi::new(tilings, 2, &mut storage).unwrap();
@@ -969,24 +982,8 @@ mod tests {
         use awfqi::{
             EmptyCells, FqiConfig, Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet, Transition,
         };
-        let at = |c: usize| [c as f32 + 0.5];
-        let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 8];
-        for c in 0..4 {
-            samples[2 * c] = Transition {
-                state: at(c),
-                action: 0,
-                reward: -1.0,
-                next_state: at(c + 1),
-                absorbing: c == 3,
-            };
-            samples[2 * c + 1] = Transition {
-                state: at(c),
-                action: 1,
-                reward: -1.0,
-                next_state: at(c.saturating_sub(1)),
-                absorbing: false,
-            };
-        }
+        let at = super::chain_state;
+        let samples = super::chain_samples();
         let nb = Neighbours::<f32, 1>::cube(1, 0.0, 5.0, Kernel::Uniform).unwrap();
         let mut records = [KnnRecord::<f32, 1>::EMPTY; 8];
         let mut links = [0u16; 16];
