@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
-use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveSetup};
+use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
 use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, KernelSetup};
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
@@ -280,6 +280,32 @@ pub struct Args {
     /// first (default: the protocol's ε).
     #[arg(long)]
     pub adaptive_verify_epsilon: Option<f64>,
+    /// awfqi-adaptive: rollouts of the current plan simulated per sub-batch in a
+    /// nearest-record model, whose states join the relevance centres (0: off).
+    #[arg(long, default_value_t = AdaptiveOptions::default().simulate)]
+    pub adaptive_simulate: usize,
+    /// awfqi-adaptive: resume an unfinished verification rollout in the next sub-batch.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().resume)]
+    pub adaptive_resume: bool,
+    /// awfqi-adaptive: temperature of the source plausibilities (1: the likelihood; inf:
+    /// uniform).
+    #[arg(long, default_value_t = AdaptiveOptions::default().temperature)]
+    pub adaptive_temperature: f64,
+    /// awfqi-adaptive: the reward model's prior mean is the median of the sources' means.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().consensus)]
+    pub adaptive_consensus: bool,
+    /// awfqi-adaptive: relabel contradicted source rewards by the target GP instead of
+    /// down-weighting the records.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().relabel)]
+    pub adaptive_relabel: bool,
+    /// awfqi-adaptive: drop source records whose episode end no other source or target
+    /// record corroborates.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().corroborate)]
+    pub adaptive_corroborate: bool,
+    /// awfqi-adaptive: an oracle diagnostic (reads the true target model; not an
+    /// algorithm).
+    #[arg(long, value_enum, default_value_t = AdaptiveOracle::None)]
+    pub adaptive_oracle: AdaptiveOracle,
 }
 
 impl Args {
@@ -301,6 +327,13 @@ impl Args {
             surprise_stop: self.adaptive_surprise_stop,
             gp_search: self.adaptive_gp_search,
             verify_epsilon: self.adaptive_verify_epsilon,
+            simulate: self.adaptive_simulate,
+            resume: self.adaptive_resume,
+            temperature: self.adaptive_temperature,
+            consensus: self.adaptive_consensus,
+            relabel: self.adaptive_relabel,
+            corroborate: self.adaptive_corroborate,
+            oracle: self.adaptive_oracle,
         }
     }
 }

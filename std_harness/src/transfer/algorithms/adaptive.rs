@@ -83,6 +83,55 @@ pub struct AdaptiveOptions {
     /// protocol's ε; 0: greedy, so they visit what the evaluation's noisy greedy rollouts
     /// visit).
     pub verify_epsilon: Option<f64>,
+    /// Rollouts of the current plan simulated per sub-batch in a nearest-record transition
+    /// model (no queries); their states join the relevance kernel's centres, so the drawn
+    /// queries also cover the part of the greedy path that verification has not reached
+    /// and the neighbourhood that noisy rollouts visit (0: off).
+    pub simulate: usize,
+    /// A sub-batch's verification resumes the previous sub-batch's unfinished rollout
+    /// (from its last state, with the new plan) instead of restarting from the initial
+    /// state, so the whole path gets verified when a quota is shorter than the path.
+    pub resume: bool,
+    /// Temperature of the source plausibilities: the clipped log-likelihood is divided by
+    /// it (1: the plain likelihood; larger: closer to the uniform mixture, which
+    /// `f64::INFINITY` gives), so a few records explained by one source's GP fit do not
+    /// make it the only source.
+    pub temperature: f64,
+    /// The prior mean of the target reward model is the sources' consensus, the median of
+    /// their reward means at the input (what most sources agree on), instead of the
+    /// plausibility-weighted mean.
+    pub consensus: bool,
+    /// Relabel instead of down-weighting: every source record keeps weight 1, and its
+    /// reward becomes `λ r + (1 − λ) μ_T`, `μ_T` the weights' target reward GP's mean at
+    /// the record and `λ = exp(−u²/2)`, `u = (r − μ_T)/√(σ_T² + v_r)`: a source reward
+    /// stays where the target GP does not contradict it and is replaced by the target's
+    /// where it does, so every action keeps the sources' transitions around a feature
+    /// only the target has.
+    pub relabel: bool,
+    /// A source record that ends its episode (absorbs) keeps weight only when that end is
+    /// corroborated: by a target record's end there, or by at least half of the other
+    /// sources (their nearest record with the same action ends too). A goal only one
+    /// source has then does not pull the greedy policy (its records are dropped).
+    pub corroborate: bool,
+    /// A diagnostic bound, not an algorithm: FQI's source records from the true target
+    /// model (see [`AdaptiveOracle`]).
+    pub oracle: AdaptiveOracle,
+}
+
+/// Oracle diagnostics of `awfqi-adaptive`: what its loop reaches when FQI's rewards or
+/// weights come from the target's true mean reward (they read the instance, which the
+/// algorithm never does), to tell how much a better reward model could still gain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum AdaptiveOracle {
+    /// No oracle: the algorithm.
+    None,
+    /// Every record (target and sources) relabelled with the target's mean reward, all
+    /// weights 1.
+    Rewards,
+    /// A source record keeps weight 1 where its source's mean reward equals the target's
+    /// (within 0.3) and gets 0 elsewhere.
+    Validity,
 }
 
 impl Default for AdaptiveOptions {
@@ -103,6 +152,13 @@ impl Default for AdaptiveOptions {
             surprise_stop: false,
             gp_search: GpSearch::Screened,
             verify_epsilon: None,
+            simulate: 0,
+            resume: false,
+            temperature: 1.0,
+            consensus: false,
+            relabel: false,
+            corroborate: false,
+            oracle: AdaptiveOracle::None,
         }
     }
 }
@@ -234,6 +290,9 @@ pub struct Adaptive<'e, const D: usize = 2> {
     source_records: usize,
     /// States of this step's verification rollouts (the relevance kernel's centres).
     path: Vec<[f64; D]>,
+    /// Where an unfinished verification rollout stopped, and its length so far
+    /// ([`AdaptiveOptions::resume`]).
+    resume_at: Option<([f64; D], usize)>,
     /// The reward model of the last refit (`None` before any target data).
     model: Option<RewardModel>,
     /// Diagnostics of the last refit.
@@ -275,6 +334,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             source_records: sources.len(),
             sources,
             path: Vec::new(),
+            resume_at: None,
             model: None,
             last: Diagnostics::default(),
         })
@@ -285,6 +345,16 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         GpOptions {
             search: Some(self.options.gp_search),
             ..self.experiment.options.gp
+        }
+    }
+
+    /// The reward model's prior mean from the sources' means `values` at one input: their
+    /// median with [`AdaptiveOptions::consensus`], else their `weights`-weighted mean.
+    fn prior(&self, values: impl Iterator<Item = f64>, weights: &[f64]) -> f64 {
+        if self.options.consensus {
+            median(values.collect())
+        } else {
+            values.zip(weights).map(|(x, w)| w * x).sum()
         }
     }
 
@@ -320,12 +390,12 @@ impl<'e, const D: usize> Adaptive<'e, D> {
                     .collect()
             })
             .collect();
-        let plausibility = plausibility(&errors, v);
+        let plausibility = plausibility(&errors, v * self.options.temperature);
         let residuals: Vec<Record<D>> = data
             .iter()
             .enumerate()
             .map(|(i, r)| {
-                let m: f64 = means.iter().zip(&plausibility).map(|(m, p)| p * m[i]).sum();
+                let m = self.prior(means.iter().map(|m| m[i]), &plausibility);
                 Record {
                     reward: r.reward - m,
                     ..*r
@@ -347,21 +417,49 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         })
     }
 
-    /// The reward weights of the source records (in union order) and the weights' GP.
+    /// The reward weights of the source records (in union order), the weights' GP and its
+    /// posteriors at the records (union order).
     fn source_weights(
         &self,
         model: &RewardModel,
         rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<(Vec<f64>, GpSummary)> {
+    ) -> anyhow::Result<(Vec<f64>, GpSummary, Vec<Posterior<f64>>)> {
         let domain = &*self.experiment.domain;
         let options = &self.experiment.options;
         let spec = domain.gp_spec(Output::Reward);
         let noise = spec.noise(options.noise);
         let sources = &self.experiment.sources.sources;
         let mut wr = Vec::with_capacity(self.source_records);
+        let mut posteriors = Vec::with_capacity(self.source_records);
         // IWFQI's own GP when the prior is off.
+        // Relabelling reads the GP's mean far from the target data too, so its prior mean
+        // is the target rewards' median instead of zero (a zero prior would relabel
+        // towards an optimistic 0 there).
+        let centre = if self.options.relabel {
+            median(self.run.data.iter().map(|r| r.reward).collect())
+        } else {
+            0.0
+        };
         let plain = if self.options.prior {
             None
+        } else if centre != 0.0 {
+            let centred: Vec<Record<D>> = self
+                .run
+                .data
+                .iter()
+                .map(|r| Record {
+                    reward: r.reward - centre,
+                    ..*r
+                })
+                .collect();
+            Some(RecordGp::fit_records(
+                domain,
+                &centred,
+                Output::Reward,
+                &spec,
+                &self.gp_options(),
+                rng,
+            )?)
         } else {
             Some(RecordGp::fit_records(
                 domain,
@@ -376,20 +474,21 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         for s in sources {
             let zs: Vec<GpInput> = s.records.iter().map(|r| domain.input(r)).collect();
             let targets: Vec<Posterior<f64>> = match &plain {
-                Some(gp) => gp.posteriors(&zs, noise),
+                Some(gp) => gp
+                    .posteriors(&zs, noise)
+                    .into_iter()
+                    .map(|p| Posterior::new(centre + p.mean, p.std))
+                    .collect(),
                 None => model
                     .residual
                     .posteriors(&zs, noise)
                     .into_iter()
                     .enumerate()
                     .map(|(i, p)| {
-                        let prior: f64 = self
-                            .setup
-                            .record_means
-                            .iter()
-                            .zip(&model.plausibility)
-                            .map(|(m, w)| w * m[offset + i])
-                            .sum();
+                        let prior = self.prior(
+                            self.setup.record_means.iter().map(|m| m[offset + i]),
+                            &model.plausibility,
+                        );
                         Posterior::new(prior + p.mean, p.std)
                     })
                     .collect(),
@@ -399,28 +498,49 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             self.reward
                 .weights_into(&ys, &targets, &s.reward, &mut out)?;
             wr.extend(out);
+            posteriors.extend(targets);
             offset += s.len();
         }
         let summary = plain.as_ref().unwrap_or(&model.residual).summary();
-        Ok((wr, summary))
+        Ok((wr, summary, posteriors))
     }
 
     /// Weighted FQI on `D₀` then the sources with `trees` trees; sources unweighted before
     /// any target data.
     fn refit(&mut self, trees: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<()> {
         let n_target = self.run.data.len();
+        let mut relabelled = Vec::new();
         let (wr_source, model, gp) = if n_target == 0 {
             (vec![1.0; self.source_records], None, None)
         } else {
             let model = self.reward_model(rng)?;
-            let (w, gp) = self.source_weights(&model, rng)?;
+            let (mut w, gp, posteriors) = self.source_weights(&model, rng)?;
+            if self.options.relabel {
+                let v = self.reward_variance;
+                for (j, p) in posteriors.iter().enumerate() {
+                    let r = self.sources.rewards[j];
+                    let u = (r - p.mean) / (p.std * p.std + v).sqrt();
+                    let lambda = (-0.5 * u * u).exp();
+                    relabelled.push(lambda * r + (1.0 - lambda) * p.mean);
+                }
+                w = vec![1.0; w.len()];
+            }
             (w, Some(model), Some(gp))
         };
         let mut union: Dataset<D> = self.run.data.iter().copied().collect();
         union.extend_from(&self.sources);
+        if !relabelled.is_empty() {
+            union.rewards[n_target..].copy_from_slice(&relabelled);
+        }
         let mut wr = vec![1.0; n_target];
         wr.extend_from_slice(&wr_source);
         let mut ws = vec![1.0; wr.len()];
+        if self.options.corroborate {
+            for j in self.uncorroborated_ends() {
+                wr[n_target + j] = 0.0;
+                ws[n_target + j] = 0.0;
+            }
+        }
         if let Some(model) = &model {
             if self.options.source_weights {
                 let top = model.plausibility.iter().copied().fold(0.0, f64::max);
@@ -432,6 +552,34 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             }
             if self.options.model_rewards {
                 union.rewards = self.model_rewards(model, &union);
+            }
+        }
+        match self.options.oracle {
+            AdaptiveOracle::None => {}
+            AdaptiveOracle::Validity if n_target > 0 => {
+                let domain = self.run.domain;
+                for j in 0..self.source_records {
+                    let (state, action) = (self.sources.states[j], self.sources.actions[j]);
+                    let target = domain.target.mean_reward(state, action)?;
+                    let source =
+                        domain.sources[self.setup.source_of[j]].mean_reward(state, action)?;
+                    wr[n_target + j] = if (target - source).abs() < 0.3 {
+                        1.0
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            AdaptiveOracle::Validity => {}
+            AdaptiveOracle::Rewards => {
+                for i in 0..union.len() {
+                    union.rewards[i] = self
+                        .run
+                        .domain
+                        .target
+                        .mean_reward(union.states[i], union.actions[i])?;
+                }
+                wr.fill(1.0);
             }
         }
         let mut options = self.run.options(FqiOptions::iwfqi(&wr, &ws));
@@ -450,6 +598,39 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         Ok(())
     }
 
+    /// The source records (union order) whose episode end is corroborated neither by a
+    /// target record that ends nearby (same action, nearest target record of that action
+    /// within the nearest other source's distance) nor by at least half of the other
+    /// sources' nearest records.
+    fn uncorroborated_ends(&self) -> Vec<usize> {
+        let bounds = &self.run.domain.state_bounds;
+        let m = self.setup.endings.len();
+        let mut out = Vec::new();
+        let mut offset = 0;
+        for (k, records) in self.setup.endings.iter().enumerate() {
+            for (i, (state, action, ends)) in records.iter().enumerate() {
+                if !ends {
+                    continue;
+                }
+                let others = (0..m)
+                    .filter(|&o| o != k && self.setup.source_ends(o, state, *action, bounds))
+                    .count();
+                let target = self.run.data.iter().any(|r| {
+                    r.absorbing
+                        && r.action == *action
+                        && (0..D).all(|d| {
+                            (r.state[d] - state[d]).abs() <= 0.1 * (bounds[d].1 - bounds[d].0)
+                        })
+                });
+                if !target && 2 * others < m - 1 {
+                    out.push(offset + i);
+                }
+            }
+            offset += records.len();
+        }
+        out
+    }
+
     /// The reward model's mean at every record of `union` (`D₀` first, then the sources in
     /// union order).
     fn model_rewards(&self, model: &RewardModel, union: &Dataset<D>) -> Vec<f64> {
@@ -462,18 +643,15 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         let target_means = self.source_means(&zs[..n_target]);
         (0..union.len())
             .map(|i| {
-                let prior: f64 = model
-                    .plausibility
-                    .iter()
-                    .enumerate()
-                    .map(|(k, p)| {
-                        p * if i < n_target {
-                            target_means[k][i]
-                        } else {
-                            self.setup.record_means[k][i - n_target]
-                        }
-                    })
-                    .sum();
+                let prior = if i < n_target {
+                    self.prior(target_means.iter().map(|m| m[i]), &model.plausibility)
+                } else {
+                    let j = i - n_target;
+                    self.prior(
+                        self.setup.record_means.iter().map(|m| m[j]),
+                        &model.plausibility,
+                    )
+                };
                 prior + residual[i]
             })
             .collect()
@@ -487,11 +665,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         let m = means.len() as f64;
         match &self.model {
             Some(model) => {
-                let prior: f64 = means
-                    .iter()
-                    .zip(&model.plausibility)
-                    .map(|(x, p)| p * x[0])
-                    .sum();
+                let prior = self.prior(means.iter().map(|x| x[0]), &model.plausibility);
                 prior + model.residual.means(&z)[0]
             }
             None => means.iter().map(|x| x[0] / m).sum(),
@@ -512,9 +686,15 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         let mut left = n;
         let mut first = true;
         while left > 0 {
-            let mut state = domain.target.initial_state(rng);
-            for _ in 0..domain.horizon {
+            let (mut state, done) = match self.resume_at.take() {
+                Some(at) if self.options.resume => at,
+                _ => (domain.target.initial_state(rng), 0),
+            };
+            for t in done..domain.horizon {
                 if left == 0 {
+                    if self.options.resume {
+                        self.resume_at = Some((state, t));
+                    }
                     break;
                 }
                 let explore = !first && awfqi::rng::uniform_f64(rng) < epsilon;
@@ -540,6 +720,63 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             first = false;
         }
         Ok(n)
+    }
+
+    /// States of `n` rollouts of the current greedy policy from the target's initial state
+    /// in a nearest-record model: each step moves by the displacement `s′ − s` of one of
+    /// the `SIMULATION_NEIGHBOURS` records (target and sources, same action) nearest to the
+    /// state, drawn uniformly (so the rollouts spread as noisy ones do), clipped to the
+    /// state bounds; a drawn record that absorbs ends the rollout. No query is made.
+    fn simulate(&self, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; D]> {
+        const SIMULATION_NEIGHBOURS: usize = 5;
+        let domain = self.run.domain;
+        let bounds = &domain.state_bounds;
+        let records: Vec<([f64; D], usize, [f64; D], bool)> = self
+            .run
+            .data
+            .iter()
+            .map(|r| (r.state, r.action, r.next_state, r.absorbing))
+            .chain((0..self.sources.len()).map(|i| {
+                (
+                    self.sources.states[i],
+                    self.sources.actions[i],
+                    self.sources.next_states[i],
+                    self.sources.absorbing[i],
+                )
+            }))
+            .collect();
+        let mut states = Vec::new();
+        let mut nearest: Vec<(f64, usize)> = Vec::with_capacity(records.len());
+        for _ in 0..n {
+            let mut s = domain.target.initial_state(rng);
+            for _ in 0..domain.horizon {
+                states.push(s);
+                let a = self.run.greedy_action(&s);
+                nearest.clear();
+                nearest.extend(records.iter().enumerate().filter(|(_, r)| r.1 == a).map(
+                    |(j, r)| {
+                        let d: f64 = (0..D)
+                            .map(|d| ((r.0[d] - s[d]) / (bounds[d].1 - bounds[d].0)).powi(2))
+                            .sum();
+                        (d, j)
+                    },
+                ));
+                if nearest.is_empty() {
+                    break;
+                }
+                let k = SIMULATION_NEIGHBOURS.min(nearest.len());
+                nearest.select_nth_unstable_by(k - 1, |x, y| x.0.total_cmp(&y.0));
+                let (_, j) = nearest[awfqi::rng::uniform_index(rng, k)];
+                let (from, _, to, absorbing) = records[j];
+                if absorbing {
+                    break;
+                }
+                for d in 0..D {
+                    s[d] = (s[d] + to[d] - from[d]).clamp(bounds[d].0, bounds[d].1);
+                }
+            }
+        }
+        states
     }
 
     /// `n` queries drawn from a candidate subset of the rows by the adaptive score.
@@ -640,6 +877,17 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     }
 }
 
+/// The median of `v` (0 when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
 /// Source plausibilities from the target records' clipped squared errors `e2[k][i]`:
 /// `π_k ∝ exp(−Σ_i e2_ik/(2v))`, `v` the estimator's reward variance; the clip (applied by
 /// the caller) keeps a feature that every source lacks from deciding.
@@ -664,6 +912,7 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
             t => t,
         };
         self.path.clear();
+        self.resume_at = None;
         if self.run.q.is_none() {
             self.refit(plan_trees, rng)?;
         }
@@ -671,6 +920,10 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
             let quota = n * (b + 1) / s - n * b / s;
             let verify = ((quota as f64 * self.options.verify).round() as usize).min(quota);
             let made = self.verify(verify, rng)?;
+            if self.options.simulate > 0 && made < quota {
+                let simulated = self.simulate(self.options.simulate, rng);
+                self.path.extend(simulated);
+            }
             self.draw(quota - made, rng)?;
             let t = if b + 1 == s { trees } else { plan_trees };
             self.refit(t, rng)?;

@@ -47,10 +47,18 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
         o.prior == d.prior
             && o.model_rewards == d.model_rewards
             && o.source_weights == d.source_weights
-            && o.surprise_stop == d.surprise_stop,
+            && o.surprise_stop == d.surprise_stop
+            && o.simulate == d.simulate
+            && o.resume == d.resume
+            && o.temperature == d.temperature
+            && o.consensus == d.consensus
+            && o.corroborate == d.corroborate
+            && o.oracle == d.oracle,
         "awfqi-adaptive-kernel has the default configuration of awfqi-adaptive only \
          (no --adaptive-prior, --adaptive-model-rewards, --adaptive-source-weights, \
-         --adaptive-surprise-stop)"
+         --adaptive-surprise-stop, --adaptive-simulate, --adaptive-resume, \
+         --adaptive-temperature, --adaptive-consensus, --adaptive-corroborate, \
+         --adaptive-oracle)"
     );
     let domain = &experiment.domain;
     let mut bounds = [(0.0, 0.0); 2];
