@@ -156,7 +156,7 @@ impl Default for AdaptiveOptions {
             resume: false,
             temperature: 1.0,
             consensus: false,
-            relabel: false,
+            relabel: true,
             corroborate: false,
             oracle: AdaptiveOracle::None,
         }
@@ -517,12 +517,12 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             let (mut w, gp, posteriors) = self.source_weights(&model, rng)?;
             if self.options.relabel {
                 let v = self.reward_variance;
-                for (j, p) in posteriors.iter().enumerate() {
-                    let r = self.sources.rewards[j];
-                    let u = (r - p.mean) / (p.std * p.std + v).sqrt();
-                    let lambda = (-0.5 * u * u).exp();
-                    relabelled.push(lambda * r + (1.0 - lambda) * p.mean);
-                }
+                relabelled.extend(
+                    posteriors
+                        .iter()
+                        .zip(&self.sources.rewards)
+                        .map(|(p, &r)| relabelled_reward(r, p, v)),
+                );
                 w = vec![1.0; w.len()];
             }
             (w, Some(model), Some(gp))
@@ -877,6 +877,17 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     }
 }
 
+/// A source reward as the target sees it ([`AdaptiveOptions::relabel`]): `λ r + (1 − λ) μ`
+/// with `λ = exp(−u²/2)`, `u = (r − μ)/√(σ² + v)` the reward's z-score under the target
+/// GP's posterior `(μ, σ)` and the reward variance `v`. A reward the target GP does not
+/// contradict (`u ≈ 0`, also wherever the GP is uncertain) stays; one it confidently
+/// contradicts becomes the GP's mean.
+fn relabelled_reward(r: f64, target: &Posterior<f64>, v: f64) -> f64 {
+    let u = (r - target.mean) / (target.std * target.std + v).sqrt();
+    let lambda = (-0.5 * u * u).exp();
+    lambda * r + (1.0 - lambda) * target.mean
+}
+
 /// The median of `v` (0 when empty).
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -943,6 +954,35 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn relabelling_keeps_uncontradicted_rewards_and_replaces_contradicted_ones() {
+        let v = 0.1;
+        // The GP agrees: the reward stays, exactly.
+        let agree = Posterior::new(-1.0, 0.3);
+        assert_eq!(relabelled_reward(-1.0, &agree, v), -1.0);
+        // One combined standard deviation away: λ = e^{-1/2}, by hand.
+        let p = Posterior::new(-1.0, 0.3);
+        let r = -1.0 - (0.09f64 + v).sqrt();
+        let lambda = (-0.5f64).exp();
+        let want = lambda * r + (1.0 - lambda) * -1.0;
+        assert!((relabelled_reward(r, &p, v) - want).abs() < 1e-12);
+        // A confident contradiction (the source has no puddle where the target has one):
+        // the target GP's mean replaces the source's reward.
+        let puddle = Posterior::new(-10.0, 0.2);
+        assert!((relabelled_reward(-1.0, &puddle, v) + 10.0).abs() < 1e-9);
+        // Far from the target's data the GP is uncertain: the source's reward stays
+        // (u = 9/√(300² + 0.1) ≈ 0.03, so it moves by 1 − λ ≈ 4.5·10⁻⁴ of the difference).
+        let unsure = Posterior::new(-10.0, 300.0);
+        assert!((relabelled_reward(-1.0, &unsure, v) + 1.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn median_of_odd_even_and_empty_lists() {
+        assert_eq!(median(vec![3.0, -1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(Vec::new()), 0.0);
+    }
 
     #[test]
     fn plausibility_follows_the_clipped_likelihood() {
