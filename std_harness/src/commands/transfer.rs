@@ -306,6 +306,9 @@ pub struct Args {
     /// algorithm).
     #[arg(long, value_enum, default_value_t = AdaptiveOracle::None)]
     pub adaptive_oracle: AdaptiveOracle,
+    /// awfqi-adaptive: simulated rollouts per plan for plan selection (0: off).
+    #[arg(long, default_value_t = AdaptiveOptions::default().select)]
+    pub adaptive_select: usize,
 }
 
 impl Args {
@@ -334,6 +337,7 @@ impl Args {
             relabel: self.adaptive_relabel,
             corroborate: self.adaptive_corroborate,
             oracle: self.adaptive_oracle,
+            select: self.adaptive_select,
         }
     }
 }

@@ -29,8 +29,10 @@ use serde::Serialize;
 
 use super::Experiment;
 use super::episodic::Episodic;
+use super::nearest_model::NearestModel;
 use crate::domains::{GpInput, Record, Rows};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::joint_q::QFunction;
 use crate::transfer::gp::{GpOptions, GpSearch, GpSummary, Output, RecordGp, SourceGps};
 use crate::transfer::protocol::{Diagnostics, Learner};
 
@@ -113,6 +115,10 @@ pub struct AdaptiveOptions {
     /// sources (their nearest record with the same action ends too). A goal only one
     /// source has then does not pull the greedy policy (its records are dropped).
     pub corroborate: bool,
+    /// Plan selection: every plan of a step (the one it started with and each
+    /// sub-batch's) is rolled out this many times in the nearest-record model of the
+    /// records held, and the step ends with the best (0: off, the last plan).
+    pub select: usize,
     /// A diagnostic bound, not an algorithm: FQI's source records from the true target
     /// model (see [`AdaptiveOracle`]).
     pub oracle: AdaptiveOracle,
@@ -159,6 +165,7 @@ impl Default for AdaptiveOptions {
             relabel: true,
             corroborate: false,
             oracle: AdaptiveOracle::None,
+            select: 0,
         }
     }
 }
@@ -293,6 +300,9 @@ pub struct Adaptive<'e, const D: usize = 2> {
     /// Where an unfinished verification rollout stopped, and its length so far
     /// ([`AdaptiveOptions::resume`]).
     resume_at: Option<([f64; D], usize)>,
+    /// The source records' rewards FQI used in the last refit when they were not their
+    /// own (relabelled).
+    rewards: Option<Vec<f64>>,
     /// The reward model of the last refit (`None` before any target data).
     model: Option<RewardModel>,
     /// Diagnostics of the last refit.
@@ -335,6 +345,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             sources,
             path: Vec::new(),
             resume_at: None,
+            rewards: None,
             model: None,
             last: Diagnostics::default(),
         })
@@ -532,6 +543,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         if !relabelled.is_empty() {
             union.rewards[n_target..].copy_from_slice(&relabelled);
         }
+        self.rewards = (!relabelled.is_empty()).then_some(relabelled);
         let mut wr = vec![1.0; n_target];
         wr.extend_from_slice(&wr_source);
         let mut ws = vec![1.0; wr.len()];
@@ -723,60 +735,55 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     }
 
     /// States of `n` rollouts of the current greedy policy from the target's initial state
-    /// in a nearest-record model: each step moves by the displacement `s′ − s` of one of
-    /// the `SIMULATION_NEIGHBOURS` records (target and sources, same action) nearest to the
-    /// state, drawn uniformly (so the rollouts spread as noisy ones do), clipped to the
-    /// state bounds; a drawn record that absorbs ends the rollout. No query is made.
+    /// in the nearest-record model of the records held (no query is made).
     fn simulate(&self, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; D]> {
-        const SIMULATION_NEIGHBOURS: usize = 5;
         let domain = self.run.domain;
-        let bounds = &domain.state_bounds;
-        let records: Vec<([f64; D], usize, [f64; D], bool)> = self
-            .run
-            .data
-            .iter()
-            .map(|r| (r.state, r.action, r.next_state, r.absorbing))
-            .chain((0..self.sources.len()).map(|i| {
-                (
-                    self.sources.states[i],
-                    self.sources.actions[i],
-                    self.sources.next_states[i],
-                    self.sources.absorbing[i],
-                )
-            }))
-            .collect();
+        let model = NearestModel::new(&self.run.data, &self.sources, None, domain.state_bounds);
+        let greedy = |s: &[f64; D]| self.run.greedy_action(s);
         let mut states = Vec::new();
-        let mut nearest: Vec<(f64, usize)> = Vec::with_capacity(records.len());
         for _ in 0..n {
-            let mut s = domain.target.initial_state(rng);
-            for _ in 0..domain.horizon {
-                states.push(s);
-                let a = self.run.greedy_action(&s);
-                nearest.clear();
-                nearest.extend(records.iter().enumerate().filter(|(_, r)| r.1 == a).map(
-                    |(j, r)| {
-                        let d: f64 = (0..D)
-                            .map(|d| ((r.0[d] - s[d]) / (bounds[d].1 - bounds[d].0)).powi(2))
-                            .sum();
-                        (d, j)
-                    },
-                ));
-                if nearest.is_empty() {
-                    break;
-                }
-                let k = SIMULATION_NEIGHBOURS.min(nearest.len());
-                nearest.select_nth_unstable_by(k - 1, |x, y| x.0.total_cmp(&y.0));
-                let (_, j) = nearest[awfqi::rng::uniform_index(rng, k)];
-                let (from, _, to, absorbing) = records[j];
-                if absorbing {
-                    break;
-                }
-                for d in 0..D {
-                    s[d] = (s[d] + to[d] - from[d]).clamp(bounds[d].0, bounds[d].1);
-                }
-            }
+            let start = domain.target.initial_state(rng);
+            model.rollout(start, &greedy, domain.horizon, domain.discount, rng, |s| {
+                states.push(*s)
+            });
         }
         states
+    }
+
+    /// Keeps, of this step's plans, the one whose mean discounted return over
+    /// [`AdaptiveOptions::select`] simulated rollouts from the target's initial state is
+    /// highest (the latest on ties), in the nearest-record model of the last refit's
+    /// records and rewards (relabelled ones included).
+    fn select_plan(
+        &mut self,
+        plans: Vec<QFunction<D>>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<()> {
+        let domain = self.run.domain;
+        let model = NearestModel::new(
+            &self.run.data,
+            &self.sources,
+            self.rewards.as_deref(),
+            domain.state_bounds,
+        );
+        let mut best: Option<(f64, QFunction<D>)> = None;
+        for plan in plans {
+            let greedy = |s: &[f64; D]| plan.greedy_action(s);
+            let mut total = 0.0;
+            for _ in 0..self.options.select {
+                let start = domain.target.initial_state(rng);
+                total +=
+                    model.rollout(start, &greedy, domain.horizon, domain.discount, rng, |_| {});
+            }
+            let value = total / self.options.select as f64;
+            if best.as_ref().is_none_or(|(v, _)| value >= *v) {
+                best = Some((value, plan));
+            }
+        }
+        if let Some((_, plan)) = best {
+            self.run.q = Some(plan);
+        }
+        Ok(())
     }
 
     /// `n` queries drawn from a candidate subset of the rows by the adaptive score.
@@ -927,6 +934,10 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
         if self.run.q.is_none() {
             self.refit(plan_trees, rng)?;
         }
+        let mut plans = Vec::new();
+        if self.options.select > 0 {
+            plans.extend(self.run.q.clone());
+        }
         for b in 0..s {
             let quota = n * (b + 1) / s - n * b / s;
             let verify = ((quota as f64 * self.options.verify).round() as usize).min(quota);
@@ -938,6 +949,12 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
             self.draw(quota - made, rng)?;
             let t = if b + 1 == s { trees } else { plan_trees };
             self.refit(t, rng)?;
+            if self.options.select > 0 {
+                plans.extend(self.run.q.clone());
+            }
+        }
+        if self.options.select > 0 {
+            self.select_plan(plans, rng)?;
         }
         Ok(self.last.clone())
     }

@@ -53,12 +53,13 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
             && o.temperature == d.temperature
             && o.consensus == d.consensus
             && o.corroborate == d.corroborate
-            && o.oracle == d.oracle,
+            && o.oracle == d.oracle
+            && o.select == d.select,
         "awfqi-adaptive-kernel has the default configuration of awfqi-adaptive only \
          (no --adaptive-prior, --adaptive-model-rewards, --adaptive-source-weights, \
          --adaptive-surprise-stop, --adaptive-simulate, --adaptive-resume, \
          --adaptive-temperature, --adaptive-consensus, --adaptive-corroborate, \
-         --adaptive-oracle)"
+         --adaptive-oracle, --adaptive-select)"
     );
     let domain = &experiment.domain;
     let mut bounds = [(0.0, 0.0); 2];

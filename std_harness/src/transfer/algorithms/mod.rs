@@ -6,6 +6,7 @@ pub mod adaptive_kernel;
 pub mod awfqi_kernel;
 pub mod episodic;
 pub mod iwfqi;
+pub mod nearest_model;
 pub mod plain_fqi;
 pub mod rbt;
 pub mod sdt;
