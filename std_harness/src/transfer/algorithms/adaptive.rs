@@ -982,7 +982,7 @@ mod tests {
         let p = Posterior::new(-1.0, 0.3);
         let r = -1.0 - (0.09f64 + v).sqrt();
         let lambda = (-0.5f64).exp();
-        let want = lambda * r + (1.0 - lambda) * -1.0;
+        let want = lambda * r - (1.0 - lambda);
         assert!((relabelled_reward(r, &p, v) - want).abs() < 1e-12);
         // A confident contradiction (the source has no puddle where the target has one):
         // the target GP's mean replaces the source's reward.
