@@ -442,10 +442,9 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         let sources = &self.experiment.sources.sources;
         let mut wr = Vec::with_capacity(self.source_records);
         let mut posteriors = Vec::with_capacity(self.source_records);
-        // IWFQI's own GP when the prior is off.
-        // Relabelling reads the GP's mean far from the target data too, so its prior mean
-        // is the target rewards' median instead of zero (a zero prior would relabel
-        // towards an optimistic 0 there).
+        // IWFQI's own GP when the prior is off. Relabelling reads the GP's mean far from
+        // the target data too, so there its prior mean is the target rewards' median
+        // instead of zero (a zero prior would relabel towards an optimistic 0).
         let centre = if self.options.relabel {
             median(self.run.data.iter().map(|r| r.reward).collect())
         } else {
@@ -453,28 +452,25 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         };
         let plain = if self.options.prior {
             None
-        } else if centre != 0.0 {
-            let centred: Vec<Record<D>> = self
-                .run
-                .data
-                .iter()
-                .map(|r| Record {
-                    reward: r.reward - centre,
-                    ..*r
-                })
-                .collect();
-            Some(RecordGp::fit_records(
-                domain,
-                &centred,
-                Output::Reward,
-                &spec,
-                &self.gp_options(),
-                rng,
-            )?)
         } else {
+            let centred: Vec<Record<D>>;
+            let records = if centre == 0.0 {
+                &self.run.data
+            } else {
+                centred = self
+                    .run
+                    .data
+                    .iter()
+                    .map(|r| Record {
+                        reward: r.reward - centre,
+                        ..*r
+                    })
+                    .collect();
+                &centred
+            };
             Some(RecordGp::fit_records(
                 domain,
-                &self.run.data,
+                records,
                 Output::Reward,
                 &spec,
                 &self.gp_options(),
@@ -611,9 +607,8 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     }
 
     /// The source records (union order) whose episode end is corroborated neither by a
-    /// target record that ends nearby (same action, nearest target record of that action
-    /// within the nearest other source's distance) nor by at least half of the other
-    /// sources' nearest records.
+    /// target record that ends nearby (same action, within 10 % of each coordinate's
+    /// range) nor by at least half of the other sources' nearest records.
     fn uncorroborated_ends(&self) -> Vec<usize> {
         let bounds = &self.run.domain.state_bounds;
         let m = self.setup.endings.len();
