@@ -159,12 +159,12 @@ fn awfqi_defaults_to_the_screened_search_and_awfqi_oracle_to_the_spec() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// iwfqi's default GP search: the screened one without transition weights (its result
-/// file says so), the spec's with them and whenever `--gp-search` names one. Below 300
+/// iwfqi's default GP search on Puddle World: the screened one with and without transition
+/// weights (its result file says so), the spec's whenever `--gp-search` names it. Below 300
 /// points the screened search is the spec's (docs/algorithms.md §4.6), so on this small
 /// budget both give the same returns.
 #[test]
-fn iwfqi_defaults_to_the_screened_search_without_transition_weights() {
+fn iwfqi_defaults_to_the_screened_search_on_puddle_world() {
     let base = std::env::temp_dir().join(format!("awfqi-gp-search-{}", std::process::id()));
     let one = ["--episodes-per-step", "1"];
     let run_in = |name: &str, extra: &[&str]| -> serde_json::Value {
@@ -179,7 +179,7 @@ fn iwfqi_defaults_to_the_screened_search_without_transition_weights() {
     let parameters = |v: &serde_json::Value| v["runs"][0]["parameters"].clone();
     assert_eq!(parameters(&default)["gp_search"], "screened");
     assert!(parameters(&spec).get("gp_search").is_none());
-    assert!(parameters(&puddle).get("gp_search").is_none());
+    assert_eq!(parameters(&puddle)["gp_search"], "screened");
     // The experiment says which search was asked for, so the two files do not merge.
     assert!(
         default["experiment"]["options"]["gp"]
