@@ -498,6 +498,7 @@ where
             &self.sources,
             Some(self.weights),
             transition,
+            None,
             &self.config.fqi,
         )?;
         self.steps += 1;
@@ -549,16 +550,17 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
 }
 
 /// Weighted FQI (§12 step 5) on `target` (weight 1) followed by the sources in order, with
-/// the sources' reward weights `weights` and transition weights `transition` (source after
-/// source; `None`: all 1).
+/// the sources' reward weights `weights`, transition weights `transition` and replacement
+/// rewards `rewards` (source after source; `None`: all 1, their own rewards).
 ///
 /// Errors: those of [`QFunction::fit_sets`] (e.g. a weight slice of the wrong length).
-pub(crate) fn fit_weighted_fqi<T: Real, const D: usize>(
+pub(crate) fn fit_weighted_fqi<'s, T: Real, const D: usize>(
     fqi: &mut QFunction<'_, T, D>,
-    target: &[Transition<[T; D], T>],
-    sources: &SourceData<'_, T, D>,
-    weights: Option<&[T]>,
-    transition: Option<&[T]>,
+    target: &'s [Transition<[T; D], T>],
+    sources: &'s SourceData<'_, T, D>,
+    weights: Option<&'s [T]>,
+    transition: Option<&'s [T]>,
+    rewards: Option<&'s [T]>,
     config: &FqiConfig<T>,
 ) -> Result<()> {
     let sets = core::iter::once(SampleSet::unweighted(target)).chain(sources.records.iter().scan(
@@ -566,9 +568,11 @@ pub(crate) fn fit_weighted_fqi<T: Real, const D: usize>(
         move |offset, &s| {
             let start = *offset;
             *offset += s.len();
-            let w = weights.and_then(|w| w.get(start..*offset));
-            let ws = transition.and_then(|t| t.get(start..*offset));
-            Some(SampleSet::weighted(s, w, ws))
+            let range = start..*offset;
+            let part = |x: Option<&'s [T]>| x.and_then(|x| x.get(range.clone()));
+            Some(
+                SampleSet::weighted(s, part(weights), part(transition)).with_rewards(part(rewards)),
+            )
         },
     ));
     fqi.fit_sets(sets, config)

@@ -114,6 +114,7 @@ fn run<T: Real>(b: &mut Bytes) {
     config.surprise = b.bool();
     config.uncertainty = b.bool();
     config.decision = b.bool();
+    config.relabel = b.bool();
     // The published FQI settings (γ = 0.99, capped nearest, minimum weight 0.5) with 1 to 8
     // iterations instead of their 60: the same loop body, while 60 iterations per replan
     // took three quarters of the target's time (measured with perf).
@@ -313,6 +314,9 @@ fn run<T: Real>(b: &mut Bytes) {
                     }
                     for &w in kernel.reward_weights() {
                         finite("step", "weight", w.to_f64());
+                    }
+                    for &y in kernel.relabelled_rewards() {
+                        finite("step", "relabelled reward", y.to_f64());
                     }
                     let sum: f64 = kernel
                         .beliefs()

@@ -21,11 +21,13 @@
 //!    signal variance (reference noise subtraction over the batch), at most 1;
 //!    *relevance*, `exp(−d²/2)` with `d` the distance to the nearest state verified in this
 //!    step in units of [`AdaptiveConfig::relevance_width`] of each coordinate's range;
-//! 3. **re-plan**: the target reward GP (zero prior mean, the thesis's), the reward weights
-//!    of every source record (§7.3 estimator) and weighted FQI on `D₀` and the sources
-//!    (§12 steps 4–5, the core's [`crate::Awfqi`] pieces); then the residual GP for the next
-//!    sub-batch, in the same GP. Before any target data the plan is FQI on the unweighted
-//!    sources.
+//! 3. **re-plan**: the target reward GP, then FQI on `D₀` and the sources (§12 steps 4–5,
+//!    the core's [`crate::Awfqi`] pieces). With [`AdaptiveConfig::relabel`] (the harness's
+//!    `awfqi-adaptive` default; off in [`AdaptiveConfig::recommended`]) the GP's prior mean is the target rewards' median and every source record keeps
+//!    weight 1 with its reward relabelled towards the GP's mean where the GP contradicts it
+//!    ([`relabelled_reward`]); without it the GP has the thesis's zero prior mean and the
+//!    source records get §7.3 reward weights. Then the residual GP for the next sub-batch,
+//!    in the same GP. Before any target data the plan is FQI on the unweighted sources.
 //!
 //! **What it needs beyond AWFQI's set-up:** one [`MeanFunction`] per source (its reward
 //! GP's posterior mean, 1 048 bytes for `f32`, `N = 64`), the candidate rows (a
@@ -59,7 +61,7 @@ use crate::awfqi::{AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, reward
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, QFunction};
 use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{InputDim, Output, fit_gp, fit_gp_on, input};
+use crate::record_gp::{InputDim, Output, fit_gp, fit_gp_on, input, visit_posteriors};
 use crate::score::RowSet;
 use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
 use crate::{Error, Real, Result};
@@ -86,6 +88,12 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     pub decision: bool,
     /// Coverage floor, in [0, 1].
     pub floor: T,
+    /// Relabel instead of down-weighting: every source record keeps weight 1 and its
+    /// reward `r` becomes `λ r + (1 − λ) μ`, `λ = exp(−u²/2)`, `u = (r − μ)/√(σ² + v)`,
+    /// under the target reward GP's posterior `(μ, σ)` (fitted around the target rewards'
+    /// median) and the estimator's `v` ([`relabelled_reward`]). `false`: the §7.3 reward
+    /// weights of a zero-mean target GP, the thesis's.
+    pub relabel: bool,
     /// Candidate rows scored per sub-batch (at most the number of rows are), ≥ 1.
     pub candidates: usize,
     /// Width of the relevance kernel as a share of each coordinate's range, > 0.
@@ -103,7 +111,9 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The harness's default configuration (`docs/active-budget.md`): 3 sub-batches, 70 %
-    /// verification, surprise, uncertainty and decision relevance on, floor 0.1, 4 000
+    /// verification, surprise, uncertainty and decision relevance on, floor 0.1,
+    /// relabelling off (on the tuning runs it helped the harness's Extra-Trees FQI but not
+    /// the core's tile coding), 4 000
     /// candidates, relevance width 0.1, on the thesis's AWFQI settings for `budget`
     /// ([`AwfqiConfig::thesis`]), for a plant that starts in `start`, with episodes of
     /// `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state `bounds`.
@@ -122,6 +132,7 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
             uncertainty: true,
             decision: true,
             floor: T::from_f64(0.1),
+            relabel: false,
             candidates: 4000,
             relevance_width: T::from_f64(0.1),
             start,
@@ -211,6 +222,8 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     gp: &'a mut Gp<T, N, I>,
     /// `gp` holds the residual GP of the last re-plan.
     residual: bool,
+    /// `weights` holds the relabelled rewards the Q-function was last fitted on.
+    relabelled: bool,
     fqi: QFunction<'a, T, D>,
     slots: &'a mut [Candidate<T>],
     alias: &'a mut [crate::AliasEntry<T>],
@@ -302,6 +315,7 @@ where
             weights,
             gp,
             residual: false,
+            relabelled: false,
             fqi,
             slots: candidates,
             alias,
@@ -323,6 +337,7 @@ where
         self.path_len = 0;
         self.planned = false;
         self.residual = false;
+        self.relabelled = false;
         self.last = None;
         self.fqi.clear();
         self.gp.clear();
@@ -344,8 +359,22 @@ where
         self.samples.get(..self.len).unwrap_or(&[])
     }
 
-    /// The reward weights of the last re-plan, source by source, record by record.
+    /// The reward weights of the last re-plan, source by source, record by record (empty
+    /// with [`AdaptiveConfig::relabel`]: every weight is then 1).
     pub fn reward_weights(&self) -> &[T] {
+        if self.config.relabel {
+            return &[];
+        }
+        self.weights.get(..self.sources.len()).unwrap_or(&[])
+    }
+
+    /// The sources' rewards as the last re-plan relabelled them, source by source, record by
+    /// record ([`AdaptiveConfig::relabel`]; empty without relabelling or before a re-plan
+    /// with target data, when the records' own rewards are used).
+    pub fn relabelled_rewards(&self) -> &[T] {
+        if !self.relabelled {
+            return &[];
+        }
         self.weights.get(..self.sources.len()).unwrap_or(&[])
     }
 
@@ -570,38 +599,77 @@ where
                 &self.sources,
                 None,
                 None,
+                None,
                 &config.fqi,
             )?;
             wr.add_ones(self.sources.len());
             self.planned = true;
             self.residual = false;
+            self.relabelled = false;
             return Ok(self.report(&wr, T::ZERO, *self.gp.hyperparameters(), 0));
         }
-        let lml = fit_gp(
-            self.gp,
-            target,
-            Output::Reward,
-            config.subset,
-            &config.gp_training,
-            rng,
-        )?;
+        let relabel = self.config.relabel;
+        // Relabelling reads the GP far from the target data too, so its prior mean is the
+        // target rewards' median there (a zero prior would relabel towards an optimistic 0).
+        let centre = if relabel { median(target) } else { T::ZERO };
+        let lml = if relabel {
+            fit_gp_on(
+                self.gp,
+                target,
+                |r| Ok(r.reward - centre),
+                config.subset,
+                &config.gp_training,
+                rng,
+            )?
+        } else {
+            fit_gp(
+                self.gp,
+                target,
+                Output::Reward,
+                config.subset,
+                &config.gp_training,
+                rng,
+            )?
+        };
         let (hyper, points) = (*self.gp.hyperparameters(), self.gp.len());
-        reward_weights(
-            self.gp,
-            &self.sources,
-            &config.weights,
-            config.noise_subtraction,
-            self.weights,
-            &mut wr,
-        )?;
+        self.relabelled = false;
+        if relabel {
+            // `weights` holds the relabelled rewards; every weight is 1.
+            relabel_rewards(
+                self.gp,
+                &self.sources,
+                centre,
+                config.weights.noise_variance(),
+                config.noise_subtraction,
+                self.weights,
+            )?;
+            wr.add_ones(self.sources.len());
+        } else {
+            reward_weights(
+                self.gp,
+                &self.sources,
+                &config.weights,
+                config.noise_subtraction,
+                self.weights,
+                &mut wr,
+            )?;
+        }
+        let source_values = self.weights.get(..self.sources.len());
+        let (weights, rewards) = if relabel {
+            (None, source_values)
+        } else {
+            (source_values, None)
+        };
         fit_weighted_fqi(
             &mut self.fqi,
             target,
             &self.sources,
-            Some(self.weights),
+            weights,
             None,
+            rewards,
             &config.fqi,
         )?;
+        self.relabelled = relabel;
         self.planned = true;
         // The residual model for the next sub-batch's scores.
         self.residual = false;
@@ -687,6 +755,81 @@ impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T
         *slot = record;
         *self.len += 1;
         Ok(())
+    }
+}
+
+/// The sources' rewards as the target sees them ([`AdaptiveConfig::relabel`]), source after
+/// source into `out`: each record's posterior under `gp` (fitted on the target rewards
+/// minus `centre`; one noise-subtraction batch per source, as the reward weights do), then
+/// [`relabelled_reward`].
+///
+/// Errors: `out` shorter than the source records ([`Error::CapacityExceeded`]), those of
+/// [`crate::Gp::predict`] and a non-finite result ([`Error::NonFinite`] `reward`).
+fn relabel_rewards<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    sources: &SourceData<'_, T, D>,
+    centre: T,
+    v: T,
+    noise: NoiseSubtraction,
+    out: &mut [T],
+) -> Result<()> {
+    let capacity = out.len();
+    let mut rest: &mut [T] = out;
+    for records in sources.records() {
+        let (mine, tail) = core::mem::take(&mut rest)
+            .split_at_mut_checked(records.len())
+            .ok_or(Error::CapacityExceeded { capacity })?;
+        rest = tail;
+        if records.is_empty() {
+            continue;
+        }
+        let mut slots = mine.iter_mut();
+        visit_posteriors(gp, records, noise, |r, p| {
+            if let Some(slot) = slots.next() {
+                let y = relabelled_reward(r.reward, centre + p.mean, p.std, v);
+                crate::error::ensure_finite(y, "reward")?;
+                *slot = y;
+            }
+            Ok(())
+        })?;
+    }
+    Ok(())
+}
+
+/// A source reward `r` as the target sees it: `λ r + (1 − λ) μ` with `λ = exp(−u²/2)` and
+/// `u = (r − μ)/√(σ² + v)`, the reward's z-score under the target's posterior `(μ, σ)` and
+/// the reward variance `v`. A reward the target does not contradict (`u ≈ 0`, also
+/// wherever the target GP is unsure) stays; one it confidently contradicts becomes `μ`.
+pub fn relabelled_reward<T: Real>(r: T, mean: T, std: T, v: T) -> T {
+    let u = (r - mean) / (std * std + v).sqrt();
+    let lambda = (-(u * u) / T::from_f64(2.0)).exp();
+    lambda * r + (T::ONE - lambda) * mean
+}
+
+/// The median of the records' rewards (the mean of the middle two for an even count, 0 for
+/// none), without a buffer: the order of `D₀` is kept, at `O(n²)` comparisons (n ≤ the
+/// target buffer, a few hundred records).
+fn median<T: Real, const D: usize>(records: &[Transition<[T; D], T>]) -> T {
+    let n = records.len();
+    if n == 0 {
+        return T::ZERO;
+    }
+    // The k-th smallest reward (0-based), counting ties.
+    let kth = |k: usize| {
+        records
+            .iter()
+            .map(|r| r.reward)
+            .find(|&x| {
+                let below = records.iter().filter(|r| r.reward < x).count();
+                let at = records.iter().filter(|r| r.reward == x).count();
+                below <= k && k < below + at
+            })
+            .unwrap_or(T::ZERO)
+    };
+    if n % 2 == 1 {
+        kth(n / 2)
+    } else {
+        (kth(n / 2 - 1) + kth(n / 2)) / T::from_f64(2.0)
     }
 }
 

@@ -315,7 +315,9 @@ fn a_step_spends_its_budget_on_verified_paths_and_drawn_rows() {
         }
     }
     assert_eq!(kernel.path(), &path[..]);
-    // Every weight is a valid weight, the beliefs a distribution.
+    // Every weight is a valid weight (no relabelling in the recommended configuration),
+    // the beliefs a distribution.
+    assert!(kernel.relabelled_rewards().is_empty());
     assert_eq!(kernel.reward_weights().len(), 120);
     assert!(
         kernel
@@ -419,14 +421,16 @@ fn the_source_that_answers_like_the_target_becomes_plausible() {
 }
 
 #[test]
-fn kernel_averaging_plans_on_d0_and_the_weighted_sources() {
+fn kernel_averaging_plans_on_d0_and_the_relabelled_sources() {
     // The kNN approximator in the loop: the first verification follows the kNN plan on the
     // unweighted sources, and after a step the kernel's Q is the kNN fit on D₀ and the
-    // sources with the reward weights the kernel reports (rebuilt here independently).
+    // sources with the relabelled rewards the kernel reports (rebuilt here independently).
     use crate::fqi::{Kernel, KnnStorage, Neighbours, SampleSet};
     let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
     let slices = fx.slices();
-    let valid = config(12).validate().unwrap();
+    let mut c = config(12);
+    c.relabel = true;
+    let valid = c.validate().unwrap();
     let nb = Neighbours::cube(3, 0.0, 10.0, Kernel::Gaussian(0.1)).unwrap();
     let mut storage =
         std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 36, 120, 40, 0, 12, 3>::new());
@@ -452,15 +456,13 @@ fn kernel_averaging_plans_on_d0_and_the_weighted_sources() {
     kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
     let d0 = kernel.target_samples().to_vec();
     assert_eq!(d0[0].action, q.greedy_action([0.0, 0.0]).unwrap());
-    let w = kernel.reward_weights().to_vec();
+    // Relabelling: every source weight 1, rewards replaced.
+    let y = kernel.relabelled_rewards().to_vec();
+    assert_eq!(y.len(), 120);
     let mut sets = vec![SampleSet::unweighted(&d0)];
     let mut offset = 0;
     for s in &slices {
-        sets.push(SampleSet::weighted(
-            s,
-            Some(&w[offset..offset + s.len()]),
-            None,
-        ));
+        sets.push(SampleSet::unweighted(s).with_rewards(Some(&y[offset..offset + s.len()])));
         offset += s.len();
     }
     q.fit(&sets, &valid.awfqi.fqi).unwrap();
@@ -491,4 +493,135 @@ fn kernel_averaging_plans_on_d0_and_the_weighted_sources() {
         Some(Error::CapacityExceeded { capacity: 100 })
     );
     assert!(kernel.target_samples().is_empty());
+}
+
+#[test]
+fn with_relabelling_the_sources_keep_weight_one_and_get_relabelled_rewards() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let mut c = config(12);
+    c.relabel = true;
+    let mut storage = std::boxed::Box::new(Storage::new());
+    let mut kernel = AdaptiveAwfqi::new(
+        c.validate().unwrap(),
+        grid(),
+        SourceData::new(&slices, &fx.posteriors).unwrap(),
+        &fx.means,
+        rows(),
+        PuddleWorld::target(Dynamics::Shared),
+        &mut *storage,
+    )
+    .unwrap();
+    assert!(
+        kernel.relabelled_rewards().is_empty(),
+        "nothing relabelled before a step"
+    );
+    let report = kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
+    // No weights (every one is 1, the report says so), one finite reward per source
+    // record, some of them moved by the target's answers.
+    assert!(kernel.reward_weights().is_empty());
+    assert_eq!(report.wr_mean, 1.0);
+    let relabelled = kernel.relabelled_rewards();
+    assert_eq!(relabelled.len(), 120);
+    assert!(relabelled.iter().all(|y| y.is_finite()));
+    let own: Vec<f64> = slices
+        .iter()
+        .flat_map(|s| s.iter().map(|r| r.reward))
+        .collect();
+    assert!(own.iter().zip(relabelled).any(|(r, y)| r != y));
+    // reset forgets them.
+    kernel.reset();
+    assert!(kernel.relabelled_rewards().is_empty());
+}
+
+#[test]
+fn relabelling_keeps_uncontradicted_rewards_and_replaces_contradicted_ones() {
+    let v = 0.01;
+    // Exact agreement: λ = 1.
+    assert_eq!(relabelled_reward(-1.0, -1.0, 0.3, v), -1.0);
+    // By hand: r = −1, μ = −2, σ² + v = 0.25 + 0.75 = 1, u = 1, λ = e^{−1/2}.
+    let lambda = (-0.5f64).exp();
+    let want = -lambda - 2.0 * (1.0 - lambda);
+    assert!((relabelled_reward(-1.0, -2.0, 0.5, 0.75) - want).abs() < 1e-15);
+    // A confident puddle (μ = −10, σ = 0.1) replaces a dry reward: u ≈ 64, λ ≈ 0.
+    assert!((relabelled_reward(-1.0, -10.0, 0.1, v) + 10.0).abs() < 1e-12);
+    // An unsure target (σ = 30) keeps it: u ≈ 0.3, λ ≈ 0.96.
+    assert!((relabelled_reward(-1.0, -10.0, 30.0, v) + 1.0).abs() < 0.5);
+}
+
+#[test]
+fn the_median_of_odd_even_tied_and_empty_rewards() {
+    let with = |rewards: &[f64]| -> Vec<Record> {
+        rewards
+            .iter()
+            .map(|&reward| Transition {
+                state: [0.0; 2],
+                action: 0,
+                reward,
+                next_state: [0.0; 2],
+                absorbing: false,
+            })
+            .collect()
+    };
+    assert_eq!(median(&with(&[])), 0.0);
+    assert_eq!(median(&with(&[3.0, -1.0, 2.0])), 2.0);
+    assert_eq!(median(&with(&[4.0, -1.0, 2.0, -10.0])), 0.5);
+    assert_eq!(median(&with(&[-1.0, -1.0, -10.0, -1.0])), -1.0);
+    assert_eq!(median(&with(&[-10.0, -1.0, -10.0, -1.0])), -5.5);
+}
+
+#[test]
+fn relabelled_source_rewards_follow_the_target_gp_in_closed_form() {
+    // A target GP with one point at z₀ (y = −9 around a centre of −1, so a −10 reward
+    // there) and tiny noise: at z₀ its mean is ≈ −9 (+ centre = −10) and its posterior std
+    // ≈ 0, so a dry −1 source reward at z₀ becomes ≈ −10; far from z₀ the mean is the
+    // centre and the std √c = 1 (principled noise subtraction), so a −1 reward is kept
+    // and a −3 one moves by the closed-form λ with u = 2/√(1 + v).
+    let hyper = Hyperparameters::isotropic(1.0, 0.5, 1e-6);
+    let mut gp = Gp::<f64, GP, 3>::new(hyper).unwrap();
+    let z0 = input([2.0, 2.0], 1);
+    gp.fit(&[z0], &[-9.0]).unwrap();
+    let rec = |state: [f64; 2], reward: f64| Transition {
+        state,
+        action: 1,
+        reward,
+        next_state: state,
+        absorbing: false,
+    };
+    let near = [rec([2.0, 2.0], -1.0)];
+    let far = [rec([9.0, 9.0], -1.0), rec([9.0, 1.0], -3.0)];
+    let records: [&[Record]; 2] = [&near, &far];
+    let posteriors = [Posterior::new(0.0, 0.1); 3];
+    let sources = SourceData::new(&records, &posteriors).unwrap();
+    let v = 0.01;
+    let mut out = [0.0; 3];
+    relabel_rewards(
+        &gp,
+        &sources,
+        -1.0,
+        v,
+        NoiseSubtraction::Principled,
+        &mut out,
+    )
+    .unwrap();
+    assert!((out[0] + 10.0).abs() < 1e-3, "{out:?}");
+    assert!((out[1] + 1.0).abs() < 1e-9, "{out:?}");
+    let u = 2.0 / (1.0 + v).sqrt();
+    let lambda = (-0.5 * u * u).exp();
+    assert!(
+        (out[2] - (-3.0 * lambda - (1.0 - lambda))).abs() < 1e-9,
+        "{out:?}"
+    );
+    // Too short an output: refused.
+    assert_eq!(
+        relabel_rewards(
+            &gp,
+            &sources,
+            -1.0,
+            v,
+            NoiseSubtraction::Principled,
+            &mut out[..2]
+        ),
+        Err(Error::CapacityExceeded { capacity: 2 })
+    );
 }

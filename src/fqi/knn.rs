@@ -430,14 +430,14 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         self.min_weight = config.min_weight();
         let mut slots = self.records.iter_mut();
         for set in sets {
-            for (s, w_r, w_s) in set.iter() {
+            for (s, reward, w_r, w_s) in set.iter() {
                 if let Some(slot) = slots.next() {
                     *slot = KnnRecord {
                         state: s.state,
                         next_state: s.next_state,
                         weight: w_s,
                         reward: T::ZERO,
-                        target: s.reward,
+                        target: reward,
                         value: w_r,
                         action: s.action as u16,
                         absorbing: s.absorbing,

@@ -222,15 +222,18 @@ impl<T: Real> FqiConfig<T> {
     }
 }
 
-/// A slice of samples with optional per-sample weights (absent = all 1).
+/// A slice of samples with optional per-sample weights (absent = all 1) and optional
+/// rewards that replace the samples' own (absent = their own).
 ///
 /// AWFQI passes the target samples (unweighted) and one set per source, so the records
-/// never need to be copied into one buffer.
+/// never need to be copied into one buffer; adaptive AWFQI's relabelling passes the
+/// sources' rewards as the target sees them beside the untouched records.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SampleSet<'a, T, const D: usize> {
     samples: &'a [Transition<[T; D], T>],
     reward_weights: Option<&'a [T]>,
     transition_weights: Option<&'a [T]>,
+    rewards: Option<&'a [T]>,
 }
 
 impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
@@ -240,6 +243,7 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
             samples,
             reward_weights: None,
             transition_weights: None,
+            rewards: None,
         }
     }
 
@@ -254,7 +258,15 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
             samples,
             reward_weights,
             transition_weights,
+            rewards: None,
         }
+    }
+
+    /// The same set fitted on `rewards` (one per sample, in order) instead of the samples'
+    /// own rewards; `None` keeps their own. The length and finiteness are checked by the
+    /// fit, like the weights'.
+    pub fn with_rewards(self, rewards: Option<&'a [T]>) -> Self {
+        Self { rewards, ..self }
     }
 
     /// Number of samples.
@@ -268,6 +280,14 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
     }
 
     fn validate(&self, actions: usize) -> Result<()> {
+        if let Some(r) = self.rewards {
+            if r.len() != self.samples.len() {
+                return Err(Error::InvalidParameter {
+                    parameter: "rewards",
+                });
+            }
+            crate::error::ensure_all_finite(r, "reward")?;
+        }
         for (weights, name) in [
             (self.reward_weights, "reward_weights"),
             (self.transition_weights, "transition_weights"),
@@ -297,11 +317,20 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
         Ok(())
     }
 
-    /// `(sample, w_r, w_s)` triples.
-    fn iter(&self) -> impl Iterator<Item = (&'a Transition<[T; D], T>, T, T)> + '_ {
+    /// `(sample, reward, w_r, w_s)`: the reward is the replacement when there is one.
+    fn iter(&self) -> impl Iterator<Item = (&'a Transition<[T; D], T>, T, T, T)> + '_ {
         self.samples.iter().enumerate().map(|(i, s)| {
             let pick = |w: Option<&[T]>| w.and_then(|w| w.get(i).copied()).unwrap_or(T::ONE);
-            (s, pick(self.reward_weights), pick(self.transition_weights))
+            let reward = self
+                .rewards
+                .and_then(|r| r.get(i).copied())
+                .unwrap_or(s.reward);
+            (
+                s,
+                reward,
+                pick(self.reward_weights),
+                pick(self.transition_weights),
+            )
         })
     }
 }
@@ -435,11 +464,11 @@ impl<'a, T: Real, const D: usize> TabularFqi<'a, T, D> {
             *e = FqiEntry::default();
         }
         for set in sets {
-            for (s, w_r, w_s) in set.iter() {
+            for (s, reward, w_r, w_s) in set.iter() {
                 let i = self.index(s.state, s.action);
                 if let Some(e) = self.entries.get_mut(i) {
                     // `next` holds Σ w_r while the reward model is being fitted.
-                    e.reward += w_r * s.reward;
+                    e.reward += w_r * reward;
                     e.next += w_r;
                     e.weight += w_s;
                 }
@@ -479,7 +508,7 @@ impl<'a, T: Real, const D: usize> TabularFqi<'a, T, D> {
             e.next = T::ZERO;
         }
         for set in sets {
-            for (s, _, w_s) in set.iter() {
+            for (s, _, _, w_s) in set.iter() {
                 if w_s <= T::ZERO || s.absorbing {
                     continue;
                 }
@@ -761,10 +790,10 @@ fn check_magnitudes<'s, T: Real + 's, const D: usize>(
         _ => T::ZERO,
     };
     for set in sets {
-        for (s, w_r, w_s) in set.iter() {
-            reward_mass += w_r * s.reward.abs();
+        for (_, reward, w_r, w_s) in set.iter() {
+            reward_mass += w_r * reward.abs();
             weight_mass += w_r + w_s;
-            largest = largest.max(s.reward.abs());
+            largest = largest.max(reward.abs());
         }
     }
     let bound =

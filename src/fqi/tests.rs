@@ -434,3 +434,73 @@ fn nearest_search_matches_brute_force_in_one_three_and_four_dimensions() {
     check([4, 3, 5, 3], 1);
     check([3, 3, 3, 3], 0); // nothing visited: no donor
 }
+
+#[test]
+fn replacement_rewards_fit_as_if_the_records_carried_them() {
+    // The chain with rewards −1 replaced by −2 on its right moves: Q equals the fit on a
+    // copy of the records that carries those rewards, for every approximator that reads
+    // sample sets (table, tiles, kernel averaging); bad replacements are refused.
+    let samples = chain();
+    let rewards: Vec<f64> = samples
+        .iter()
+        .map(|s| if s.action == 0 { -2.0 } else { s.reward })
+        .collect();
+    let carried: Vec<Sample> = samples
+        .iter()
+        .zip(&rewards)
+        .map(|(s, &reward)| Transition { reward, ..*s })
+        .collect();
+    let config = FqiConfig::new(0.9, 30, EmptyCells::Nearest).unwrap();
+    let mut a = vec![FqiEntry::default(); 10];
+    let mut b = vec![FqiEntry::default(); 10];
+    let mut replaced = TabularFqi::new(line(5), 2, &mut a).unwrap();
+    let mut copied = TabularFqi::new(line(5), 2, &mut b).unwrap();
+    let set = SampleSet::unweighted(&samples).with_rewards(Some(&rewards));
+    replaced.fit(&[set], &config).unwrap();
+    copied
+        .fit(&[SampleSet::unweighted(&carried)], &config)
+        .unwrap();
+    assert_eq!(replaced.entries(), copied.entries());
+    // V*(0) moves right 4 times at −2: −2(1 − 0.9⁴)/(1 − 0.9).
+    let want = -2.0 * (1.0 - 0.9f64.powi(4)) / 0.1;
+    assert!((replaced.max_value(at(0)).unwrap() - want).abs() < 1e-12);
+
+    let tiles = Tilings::new([0.0, 0.0], [5.0, 1.0], 5, 2).unwrap();
+    let mut ta = vec![FqiEntry::EMPTY; 144];
+    let mut tb = vec![FqiEntry::EMPTY; 144];
+    let mut replaced = TileFqi::new(tiles, 2, &mut ta).unwrap();
+    let mut copied = TileFqi::new(tiles, 2, &mut tb).unwrap();
+    replaced.fit(&[set], &config).unwrap();
+    copied
+        .fit(&[SampleSet::unweighted(&carried)], &config)
+        .unwrap();
+    for c in 0..5 {
+        for a in 0..2 {
+            assert_eq!(replaced.value(at(c), a), copied.value(at(c), a));
+        }
+    }
+
+    let before = replaced.value(at(0), 0);
+    let short = [-1.0; 3];
+    assert_eq!(
+        replaced.fit(
+            &[SampleSet::unweighted(&samples).with_rewards(Some(&short))],
+            &config
+        ),
+        Err(Error::InvalidParameter {
+            parameter: "rewards"
+        })
+    );
+    let mut nan = rewards.clone();
+    nan[2] = f64::NAN;
+    assert_eq!(
+        replaced.fit(
+            &[SampleSet::unweighted(&samples).with_rewards(Some(&nan))],
+            &config
+        ),
+        Err(Error::NonFinite {
+            parameter: "reward"
+        })
+    );
+    assert_eq!(replaced.value(at(0), 0), before);
+}

@@ -278,12 +278,12 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
     {
         self.entries.fill(FqiEntry::EMPTY);
         for set in sets {
-            for (s, w_r, w_s) in set.iter() {
+            for (s, reward, w_r, w_s) in set.iter() {
                 for t in 0..self.tilings.count {
                     let i = self.index(t, &s.state, s.action);
                     if let Some(e) = self.entries.get_mut(i) {
                         // `next` holds Σ w_r while the reward model is being fitted.
-                        e.reward += w_r * s.reward;
+                        e.reward += w_r * reward;
                         e.next += w_r;
                         e.weight += w_s;
                     }
@@ -327,7 +327,7 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
         }
         let gamma = config.discount;
         for set in sets {
-            for (s, _, w_s) in set.iter() {
+            for (s, _, _, w_s) in set.iter() {
                 if w_s <= T::ZERO {
                     continue;
                 }

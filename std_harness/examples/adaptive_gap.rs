@@ -4,7 +4,7 @@
 //! the published sources, grid rows of spacing 0.1), then fits the harness's weighted
 //! Extra-Trees FQI (the std algorithm's: 50 trees, 60 iterations, γ = 0.99) on exactly the
 //! kernel's final data — its 300 target records (weight 1) and the source records with the
-//! kernel's final reward weights — and evaluates both greedy policies with the same 50
+//! kernel's final relabelled rewards (or reward weights without relabelling) — and evaluates both greedy policies with the same 50
 //! rollouts from (0, 0) (f64 target). The difference isolates the FQI approximator: the
 //! queries, the GPs, the weights and the scalar are the kernel's for both.
 //!
@@ -131,13 +131,19 @@ fn main() -> anyhow::Result<()> {
                 absorbing: r.absorbing,
             });
         }
-        for s in &sources.sources {
-            for r in &s.records {
-                data.push(*r);
-            }
+        // Relabelling (the recommended configuration) replaces the sources' rewards and
+        // keeps their weights at 1; without it the sources keep their rewards and weights.
+        let relabelled = kernel.relabelled_rewards();
+        for (j, r) in sources.sources.iter().flat_map(|s| &s.records).enumerate() {
+            let reward = relabelled.get(j).map_or(r.reward, |&y| f64::from(y));
+            data.push(Transition { reward, ..*r });
         }
         let mut wr = vec![1.0; kernel.target_samples().len()];
-        wr.extend(kernel.reward_weights().iter().map(|&w| f64::from(w)));
+        if relabelled.is_empty() {
+            wr.extend(kernel.reward_weights().iter().map(|&w| f64::from(w)));
+        } else {
+            wr.resize(data.len(), 1.0);
+        }
         let ws = vec![1.0; wr.len()];
         let options = FqiOptions {
             iterations: protocol.iterations,

@@ -144,8 +144,9 @@ pub struct Args {
     pub max_gp: Option<usize>,
     /// GP hyperparameter search: `spec` (§4.2: every start optimised on all data) or
     /// `screened` (starts screened on a 300-point subsample, then refined on all data).
-    /// Default: `screened` for iwfqi without transition weights, where it was checked to
-    /// reach the spec's optimum (README, performance); `spec` for the others. `spec`
+    /// Default: `screened` where it was checked to reach the spec's optimum (README,
+    /// performance): iwfqi on Puddle World (with or without transition weights), iwfqi
+    /// elsewhere without them and awfqi without them; `spec` for the others. `spec`
     /// reproduces the spec's procedure exactly.
     #[arg(long, value_enum)]
     pub gp_search: Option<GpSearch>,
@@ -298,6 +299,10 @@ pub struct Args {
     /// down-weighting the records.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().relabel)]
     pub adaptive_relabel: bool,
+    /// awfqi-adaptive-kernel: relabel contradicted source rewards (the core's
+    /// `AdaptiveConfig::relabel`); off by default, as chosen on the tuning runs.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().kernel_relabel)]
+    pub adaptive_kernel_relabel: bool,
     /// awfqi-adaptive: drop source records whose episode end no other source or target
     /// record corroborates.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().corroborate)]
@@ -335,6 +340,7 @@ impl Args {
             temperature: self.adaptive_temperature,
             consensus: self.adaptive_consensus,
             relabel: self.adaptive_relabel,
+            kernel_relabel: self.adaptive_kernel_relabel,
             corroborate: self.adaptive_corroborate,
             oracle: self.adaptive_oracle,
             select: self.adaptive_select,

@@ -506,6 +506,8 @@ pub struct AdaptiveRun {
     pub tiles: (usize, usize),
     /// Likelihood evaluations and restarts of each GP search (`None`: the thesis's).
     pub search: Option<(usize, usize)>,
+    /// Relabel the sources' rewards instead of weighting them (`AdaptiveConfig::relabel`).
+    pub relabel: bool,
 }
 
 /// Adaptive AWFQI on Puddle World on the device: the published source records and their
@@ -537,6 +539,7 @@ pub fn adaptive_puddle<
         [(0.0, 10.0); 2],
     );
     config.candidates = run.candidates;
+    config.relabel = run.relabel;
     if let Some((evaluations, restarts)) = run.search {
         config.awfqi.gp_training.search.max_evaluations = evaluations;
         config.awfqi.gp_training.search.restarts = restarts;
@@ -587,4 +590,5 @@ pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     candidates: 4000,
     tiles: (12, 8),
     search: None,
+    relabel: false,
 };

@@ -618,9 +618,9 @@ mod tests {
 
     /// Adaptive AWFQI on the target (f32) over the published sources in flash, small: a
     /// 16-point GP, 60 candidates, 6 × 6 tiles × 2 tilings, 2 steps of 12 queries, short
-    /// searches. Checks the run's sizes, the verification rollouts (each sub-batch of 4
-    /// starts with 3 verified queries from (0, 0)), the beliefs (a distribution) and that
-    /// every output is finite and in range.
+    /// searches, relabelling on. Checks the run's sizes, the verification rollouts (each sub-batch of 4
+    /// starts with 3 verified queries from (0, 0)), the beliefs (a distribution), the
+    /// relabelled source rewards and that every output is finite and in range.
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
         use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveRun, adaptive_puddle};
@@ -633,6 +633,7 @@ mod tests {
             candidates: 60,
             tiles: (6, 2),
             search: Some((40, 1)),
+            relabel: true,
         };
         let mut checked = false;
         let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
@@ -642,10 +643,11 @@ mod tests {
                 t.reward.is_finite() && t.action < 4 && t.state.iter().all(|x| x.is_finite())
             });
             let total: f32 = kernel.beliefs().iter().map(|b| b.plausibility).sum();
-            let weights = kernel
-                .reward_weights()
-                .iter()
-                .all(|w| w.is_finite() && *w >= 0.0 && *w <= 1000.0);
+            // Relabelling: no weights, one finite reward per source record.
+            let relabelled = kernel.relabelled_rewards();
+            let weights = kernel.reward_weights().is_empty()
+                && relabelled.len() == 1033
+                && relabelled.iter().all(|y| y.is_finite());
             checked = d0.len() == 24
                 && starts
                 && finite

@@ -110,6 +110,10 @@ pub struct AdaptiveOptions {
     /// where it does, so every action keeps the sources' transitions around a feature
     /// only the target has.
     pub relabel: bool,
+    /// awfqi-adaptive-kernel's relabelling ([`awfqi::AdaptiveConfig::relabel`]): off by
+    /// default, where the tuning runs put it for the core's tile-coded FQI (relabelling
+    /// is `awfqi-adaptive`'s default; docs/active-budget.md).
+    pub kernel_relabel: bool,
     /// A source record that ends its episode (absorbs) keeps weight only when that end is
     /// corroborated: by a target record's end there, or by at least half of the other
     /// sources (their nearest record with the same action ends too). A goal only one
@@ -163,6 +167,7 @@ impl Default for AdaptiveOptions {
             temperature: 1.0,
             consensus: false,
             relabel: true,
+            kernel_relabel: false,
             corroborate: false,
             oracle: AdaptiveOracle::None,
             select: 0,

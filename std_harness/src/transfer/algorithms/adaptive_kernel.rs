@@ -82,6 +82,7 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
     c.floor = o.floor as T;
     c.candidates = o.candidates;
     c.relevance_width = o.relevance_width as T;
+    c.relabel = o.kernel_relabel;
     Ok(c)
 }
 

@@ -989,6 +989,7 @@ fn adaptive<T, G, const D: usize, const I: usize>(
             kernel.steps(),
             kernel.target_samples().len(),
             kernel.reward_weights().len(),
+            kernel.relabelled_rewards().len(),
             kernel.beliefs().len(),
             kernel.path().len(),
         ));
