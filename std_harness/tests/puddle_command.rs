@@ -192,3 +192,44 @@ fn iwfqi_defaults_to_the_screened_search_on_puddle_world() {
     assert_eq!(returns(&default), returns(&spec));
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// `--q-function joint` (the reference's one forest over state and action value) runs the
+/// episodic baselines — their result files say so and differ from the per-action
+/// forests' — and is refused with an active algorithm, which plans its own queries.
+#[test]
+fn the_joint_q_function_runs_the_baselines_and_refuses_active_algorithms() {
+    let base = std::env::temp_dir().join(format!("awfqi-joint-{}", std::process::id()));
+    let baselines = "fqi,iwfqi-ideal,rbt,sdt";
+    let joint = base.join("joint");
+    let per_action = base.join("per-action");
+    run(&args_with(
+        &joint,
+        "1",
+        baselines,
+        &["--q-function", "joint"],
+    ))
+    .unwrap();
+    run(&args(&per_action, "1", baselines)).unwrap();
+    for name in ["fqi", "iwfqi-ideal", "rbt", "sdt"] {
+        let file = format!("{name}.json");
+        let j: serde_json::Value = serde_json::from_str(&read(&joint, &file)).unwrap();
+        let p: serde_json::Value = serde_json::from_str(&read(&per_action, &file)).unwrap();
+        assert_eq!(j["experiment"]["protocol"]["q_function"], "joint", "{name}");
+        assert!(
+            p["experiment"]["protocol"].get("q_function").is_none(),
+            "{name}"
+        );
+        let returns =
+            |v: &serde_json::Value| v["runs"][0]["steps"][1]["perf_disc_greedy_mean"].clone();
+        assert!(returns(&j).as_f64().unwrap().is_finite(), "{name}");
+        assert_ne!(j["runs"][0]["steps"], p["runs"][0]["steps"], "{name}");
+    }
+    let refused = run(&args_with(
+        &base.join("active"),
+        "1",
+        "fqi,awfqi",
+        &["--q-function", "joint"],
+    ));
+    assert!(format!("{:#}", refused.unwrap_err()).contains("--q-function joint"));
+    let _ = std::fs::remove_dir_all(&base);
+}

@@ -605,9 +605,10 @@ pub fn build_experiment<const D: usize>(
     protocol.q_function = config.args.q_function.unwrap_or_default();
     anyhow::ensure!(
         protocol.q_function.is_per_action()
-            || (D == 2 && config.algorithms.iter().all(|&a| a == Algorithm::Fqi)),
-        "--q-function joint is an ablation of FQI on 2-D states: use it with --algorithms fqi \
-         on the Dam or Puddle World"
+            || (D == 2 && config.algorithms.iter().all(|&a| !a.is_active())),
+        "--q-function joint (the reference's one forest over state and action value) applies \
+         to 2-D states and the episodic baselines (fqi, iwfqi, iwfqi-heuristic, iwfqi-ideal, \
+         rbt, sdt): use it on the Dam or Puddle World without the active algorithms"
     );
     let options = TransferOptions {
         variances: args.variances,

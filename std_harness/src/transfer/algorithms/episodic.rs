@@ -6,8 +6,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use crate::domains::{Domain, Record};
-use crate::forest_fqi::FqiOptions;
-use crate::joint_q::QFunction;
+use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::joint_q::{QFunction, QFunctionKind, fqi_joint};
 use crate::transfer::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
 
 /// The episodic part every baseline shares: the domain, `D₀` and the last Q-function.
@@ -55,6 +55,24 @@ impl<'e, const D: usize> Episodic<'e, D> {
             num_actions: self.domain.num_actions(),
             ..base
         }
+    }
+
+    /// FQI on `data` with `options`, in the protocol's representation of Q: per-action
+    /// forests (spec §5) or the reference's joint forest over state and action value.
+    ///
+    /// Errors: those of [`fqi`] and [`fqi_joint`].
+    pub fn fit(
+        &self,
+        data: &Dataset<D>,
+        options: &FqiOptions<'_>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<QFunction<D>> {
+        Ok(match self.protocol.q_function {
+            QFunctionKind::PerAction => fqi(data, options, rng)?.q.into(),
+            QFunctionKind::Joint => {
+                QFunction::Joint(fqi_joint(data, options, &self.domain.action_values, rng)?)
+            }
+        })
     }
 
     /// The greedy action of the last Q (action 0 before the first fit).

@@ -31,7 +31,7 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::{Domain, GpInput, IdealMeans};
-use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::forest_fqi::{Dataset, FqiOptions};
 use crate::transfer::gp::{GpOptions, GpSearch, Output, RecordGp};
 use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::ScoreTableData;
@@ -249,7 +249,7 @@ impl<const D: usize> EpisodicLearner<D> for Iwfqi<'_, D> {
         let mut ws = vec![1.0; n_target];
         ws.extend_from_slice(&ws_source);
         let options = self.run.options(FqiOptions::iwfqi(&wr, &ws));
-        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
+        self.run.q = Some(self.run.fit(&union, &options, rng)?);
         let summary = |w: &[f64]| -> anyhow::Result<(f64, f64)> {
             let mut s = WeightSummary::<f64>::new();
             s.add(w)?;

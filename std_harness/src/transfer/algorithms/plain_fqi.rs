@@ -1,13 +1,13 @@
 //! Plain FQI on the target's episodes (spec §5, §13.1): per-action Extra-Trees on `D₀`
 //! only, unweighted, from scratch every step (or, with the protocol's
-//! [`QFunctionKind::Joint`] ablation, one forest over state and action value).
+//! [`crate::joint_q::QFunctionKind::Joint`] ablation, one forest over state and action
+//! value).
 
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
-use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::joint_q::{QFunction, QFunctionKind, fqi_joint};
+use crate::forest_fqi::{Dataset, FqiOptions};
 use crate::transfer::protocol::Diagnostics;
 
 /// Plain FQI.
@@ -30,15 +30,7 @@ impl<const D: usize> EpisodicLearner<D> for Fqi<'_, D> {
         self.run.collect(rng)?;
         let data: Dataset<D> = self.run.data.iter().copied().collect();
         let options = self.run.options(FqiOptions::plain());
-        self.run.q = Some(match self.run.protocol.q_function {
-            QFunctionKind::PerAction => fqi(&data, &options, rng)?.q.into(),
-            QFunctionKind::Joint => QFunction::Joint(fqi_joint(
-                &data,
-                &options,
-                &self.run.domain.action_values,
-                rng,
-            )?),
-        });
+        self.run.q = Some(self.run.fit(&data, &options, rng)?);
         Ok(Diagnostics {
             n_source_samples: Some(0),
             ..Diagnostics::default()

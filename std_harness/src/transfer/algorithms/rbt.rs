@@ -18,7 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::Record;
-use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::forest_fqi::{Dataset, FqiOptions};
 use crate::transfer::protocol::Diagnostics;
 
 /// RBT's parameters (spec §8).
@@ -257,7 +257,7 @@ impl<const D: usize> EpisodicLearner<D> for Rbt<'_, D> {
             transferred += n_k;
         }
         let options = self.run.options(FqiOptions::plain());
-        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
+        self.run.q = Some(self.run.fit(&union, &options, rng)?);
         Ok(Diagnostics {
             n_source_samples: Some(transferred),
             compliances: Some(compliances),

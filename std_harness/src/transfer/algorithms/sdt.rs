@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
-use crate::forest_fqi::{Dataset, FqiOptions, fqi};
+use crate::forest_fqi::{Dataset, FqiOptions};
 use crate::transfer::protocol::Diagnostics;
 
 /// SDT.
@@ -35,7 +35,7 @@ impl<const D: usize> EpisodicLearner<D> for Sdt<'_, D> {
         let n_target = union.len();
         union.extend_from(&self.sources);
         let options = self.run.options(FqiOptions::sdt(n_target));
-        self.run.q = Some(fqi(&union, &options, rng)?.q.into());
+        self.run.q = Some(self.run.fit(&union, &options, rng)?);
         Ok(Diagnostics {
             n_source_samples: Some(self.sources.len()),
             n_eff: Some(union.len()),
