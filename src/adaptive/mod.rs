@@ -22,11 +22,12 @@
 //!    *relevance*, `exp(−d²/2)` with `d` the distance to the nearest state verified in this
 //!    step in units of [`AdaptiveConfig::relevance_width`] of each coordinate's range;
 //! 3. **re-plan**: the target reward GP, then FQI on `D₀` and the sources (§12 steps 4–5,
-//!    the core's [`crate::Awfqi`] pieces). With [`AdaptiveConfig::relabel`] (the harness's
-//!    `awfqi-adaptive` default; off in [`AdaptiveConfig::recommended`]) the GP's prior mean is the target rewards' median and every source record keeps
-//!    weight 1 with its reward relabelled towards the GP's mean where the GP contradicts it
-//!    ([`relabelled_reward`]); without it the GP has the thesis's zero prior mean and the
-//!    source records get §7.3 reward weights. Then the residual GP for the next sub-batch,
+//!    the core's [`crate::Awfqi`] pieces). Without [`AdaptiveConfig::relabel`] (off in
+//!    [`AdaptiveConfig::recommended`]) the GP has the thesis's zero prior mean and the
+//!    source records get §7.3 reward weights. With it (the harness's `awfqi-adaptive`
+//!    default) the GP's prior mean is the target rewards' median, and every source record
+//!    keeps weight 1 with its reward relabelled towards the GP's mean where the GP
+//!    contradicts it ([`relabelled_reward`]). Then the residual GP for the next sub-batch,
 //!    in the same GP. Before any target data the plan is FQI on the unweighted sources.
 //!
 //! **What it needs beyond AWFQI's set-up:** one [`MeanFunction`] per source (its reward
@@ -111,12 +112,12 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The harness's default configuration (`docs/active-budget.md`): 3 sub-batches, 70 %
-    /// verification, surprise, uncertainty and decision relevance on, floor 0.1,
-    /// relabelling off (on the tuning runs it helped the harness's Extra-Trees FQI but not
-    /// the core's tile coding), 4 000
-    /// candidates, relevance width 0.1, on the thesis's AWFQI settings for `budget`
-    /// ([`AwfqiConfig::thesis`]), for a plant that starts in `start`, with episodes of
-    /// `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state `bounds`.
+    /// verification, surprise, uncertainty and decision relevance on, floor 0.1, 4 000
+    /// candidates, relevance width 0.1, relabelling off (on the tuning runs it helped the
+    /// harness's Extra-Trees FQI but not the core's tile coding), on the thesis's AWFQI
+    /// settings for `budget` ([`AwfqiConfig::thesis`]), for a plant that starts in
+    /// `start`, with episodes of `horizon` steps, exploration `epsilon` (the protocol's
+    /// 0.3) and state `bounds`.
     pub fn recommended(
         budget: usize,
         start: [T; D],
