@@ -146,7 +146,7 @@ pub struct Args {
     /// `screened` (starts screened on a 300-point subsample, then refined on all data).
     /// Default: `screened` where it was checked to reach the spec's optimum (README,
     /// performance): iwfqi on Puddle World (with or without transition weights), iwfqi
-    /// elsewhere without them and awfqi without them; `spec` for the others. `spec`
+    /// elsewhere, iwfqi-heuristic and awfqi without them; `spec` for the others. `spec`
     /// reproduces the spec's procedure exactly.
     #[arg(long, value_enum)]
     pub gp_search: Option<GpSearch>,
