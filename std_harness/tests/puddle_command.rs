@@ -141,30 +141,24 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     std::fs::remove_dir_all(&base).unwrap();
 }
 
-/// awfqi's and iwfqi-heuristic's default GP search is the screened one as well (each
-/// checked on 10 reference runs); awfqi-oracle, never checked, keeps the spec's, and the
-/// report's header names them.
+/// awfqi's, awfqi-oracle's and iwfqi-heuristic's default GP search is the screened one as
+/// well (each checked on 10 runs), and the report's header names them.
 #[test]
-fn awfqi_defaults_to_the_screened_search_and_awfqi_oracle_to_the_spec() {
+fn awfqi_awfqi_oracle_and_iwfqi_heuristic_default_to_the_screened_search() {
     let dir = std::env::temp_dir().join(format!("awfqi-gp-search-awfqi-{}", std::process::id()));
     let extra = ["--episodes-per-step", "1"];
-    run(&args_with(
-        &dir,
-        "1",
-        "iwfqi-heuristic,awfqi,awfqi-oracle",
-        &extra,
-    ))
-    .unwrap();
+    let algorithms = "iwfqi-heuristic,awfqi,awfqi-oracle";
+    run(&args_with(&dir, "1", algorithms, &extra)).unwrap();
     let parameters = |file: &str| -> serde_json::Value {
         let v: serde_json::Value = serde_json::from_str(&read(&dir, file)).unwrap();
         v["runs"][0]["parameters"].clone()
     };
-    assert_eq!(parameters("awfqi.json")["gp_search"], "screened");
-    assert_eq!(parameters("iwfqi-heuristic.json")["gp_search"], "screened");
-    assert!(parameters("awfqi-oracle.json").get("gp_search").is_none());
+    for name in ["iwfqi-heuristic", "awfqi", "awfqi-oracle"] {
+        assert_eq!(parameters(&format!("{name}.json"))["gp_search"], "screened");
+    }
     let report = read(&dir, "report.md");
     assert!(
-        report.contains("Spec (iwfqi-heuristic, awfqi: Screened) search"),
+        report.contains("Spec (iwfqi-heuristic, awfqi, awfqi-oracle: Screened) search"),
         "{report}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

@@ -146,8 +146,8 @@ pub struct Args {
     /// `screened` (starts screened on a 300-point subsample, then refined on all data).
     /// Default: `screened` where it was checked to reach the spec's optimum (README,
     /// performance): iwfqi on Puddle World (with or without transition weights), iwfqi
-    /// elsewhere, iwfqi-heuristic and awfqi without them; `spec` for the others. `spec`
-    /// reproduces the spec's procedure exactly.
+    /// elsewhere, iwfqi-heuristic, awfqi and awfqi-oracle without them; `spec` for the
+    /// others. `spec` reproduces the spec's procedure exactly.
     #[arg(long, value_enum)]
     pub gp_search: Option<GpSearch>,
     /// Also run the other GP search (spec ↔ screened) on every fitted GP, on the same data
