@@ -142,11 +142,12 @@ fn outputs_are_complete_deterministic_and_mergeable() {
 }
 
 /// awfqi's, awfqi-oracle's and iwfqi-heuristic's default GP search is the screened one as
-/// well (each checked on 10 runs), and the report's header names them.
+/// well (each checked on 10 runs): their fits run it (the check's file says which search
+/// each fit kept), their result files and the report's header say so.
 #[test]
 fn awfqi_awfqi_oracle_and_iwfqi_heuristic_default_to_the_screened_search() {
     let dir = std::env::temp_dir().join(format!("awfqi-gp-search-awfqi-{}", std::process::id()));
-    let extra = ["--episodes-per-step", "1"];
+    let extra = ["--episodes-per-step", "1", "--check-gp-search"];
     let algorithms = "iwfqi-heuristic,awfqi,awfqi-oracle";
     run(&args_with(&dir, "1", algorithms, &extra)).unwrap();
     let parameters = |file: &str| -> serde_json::Value {
@@ -161,6 +162,22 @@ fn awfqi_awfqi_oracle_and_iwfqi_heuristic_default_to_the_screened_search() {
         report.contains("Spec (iwfqi-heuristic, awfqi, awfqi-oracle: Screened) search"),
         "{report}"
     );
+    // Every target fit (3 algorithms × 2 steps) kept the screened search; the spec's is
+    // kept only by the realistic score table's fits of the 3 published sources.
+    let check = read(&dir, "gp_search_check.tsv");
+    let rows: Vec<Vec<&str>> = check
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').collect())
+        .collect();
+    let screened = rows.iter().filter(|r| r[0] == "Screened").count();
+    let spec: Vec<&str> = rows
+        .iter()
+        .filter(|r| r[0] == "Spec")
+        .map(|r| r[1])
+        .collect();
+    assert_eq!(screened, 6, "{check}");
+    assert_eq!(spec, ["291", "423", "319"], "{check}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

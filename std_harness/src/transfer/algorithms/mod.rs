@@ -468,7 +468,10 @@ impl<const D: usize> Experiment<D> {
                 iwfqi::Iwfqi::estimated(self, Mean, None)?
                     .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
             ),
-            Algorithm::IwfqiHeuristic => Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None)?),
+            Algorithm::IwfqiHeuristic => Box::new(
+                iwfqi::Iwfqi::estimated(self, Heuristic, None)?
+                    .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
+            ),
             Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),
             Algorithm::Rbt => Box::new(rbt::Rbt::new(self)),
             Algorithm::Sdt => Box::new(sdt::Sdt::new(self)),
@@ -483,7 +486,10 @@ impl<const D: usize> Experiment<D> {
             Algorithm::AwfqiOracle => {
                 let table = self.oracle_table.clone();
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
-                Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table))?)
+                Box::new(
+                    iwfqi::Iwfqi::estimated(self, Mean, Some(table))?
+                        .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
+                )
             }
             Algorithm::AwfqiAdaptive => Box::new(adaptive::Adaptive::new(self)?),
             Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => {
