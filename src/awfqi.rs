@@ -536,15 +536,31 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     weights: &mut [T],
     summary: &mut WeightSummary<T>,
 ) -> Result<()> {
-    let capacity = weights.len();
-    let mut rest: &mut [T] = weights;
+    for_each_source(sources, weights, |records, posteriors, mine| {
+        source_weights(gp, records, posteriors, params, noise, mine)?;
+        summary.add(mine)
+    })
+}
+
+/// Calls `f` with each source's records, stored posteriors and its part of `out` (source
+/// after source, one value per record), the split every per-record pass over the sources
+/// shares.
+///
+/// Errors: `out` shorter than the source records ([`Error::CapacityExceeded`] with its
+/// length, before the first source that does not fit); those of `f`.
+pub(crate) fn for_each_source<T: Real, U, const D: usize>(
+    sources: &SourceData<'_, T, D>,
+    out: &mut [U],
+    mut f: impl FnMut(Records<'_, T, D>, &[Posterior<T>], &mut [U]) -> Result<()>,
+) -> Result<()> {
+    let capacity = out.len();
+    let mut rest: &mut [U] = out;
     for (records, posteriors) in sources.iter() {
         let (mine, tail) = core::mem::take(&mut rest)
             .split_at_mut_checked(records.len())
             .ok_or(Error::CapacityExceeded { capacity })?;
         rest = tail;
-        source_weights(gp, records, posteriors, params, noise, mine)?;
-        summary.add(mine)?;
+        f(records, posteriors, mine)?;
     }
     Ok(())
 }

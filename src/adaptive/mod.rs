@@ -58,11 +58,13 @@ pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
 use crate::alias::AliasTable;
 use crate::awfqi::builder::short;
-use crate::awfqi::{AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, reward_weights};
+use crate::awfqi::{
+    AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, for_each_source, reward_weights,
+};
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, QFunction};
 use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{InputDim, Output, fit_gp, fit_gp_on, input, visit_posteriors};
+use crate::record_gp::{InputDim, fit_gp_on, input, visit_posteriors};
 use crate::score::RowSet;
 use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
 use crate::{Error, Real, Result};
@@ -613,25 +615,15 @@ where
         // Relabelling reads the GP far from the target data too, so its prior mean is the
         // target rewards' median there (a zero prior would relabel towards an optimistic 0).
         let centre = if relabel { median(target) } else { T::ZERO };
-        let lml = if relabel {
-            fit_gp_on(
-                self.gp,
-                target,
-                |r| Ok(r.reward - centre),
-                config.subset,
-                &config.gp_training,
-                rng,
-            )?
-        } else {
-            fit_gp(
-                self.gp,
-                target,
-                Output::Reward,
-                config.subset,
-                &config.gp_training,
-                rng,
-            )?
-        };
+        // `r − 0` is `r` exactly: without relabelling this is the thesis's zero-mean GP.
+        let lml = fit_gp_on(
+            self.gp,
+            target,
+            |r| Ok(r.reward - centre),
+            config.subset,
+            &config.gp_training,
+            rng,
+        )?;
         let (hyper, points) = (*self.gp.hyperparameters(), self.gp.len());
         self.relabelled = false;
         if relabel {
@@ -774,15 +766,9 @@ fn relabel_rewards<T: Real, const N: usize, const D: usize, const I: usize>(
     noise: NoiseSubtraction,
     out: &mut [T],
 ) -> Result<()> {
-    let capacity = out.len();
-    let mut rest: &mut [T] = out;
-    for records in sources.records() {
-        let (mine, tail) = core::mem::take(&mut rest)
-            .split_at_mut_checked(records.len())
-            .ok_or(Error::CapacityExceeded { capacity })?;
-        rest = tail;
+    for_each_source(sources, out, |records, _, mine| {
         if records.is_empty() {
-            continue;
+            return Ok(());
         }
         let mut slots = mine.iter_mut();
         visit_posteriors(gp, records, noise, |r, p| {
@@ -792,9 +778,8 @@ fn relabel_rewards<T: Real, const N: usize, const D: usize, const I: usize>(
                 *slot = y;
             }
             Ok(())
-        })?;
-    }
-    Ok(())
+        })
+    })
 }
 
 /// A source reward `r` as the target sees it: `λ r + (1 − λ) μ` with `λ = exp(−u²/2)` and
@@ -821,8 +806,12 @@ fn median<T: Real, const D: usize>(records: &[Transition<[T; D], T>]) -> T {
             .iter()
             .map(|r| r.reward)
             .find(|&x| {
-                let below = records.iter().filter(|r| r.reward < x).count();
-                let at = records.iter().filter(|r| r.reward == x).count();
+                let (below, at) = records.iter().fold((0, 0), |(b, a), r| {
+                    (
+                        b + usize::from(r.reward < x),
+                        a + usize::from(r.reward == x),
+                    )
+                });
                 below <= k && k < below + at
             })
             .unwrap_or(T::ZERO)

@@ -66,11 +66,13 @@ pub struct Iwfqi<'e, const D: usize = 2> {
 }
 
 impl<'e, const D: usize> Iwfqi<'e, D> {
-    /// IWFQI (or, with a `table`, AWFQI) with estimated weights.
+    /// IWFQI (or, with a `table`, AWFQI) with estimated weights, its target GPs fitted with
+    /// `gp` (the experiment's options with this algorithm's search).
     pub fn estimated(
         experiment: &'e Experiment<D>,
         estimator: Estimator,
         table: Option<Arc<ScoreTableData<D>>>,
+        gp: GpOptions,
     ) -> anyhow::Result<Self> {
         let (v_r, v_s) = experiment.variances()?;
         let cap = experiment.options.max_weight;
@@ -90,13 +92,8 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
             },
             table,
             sources: experiment.sources.union(),
-            gp: experiment.options.gp.resolved(GpSearch::Spec),
+            gp,
         })
-    }
-
-    /// The same learner with other GP options (iwfqi's default search).
-    pub fn with_gp(self, gp: GpOptions) -> Self {
-        Self { gp, ..self }
     }
 
     /// IWFQI with the ideal weights of §7.7 (computed once per experiment).

@@ -462,34 +462,26 @@ impl<const D: usize> Experiment<D> {
     /// for the whole run, only through [`Experiment::with_learner`]).
     pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner<D> + '_>> {
         use awfqi::weights::Estimator::{Heuristic, Mean};
+        // Every GP-fitting learner gets its algorithm's search from here.
+        let gp = self.options.gp.resolved(self.default_search(algorithm));
         Ok(match algorithm {
             Algorithm::Fqi => Box::new(plain_fqi::Fqi::new(self)),
-            Algorithm::Iwfqi => Box::new(
-                iwfqi::Iwfqi::estimated(self, Mean, None)?
-                    .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
-            ),
-            Algorithm::IwfqiHeuristic => Box::new(
-                iwfqi::Iwfqi::estimated(self, Heuristic, None)?
-                    .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
-            ),
+            Algorithm::Iwfqi => Box::new(iwfqi::Iwfqi::estimated(self, Mean, None, gp)?),
+            Algorithm::IwfqiHeuristic => {
+                Box::new(iwfqi::Iwfqi::estimated(self, Heuristic, None, gp)?)
+            }
             Algorithm::IwfqiIdeal => Box::new(iwfqi::Iwfqi::ideal(self)?),
             Algorithm::Rbt => Box::new(rbt::Rbt::new(self)),
             Algorithm::Sdt => Box::new(sdt::Sdt::new(self)),
             Algorithm::Awfqi => {
                 let table = self.realistic_table.clone();
                 let table = table.ok_or_else(|| anyhow::anyhow!("no realistic score table"))?;
-                Box::new(
-                    iwfqi::Iwfqi::estimated(self, Mean, Some(table))?
-                        .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
-                )
+                Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table), gp)?)
             }
             Algorithm::AwfqiOracle => {
                 let table = self.oracle_table.clone();
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
-                Box::new(
-                    iwfqi::Iwfqi::estimated(self, Mean, Some(table))?
-                        .with_gp(self.options.gp.resolved(self.default_search(algorithm))),
-                )
+                Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table), gp)?)
             }
             Algorithm::AwfqiAdaptive => Box::new(adaptive::Adaptive::new(self)?),
             Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => {
