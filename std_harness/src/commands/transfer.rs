@@ -30,7 +30,7 @@ use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, K
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
-use crate::transfer::gp::{GpOptions, GpSearch};
+use crate::transfer::gp::{FixedGpUpdate, GpOptions, GpSearch};
 use crate::transfer::metrics::{TransferMetrics, markdown_table, transfer_metrics};
 use crate::transfer::protocol::{self, Protocol};
 use crate::transfer::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
@@ -155,6 +155,13 @@ pub struct Args {
     /// `gp_search_check.tsv` in the output directory, with a summary on stderr.
     #[arg(long)]
     pub check_gp_search: bool,
+    /// How IWFQI's fixed-kernel target GPs (Dam, Acrobot) follow the target data:
+    /// `incremental` appends each step's records to the factor and to the posterior at the
+    /// source records (the refit's posterior to rounding, ≈ 10× fewer flops on Acrobot,
+    /// but it holds every GP's factor between steps: ≈ 7 GB a run on Acrobot's last
+    /// step); `refit` reconditions on all target records every step, as the reference.
+    #[arg(long, value_enum, default_value_t = FixedGpUpdate::Incremental)]
+    pub fixed_gp: FixedGpUpdate,
     /// IWFQI/AWFQI estimator variances: `published` or (Puddle World only) `corrected`
     /// (0.01, 0.04), spec §14.6.
     #[arg(long, value_enum, default_value = "published")]
@@ -528,6 +535,7 @@ impl Config {
             max_gp: self.max_gp,
             search: self.args.gp_search,
             check: self.args.check_gp_search,
+            fixed_update: self.args.fixed_gp,
         }
     }
 }

@@ -57,7 +57,7 @@ impl FixedKernel {
         }
     }
 
-    fn validate(&self) -> Result<()> {
+    pub(super) fn validate(&self) -> Result<()> {
         if self.terms.is_empty() {
             return Err(Error::InvalidParameter { parameter: "terms" });
         }
@@ -104,7 +104,7 @@ impl FixedKernel {
     /// `true` when two inputs whose coordinate `coord` differs by `gap` are exactly
     /// uncorrelated, whatever their other coordinates: every term's factor along `coord`
     /// underflows to 0.
-    fn uncorrelated_at(&self, coord: usize, gap: f64) -> bool {
+    pub(super) fn uncorrelated_at(&self, coord: usize, gap: f64) -> bool {
         self.terms.iter().all(|t| match t.length_scales.get(coord) {
             Some(l) => {
                 let u = gap / l;
@@ -298,7 +298,11 @@ impl<const Z: usize> FixedGp<Z> {
 
 /// `true` when the distinct values of coordinate `c` are all far enough apart for the
 /// kernel to decorrelate them exactly (and there are at least two).
-fn separable<const Z: usize>(inputs: &[[f64; Z]], kernel: &FixedKernel, c: usize) -> bool {
+pub(super) fn separable<const Z: usize>(
+    inputs: &[[f64; Z]],
+    kernel: &FixedKernel,
+    c: usize,
+) -> bool {
     let mut values: Vec<f64> = inputs.iter().map(|x| x[c]).collect();
     values.sort_by(f64::total_cmp);
     values.dedup();

@@ -42,6 +42,7 @@
 //! parallelise across runs).
 
 pub mod fixed;
+pub mod growing;
 pub mod optimizer;
 
 use awfqi::{Error, Result};

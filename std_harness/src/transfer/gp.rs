@@ -10,6 +10,7 @@ use rand_core::Rng;
 
 use crate::domains::{Domain, GP_INPUT, GpInput, Record};
 use crate::gp_large::fixed::{FixedGp, FixedKernel};
+use crate::gp_large::growing::GrowingFixedGp;
 use crate::gp_large::{self, FitOptions, LargeGp};
 
 /// Which value of a record a GP models.
@@ -94,6 +95,41 @@ pub struct GpOptions {
     /// the results do not change; never written to result files.
     #[serde(skip)]
     pub check: bool,
+    /// How IWFQI's fixed-kernel target GPs follow the growing target data (`--fixed-gp`).
+    /// Absent from result files when it is the default.
+    #[serde(default, skip_serializing_if = "FixedGpUpdate::is_default")]
+    pub fixed_update: FixedGpUpdate,
+}
+
+/// How a fixed-kernel target GP (the Dam's and Acrobot's) follows the target data, which
+/// only grows from step to step.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum FixedGpUpdate {
+    /// Append each step's records to the factor and to the posterior at the source
+    /// records ([`GrowingFixedGp`]): the refit's posterior to rounding, at `n²Δ + nΔq`
+    /// instead of `n³/3 + n²q` a step, but holding the factor and `L⁻¹K(X, Q)` between
+    /// steps (Acrobot: ≈ 7 GB a run at the last step).
+    #[default]
+    Incremental,
+    /// Recondition on all target records every step, as the reference does.
+    Refit,
+}
+
+impl FixedGpUpdate {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// One checked fit (see [`GpOptions::check`]).
@@ -148,6 +184,7 @@ impl GpOptions {
             max_gp: gp_large::MAX_GP,
             search: None,
             check: false,
+            fixed_update: FixedGpUpdate::Incremental,
         }
     }
 
@@ -279,21 +316,7 @@ impl RecordGp {
                     log_marginal_likelihood: gp.log_marginal_likelihood(),
                 }
             }
-            Model::Fixed(gp) => {
-                let k = gp.kernel();
-                GpSummary {
-                    points: gp.len(),
-                    signal_variance: k.terms.iter().map(|t| t.signal_variance).sum(),
-                    length_scale: k
-                        .terms
-                        .first()
-                        .and_then(|t| t.length_scales.first())
-                        .copied()
-                        .unwrap_or(f64::NAN),
-                    noise_variance: k.noise_variance,
-                    log_marginal_likelihood: -gp.jitter(),
-                }
-            }
+            Model::Fixed(gp) => fixed_summary(gp.kernel(), gp.len(), gp.jitter()),
         }
     }
 
@@ -331,19 +354,145 @@ impl RecordGp {
         let mut means = vec![0.0; zs.len()];
         let mut stds = vec![0.0; zs.len()];
         self.predict_into(zs, &mut means, &mut stds);
-        // The core's one rule (awfqi::weights::predictive_stds) on the noisy variances s².
-        // Exact: in binary floating point √(s·s) = s whenever s·s neither overflows nor
-        // underflows, and predicted stds are far from both. A batch the GP could not
-        // predict (NaN, see `predict_into`) is left as it is.
-        let mut variances: Vec<f64> = stds.iter().map(|s| s * s).collect();
-        if predictive_stds(noise, self.noise_variance(), &mut variances).is_ok() {
-            stds = variances;
+        posteriors_from(&means, &stds, noise, self.noise_variance())
+    }
+}
+
+/// Posteriors from one batch's means and predictive stds, the stds turned into stds of the
+/// mean function by `noise` over the batch.
+fn posteriors_from(
+    means: &[f64],
+    stds: &[f64],
+    noise: NoiseSubtraction,
+    noise_variance: f64,
+) -> Vec<Posterior<f64>> {
+    // The core's one rule (awfqi::weights::predictive_stds) on the noisy variances s².
+    // Exact: in binary floating point √(s·s) = s whenever s·s neither overflows nor
+    // underflows, and predicted stds are far from both. A batch the GP could not predict
+    // (NaN, see `RecordGp::predict_into`) is left as it is.
+    let mut variances: Vec<f64> = stds.iter().map(|s| s * s).collect();
+    let stds = if predictive_stds(noise, noise_variance, &mut variances).is_ok() {
+        &variances[..]
+    } else {
+        stds
+    };
+    means
+        .iter()
+        .zip(stds)
+        .map(|(&m, &s)| Posterior::new(m, s.max(0.0)))
+        .collect()
+}
+
+/// The summary of a fixed-kernel GP: the sum of its terms' signal variances, the first
+/// term's first length scale, and the jitter (negated) in place of a likelihood.
+fn fixed_summary(kernel: &FixedKernel, points: usize, jitter: f64) -> GpSummary {
+    GpSummary {
+        points,
+        signal_variance: kernel.terms.iter().map(|t| t.signal_variance).sum(),
+        length_scale: kernel
+            .terms
+            .first()
+            .and_then(|t| t.length_scales.first())
+            .copied()
+            .unwrap_or(f64::NAN),
+        noise_variance: kernel.noise_variance,
+        log_marginal_likelihood: -jitter,
+    }
+}
+
+/// A fixed-kernel target GP kept conditioned at the source records as target records
+/// arrive ([`FixedGpUpdate::Incremental`]), for IWFQI's weights.
+#[derive(Debug, Clone)]
+pub struct GrowingRecordGp {
+    gp: GrowingFixedGp<GP_INPUT>,
+    output: Output,
+    /// The queries' batches (one per source), in order.
+    batches: Vec<usize>,
+    subtract_noise: bool,
+}
+
+impl GrowingRecordGp {
+    /// The domain's GP of `output`, to be predicted at `batches` of inputs (one per
+    /// source); `None` when that GP's kernel is fitted, not fixed.
+    pub fn new<const D: usize>(
+        domain: &Domain<D>,
+        output: Output,
+        batches: &[Vec<GpInput>],
+    ) -> Option<anyhow::Result<Self>> {
+        let spec = domain.gp_spec(output);
+        let KernelSpec::Fixed(kernel) = &spec.kernel else {
+            return None;
+        };
+        let queries: Vec<GpInput> = batches.iter().flatten().copied().collect();
+        Some(
+            GrowingFixedGp::new(kernel, Some(D), queries, faer::Par::Seq)
+                .map(|gp| Self {
+                    gp,
+                    output,
+                    batches: batches.iter().map(Vec::len).collect(),
+                    subtract_noise: spec.subtract_noise,
+                })
+                .map_err(Into::into),
+        )
+    }
+
+    /// Conditions on `records` (all target records so far, the last `max_gp` of them as
+    /// [`RecordGp::fit_records`] would): appends the new ones. `Ok(false)` when that is not
+    /// possible — more than `max_gp` records (the window slides) or records that do not
+    /// continue the ones conditioned on — so the caller refits instead.
+    pub fn update<const D: usize>(
+        &mut self,
+        domain: &Domain<D>,
+        records: &[Record<D>],
+        max_gp: usize,
+    ) -> anyhow::Result<bool> {
+        let known = self.gp.len();
+        let continues = records.len() >= known
+            && records.len() <= max_gp
+            && records[..known]
+                .iter()
+                .zip(self.gp.inputs())
+                .all(|(r, z)| domain.input(r) == *z);
+        if !continues {
+            return Ok(false);
         }
-        means
-            .into_iter()
-            .zip(stds)
-            .map(|(m, s)| Posterior::new(m, s.max(0.0)))
+        let new = &records[known..];
+        let inputs: Vec<GpInput> = new.iter().map(|r| domain.input(r)).collect();
+        let targets: Vec<f64> = new.iter().map(|r| self.output.of(r)).collect();
+        self.gp.extend(&inputs, &targets)?;
+        Ok(true)
+    }
+
+    /// The posteriors at every batch, noise-subtracted per batch as
+    /// [`RecordGp::posteriors`] (when this GP subtracts at all).
+    pub fn posteriors(&self, noise: NoiseSubtraction) -> Vec<Vec<Posterior<f64>>> {
+        let q = self.gp.queries().len();
+        let (mut means, mut stds) = (vec![0.0; q], vec![0.0; q]);
+        if self.gp.posterior_into(&mut means, &mut stds).is_err() {
+            // As `RecordGp::predict_into`: unknown, never a wrong weight.
+            means.fill(f64::NAN);
+            stds.fill(f64::NAN);
+        }
+        let noise = if self.subtract_noise {
+            noise
+        } else {
+            NoiseSubtraction::Off
+        };
+        let noise_variance = self.gp.kernel().noise_variance;
+        let mut start = 0;
+        self.batches
+            .iter()
+            .map(|&len| {
+                let range = start..start + len;
+                start += len;
+                posteriors_from(&means[range.clone()], &stds[range], noise, noise_variance)
+            })
             .collect()
+    }
+
+    /// Points, kernel and jitter, as [`RecordGp::summary`] reports a fixed GP.
+    pub fn summary(&self) -> GpSummary {
+        fixed_summary(self.gp.kernel(), self.gp.len(), self.gp.jitter())
     }
 }
 
@@ -421,3 +570,6 @@ impl<const D: usize> Domain<D> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

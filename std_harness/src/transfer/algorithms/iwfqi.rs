@@ -25,14 +25,16 @@
 
 use std::sync::Arc;
 
-use awfqi::weights::{Estimator, WeightParams, WeightSummary, ideal_weight};
+use awfqi::weights::{Estimator, Posterior, WeightParams, WeightSummary, ideal_weight};
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::{Domain, GpInput, IdealMeans};
 use crate::forest_fqi::{Dataset, FqiOptions};
-use crate::transfer::gp::{GpOptions, GpSearch, Output, RecordGp};
+use crate::transfer::gp::{
+    FixedGpUpdate, GpOptions, GpSearch, GpSummary, GrowingRecordGp, Output, RecordGp,
+};
 use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::ScoreTableData;
 use crate::transfer::sources::SourceSet;
@@ -63,6 +65,9 @@ pub struct Iwfqi<'e, const D: usize = 2> {
     sources: Dataset<D>,
     /// The target GPs' options (the experiment's, with the search this learner runs).
     gp: GpOptions,
+    /// Fixed-kernel target GPs kept conditioned between steps
+    /// ([`FixedGpUpdate::Incremental`]), by output.
+    growing: Vec<(Output, GrowingRecordGp)>,
 }
 
 impl<'e, const D: usize> Iwfqi<'e, D> {
@@ -93,6 +98,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
             table,
             sources: experiment.sources.union(),
             gp,
+            growing: Vec::new(),
         })
     }
 
@@ -109,6 +115,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
             table: None,
             sources: experiment.sources.union(),
             gp: experiment.options.gp.resolved(GpSearch::Spec),
+            growing: Vec::new(),
         })
     }
 
@@ -126,12 +133,52 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         Ok(())
     }
 
+    /// The target GP of `output` on this step's `D₀`, as posteriors at each source's
+    /// `zs` (noise-subtracted per source), and its summary. A fixed kernel is appended to
+    /// ([`FixedGpUpdate::Incremental`]) while it can be; otherwise the GP is refitted.
+    fn target_posteriors(
+        &mut self,
+        output: Output,
+        zs: &[Vec<GpInput>],
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<(Vec<Vec<Posterior<f64>>>, GpSummary)> {
+        let domain = &*self.experiment.domain;
+        let noise = self.experiment.options.noise;
+        let target = &self.run.data;
+        if self.gp.fixed_update == FixedGpUpdate::Incremental {
+            let index = match self.growing.iter().position(|(o, _)| *o == output) {
+                Some(i) => Some(i),
+                None => GrowingRecordGp::new(domain, output, zs)
+                    .transpose()?
+                    .map(|gp| {
+                        self.growing.push((output, gp));
+                        self.growing.len() - 1
+                    }),
+            };
+            if let Some(i) = index {
+                let gp = &mut self.growing[i].1;
+                if gp.update(domain, target, self.gp.max_gp)? {
+                    return Ok((gp.posteriors(noise), gp.summary()));
+                }
+                // Beyond `max_gp` (or not a continuation): refitted from here on.
+                self.growing.remove(i);
+            }
+        }
+        let spec = domain.gp_spec(output);
+        let gp = RecordGp::fit_records(domain, target, output, &spec, &self.gp, rng)?;
+        let posteriors = zs
+            .iter()
+            .map(|zs| gp.posteriors(zs, spec.noise(noise)))
+            .collect();
+        Ok((posteriors, gp.summary()))
+    }
+
     /// The reward and transition weights of the source records for this step's `D₀`, and
     /// the target reward GP's summary.
     fn source_weights(
-        &self,
+        &mut self,
         rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<crate::transfer::gp::GpSummary>)> {
+    ) -> anyhow::Result<(Vec<f64>, Vec<f64>, Option<GpSummary>)> {
         let (reward, transition, transition_dims) = match &self.weights {
             Weights::Ideal(w) => {
                 return Ok((w.0.clone(), w.1.clone(), None));
@@ -140,50 +187,44 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
                 reward,
                 transition,
                 transition_dims,
-            } => (reward, transition, transition_dims),
+            } => (*reward, *transition, transition_dims.clone()),
         };
-        let options = &self.experiment.options;
         let domain = &*self.experiment.domain;
         let sources = &self.experiment.sources.sources;
-        let target = &self.run.data;
         let zs: Vec<Vec<GpInput>> = sources
             .iter()
             .map(|s| s.records.iter().map(|r| domain.input(r)).collect())
             .collect();
-        let spec = domain.gp_spec(Output::Reward);
-        let gp = RecordGp::fit_records(domain, target, Output::Reward, &spec, &self.gp, rng)?;
+        let (reward_posteriors, summary) = self.target_posteriors(Output::Reward, &zs, rng)?;
         let mut wr = Vec::with_capacity(self.sources.len());
-        for (s, zs) in sources.iter().zip(&zs) {
-            let post = gp.posteriors(zs, spec.noise(options.noise));
+        for (s, post) in sources.iter().zip(&reward_posteriors) {
             let ys: Vec<f64> = s.records.iter().map(|r| r.reward).collect();
             let mut out = vec![0.0; ys.len()];
-            reward.weights_into(&ys, &post, &s.reward, &mut out)?;
+            reward.weights_into(&ys, post, &s.reward, &mut out)?;
             wr.extend(out);
         }
         let mut ws = vec![1.0; self.sources.len()];
-        for &d in transition_dims {
+        for d in transition_dims {
             let output = Output::Next(d);
-            let spec = domain.gp_spec(output);
-            let gp_d = RecordGp::fit_records(domain, target, output, &spec, &self.gp, rng)?;
+            let (posteriors, _) = self.target_posteriors(output, &zs, rng)?;
             let mut offset = 0;
-            for (k, (s, zs)) in sources.iter().zip(&zs).enumerate() {
+            for (k, (s, post)) in sources.iter().zip(&posteriors).enumerate() {
                 let stored = s.next_state.get(d).ok_or_else(|| {
                     anyhow::anyhow!(
                         "source {} stores no GP posteriors of next-state coordinate {d}",
                         k + 1
                     )
                 })?;
-                let post = gp_d.posteriors(zs, spec.noise(options.noise));
                 let ys: Vec<f64> = s.records.iter().map(|r| output.of(r)).collect();
                 let mut out = vec![0.0; ys.len()];
-                transition.weights_into(&ys, &post, stored, &mut out)?;
+                transition.weights_into(&ys, post, stored, &mut out)?;
                 for (w, o) in ws[offset..offset + out.len()].iter_mut().zip(out) {
                     *w *= o;
                 }
                 offset += s.len();
             }
         }
-        Ok((wr, ws, Some(gp.summary())))
+        Ok((wr, ws, Some(summary)))
     }
 }
 
