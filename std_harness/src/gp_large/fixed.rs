@@ -155,21 +155,7 @@ impl<const Z: usize> FixedGp<Z> {
         if inputs.is_empty() {
             return Err(Error::EmptyData);
         }
-        if targets.len() != inputs.len() {
-            return Err(Error::InvalidParameter {
-                parameter: "targets",
-            });
-        }
-        if inputs
-            .iter()
-            .flatten()
-            .chain(targets)
-            .any(|v| !v.is_finite())
-        {
-            return Err(Error::NonFinite {
-                parameter: "inputs",
-            });
-        }
+        check_training(inputs, targets)?;
         let split = split.filter(|&c| c < Z && separable(inputs, kernel, c));
         let mut groups: Vec<(f64, Vec<usize>)> = Vec::new();
         for (i, x) in inputs.iter().enumerate() {
@@ -296,6 +282,47 @@ impl<const Z: usize> FixedGp<Z> {
     }
 }
 
+/// Training data of a fixed GP: as many targets as inputs, every value finite.
+pub(super) fn check_training<const Z: usize>(inputs: &[[f64; Z]], targets: &[f64]) -> Result<()> {
+    if targets.len() != inputs.len() {
+        return Err(Error::InvalidParameter {
+            parameter: "targets",
+        });
+    }
+    if inputs
+        .iter()
+        .flatten()
+        .chain(targets)
+        .any(|v| !v.is_finite())
+    {
+        return Err(Error::NonFinite {
+            parameter: "inputs",
+        });
+    }
+    Ok(())
+}
+
+/// Cholesky factor of the symmetric matrix whose lower triangle `m` holds, in place;
+/// `None` when it is not numerically positive definite.
+pub(super) fn cholesky_lower(m: faer::MatMut<'_, f64>, par: Par) -> Option<()> {
+    let mut scratch = MemBuffer::new(
+        faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+            m.nrows(),
+            par,
+            Default::default(),
+        ),
+    );
+    faer::linalg::cholesky::llt::factor::cholesky_in_place(
+        m,
+        Default::default(),
+        par,
+        MemStack::new(&mut scratch),
+        Default::default(),
+    )
+    .ok()
+    .map(|_| ())
+}
+
 /// `true` when the distinct values of coordinate `c` are all far enough apart for the
 /// kernel to decorrelate them exactly (and there are at least two).
 pub(super) fn separable<const Z: usize>(
@@ -332,21 +359,7 @@ fn condition<const Z: usize>(
             col[i] = kernel.covariance(&inputs[i], &inputs[j]);
         }
     }
-    let mut scratch = MemBuffer::new(
-        faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
-            n,
-            par,
-            Default::default(),
-        ),
-    );
-    faer::linalg::cholesky::llt::factor::cholesky_in_place(
-        factor.as_mut(),
-        Default::default(),
-        par,
-        MemStack::new(&mut scratch),
-        Default::default(),
-    )
-    .ok()?;
+    cholesky_lower(factor.as_mut(), par)?;
     let mut alpha = Mat::<f64>::zeros(n, 1);
     alpha.col_as_slice_mut(0).copy_from_slice(targets);
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(
@@ -369,10 +382,11 @@ fn condition<const Z: usize>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn points(n: usize) -> (Vec<[f64; 3]>, Vec<f64>) {
+    /// Points with a three-valued third coordinate (the "action").
+    pub(crate) fn points(n: usize) -> (Vec<[f64; 3]>, Vec<f64>) {
         let xs: Vec<[f64; 3]> = (0..n)
             .map(|i| {
                 [

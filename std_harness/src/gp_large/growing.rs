@@ -26,13 +26,12 @@
 //! `V` (`n·q`) of every block, in `f64`.
 
 use awfqi::{Error, Result};
-use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{Accum, Mat, MatRef, Par};
 
 use super::JITTER;
-use super::fixed::{FixedKernel, separable};
+use super::fixed::{FixedKernel, check_training, cholesky_lower, separable};
 
 /// The largest jitter of the ladder (as [`super::fixed::FixedGp`]).
 const MAX_JITTER: f64 = 1e-4;
@@ -151,21 +150,7 @@ impl<const Z: usize> GrowingFixedGp<Z> {
     /// Errors (the GP unchanged): mismatched lengths, non-finite values, or a Gram
     /// matrix that is not positive definite even with jitter `10⁻⁴`.
     pub fn extend(&mut self, inputs: &[[f64; Z]], targets: &[f64]) -> Result<()> {
-        if targets.len() != inputs.len() {
-            return Err(Error::InvalidParameter {
-                parameter: "targets",
-            });
-        }
-        if inputs
-            .iter()
-            .flatten()
-            .chain(targets)
-            .any(|v| !v.is_finite())
-        {
-            return Err(Error::NonFinite {
-                parameter: "inputs",
-            });
-        }
+        check_training(inputs, targets)?;
         if inputs.is_empty() {
             return Ok(());
         }
@@ -417,21 +402,7 @@ fn grow<const Z: usize>(
         let l21 = factor.submatrix(n, 0, d, n);
         matmul(schur.as_mut(), Accum::Add, l21, l21.transpose(), -1.0, par);
     }
-    let mut scratch = MemBuffer::new(
-        faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
-            d,
-            par,
-            Default::default(),
-        ),
-    );
-    faer::linalg::cholesky::llt::factor::cholesky_in_place(
-        schur.as_mut(),
-        Default::default(),
-        par,
-        MemStack::new(&mut scratch),
-        Default::default(),
-    )
-    .ok()?;
+    cholesky_lower(schur.as_mut(), par)?;
     factor
         .submatrix_mut(n, n, d, d)
         .copy_from_triangular_lower(schur.as_ref());

@@ -2,25 +2,8 @@
 //! rounding, the same blocks and jitter, and errors that leave it unchanged.
 
 use super::*;
+use crate::gp_large::fixed::tests::points;
 use crate::gp_large::fixed::{FixedGp, RbfTerm};
-
-/// Points with a three-valued third coordinate (the "action").
-fn points(n: usize) -> (Vec<[f64; 3]>, Vec<f64>) {
-    let xs: Vec<[f64; 3]> = (0..n)
-        .map(|i| {
-            [
-                i as f64 * 0.37 % 5.0,
-                (i * 7 % 11) as f64,
-                [0.0, 3.0, 5.0][i % 3],
-            ]
-        })
-        .collect();
-    let ys = xs
-        .iter()
-        .map(|x| (x[0] + x[2]).sin() - 0.1 * x[1])
-        .collect();
-    (xs, ys)
-}
 
 fn split_kernel() -> FixedKernel {
     FixedKernel {
