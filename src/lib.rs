@@ -46,6 +46,7 @@ pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, Greedy, Kernel, KnnFqi, KnnRecord,
     KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi, Tilings,
+    ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};

@@ -604,6 +604,7 @@ where
                 None,
                 None,
                 &config.fqi,
+                rng,
             )?;
             wr.add_ones(self.sources.len());
             self.planned = true;
@@ -661,6 +662,7 @@ where
             None,
             rewards,
             &config.fqi,
+            rng,
         )?;
         self.relabelled = relabel;
         self.planned = true;

@@ -86,6 +86,9 @@ pub enum AdaptiveKernelQ {
     Knn,
     /// The mean of both, each fitted on the same data (tiles as for `tiles`).
     Hybrid,
+    /// Per-action Extra-Trees forests in fixed memory (the core's `TreeFqi`):
+    /// `--kernel-trees` trees of at most `--kernel-tree-nodes` nodes.
+    Trees,
 }
 
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
@@ -232,6 +235,19 @@ pub struct Args {
     /// acts as the reach).
     #[arg(long)]
     pub kernel_common_ball: bool,
+    /// Trees per action of `--adaptive-kernel-q trees`.
+    #[arg(long, default_value_t = 10)]
+    pub kernel_trees: usize,
+    /// Node budget of each tree of `--adaptive-kernel-q trees` (at most 65 535; a tree is
+    /// grown breadth first and cut when full).
+    #[arg(long, default_value_t = 255)]
+    pub kernel_tree_nodes: usize,
+    /// `min_samples_split` of `--adaptive-kernel-q trees`.
+    #[arg(long, default_value_t = 2)]
+    pub kernel_min_samples_split: usize,
+    /// `min_samples_leaf` of `--adaptive-kernel-q trees`.
+    #[arg(long, default_value_t = 1)]
+    pub kernel_min_samples_leaf: usize,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -704,6 +720,14 @@ pub fn build_experiment<const D: usize>(
                 (AdaptiveKernelQ::Hybrid, _, _) => {
                     anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")
                 }
+                (AdaptiveKernelQ::Trees, _, _) => {
+                kernel = kernel.with_adaptive_q(KernelQFunction::trees(
+                    args.kernel_trees,
+                    args.kernel_tree_nodes,
+                    args.kernel_min_samples_split,
+                    args.kernel_min_samples_leaf,
+                )?);
+            }
                 (AdaptiveKernelQ::Tiles, _, _) => {}
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))

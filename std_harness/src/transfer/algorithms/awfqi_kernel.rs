@@ -17,7 +17,8 @@ use std::time::Instant;
 
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
-    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, FqiEntry, Gp,
+    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, ExtraTrees,
+    FqiEntry, Gp,
     GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores,
     SubsetRule, Tilings, Transition, WeightParams,
 };
@@ -56,6 +57,9 @@ pub enum KernelQFunction {
     /// The mean of tile coding (tiles per axis, tilings) and kernel averaging (as
     /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
     Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
+    /// Per-action Extra-Trees forests: trees per action, node budget per tree,
+    /// `min_samples_split`, `min_samples_leaf`; `awfqi-adaptive-kernel` only.
+    Trees(usize, usize, usize, usize),
 }
 
 impl KernelQFunction {
@@ -95,6 +99,22 @@ impl KernelQFunction {
         Ok(out)
     }
 
+    /// Per-action Extra-Trees forests (`--kernel-trees`, `--kernel-tree-nodes`,
+    /// `--kernel-min-samples-split`, `--kernel-min-samples-leaf`).
+    ///
+    /// Errors: those of [`awfqi::ExtraTrees::new`] and
+    /// [`awfqi::ExtraTrees::with_min_samples`].
+    pub fn trees(
+        trees: usize,
+        max_nodes: usize,
+        min_samples_split: usize,
+        min_samples_leaf: usize,
+    ) -> anyhow::Result<Self> {
+        let out = Self::Trees(trees, max_nodes, min_samples_split, min_samples_leaf);
+        out.approximator()?;
+        Ok(out)
+    }
+
     /// The core's approximator over Puddle World's `[0, 10]²`.
     pub(super) fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
@@ -105,6 +125,9 @@ impl KernelQFunction {
                 Tilings::cube(0.0, 10.0, n, t)?,
                 neighbours(k, h, reach, common)?,
             ),
+            Self::Trees(trees, nodes, split, leaf) => {
+                ExtraTrees::new(trees, nodes)?.with_min_samples(split, leaf)?.into()
+            }
         })
     }
 }
@@ -318,6 +341,12 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_neighbours"] = k.into();
                 out["fqi_bandwidth"] = h.into();
                 out["fqi_reach"] = reach.into();
+            }
+            KernelQFunction::Trees(trees, nodes, split, leaf) => {
+                out["fqi_trees"] = trees.into();
+                out["fqi_tree_nodes"] = nodes.into();
+                out["fqi_min_samples_split"] = split.into();
+                out["fqi_min_samples_leaf"] = leaf.into();
             }
         }
         out
