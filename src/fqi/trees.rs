@@ -422,11 +422,23 @@ fn partition<T: Real, const D: usize>(
             .get(j)
             .is_some_and(|r| r.coordinate(feature) <= threshold);
         if goes_left {
-            records.swap(left, j);
+            swap(records, left, j);
             left += 1;
         }
     }
     left
+}
+
+/// Swaps elements `i ≤ j` of `items` (nothing when out of range; no bounds-check panic).
+fn swap<X>(items: &mut [X], i: usize, j: usize) {
+    if i >= j {
+        return;
+    }
+    if let Some((head, tail)) = items.split_at_mut_checked(j) {
+        if let (Some(a), Some(b)) = (head.get_mut(i), tail.first_mut()) {
+            core::mem::swap(a, b);
+        }
+    }
 }
 
 /// Grows one tree on `records` (reordering them) into `nodes`, breadth first (module
@@ -721,7 +733,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             let mut front = 0usize;
             for j in 0..rest.len() {
                 if rest.get(j).is_some_and(|r| r.action() == a) {
-                    rest.swap(front, j);
+                    swap(rest, front, j);
                     front += 1;
                 }
             }
