@@ -66,6 +66,7 @@ pub struct ExtraTrees {
     max_nodes: usize,
     min_samples_split: usize,
     min_samples_leaf: usize,
+    streamed: bool,
 }
 
 impl ExtraTrees {
@@ -88,7 +89,27 @@ impl ExtraTrees {
             max_nodes,
             min_samples_split: 2,
             min_samples_leaf: 1,
+            streamed: false,
         })
+    }
+
+    /// `trees` trees per action, **streamed** (module docs): during FQI every tree is grown
+    /// in one scratch tree of at most `max_nodes` nodes, used and discarded, and the final
+    /// Q-function is grown along each query's path from the records, so the memory does not
+    /// depend on the number of trees. Give the scratch tree room for a fully grown tree
+    /// (`2n − 1` nodes for the `n` records of the largest action) to grow trees fully.
+    ///
+    /// Errors: as [`ExtraTrees::new`].
+    pub fn streamed(trees: usize, max_nodes: usize) -> Result<Self> {
+        Ok(Self {
+            streamed: true,
+            ..Self::new(trees, max_nodes)?
+        })
+    }
+
+    /// `true` for [`ExtraTrees::streamed`] forests.
+    pub fn is_streamed(&self) -> bool {
+        self.streamed
     }
 
     /// The same forests with scikit-learn's growth limits: a node with fewer than
@@ -135,8 +156,12 @@ impl ExtraTrees {
         self.min_samples_leaf
     }
 
-    /// [`TreeNode`]s needed with `actions` actions (`None` on overflow).
+    /// [`TreeNode`]s needed with `actions` actions (`None` on overflow): every tree's
+    /// budget, or one scratch tree's when streamed.
     pub fn required_nodes(&self, actions: usize) -> Option<usize> {
+        if self.streamed {
+            return (actions > 0).then_some(self.max_nodes);
+        }
         actions.checked_mul(self.trees)?.checked_mul(self.max_nodes)
     }
 
@@ -160,6 +185,12 @@ pub struct TreeRecord<T, const D: usize> {
     reward: T,
     /// The regression target `y` of the last iteration (the reward during iteration 1).
     target: T,
+    /// Streamed: the sum over the current action's trees at the next state.
+    acc: T,
+    /// Streamed: `maxₐ Q(s′, a)` over the actions done so far.
+    best: T,
+    /// Streamed, iteration 1: the sum over the record's action's trees at its own state.
+    own: T,
     action: u16,
     absorbing: bool,
 }
@@ -172,6 +203,9 @@ impl<T: Real, const D: usize> TreeRecord<T, D> {
         weight: T::ZERO,
         reward: T::ZERO,
         target: T::ZERO,
+        acc: T::ZERO,
+        best: T::ZERO,
+        own: T::ZERO,
         action: 0,
         absorbing: false,
     };
@@ -256,6 +290,7 @@ impl<T: Real> Default for TreeNode<T> {
 /// A node's weighted sums relative to `y0`: `W = Σw`, `S = Σw(y − y0)`,
 /// `Q = Σw(y − y0)²`, and the per-feature range.
 struct Stats<T, const D: usize> {
+    n: usize,
     w: T,
     s: T,
     q: T,
@@ -265,9 +300,13 @@ struct Stats<T, const D: usize> {
 }
 
 impl<T: Real, const D: usize> Stats<T, D> {
-    fn of(records: &[TreeRecord<T, D>], first: bool) -> Self {
-        let y0 = records.first().map_or(T::ZERO, |r| r.target);
+    fn of<'r>(mut records: impl Iterator<Item = &'r TreeRecord<T, D>> + Clone, first: bool) -> Self
+    where
+        T: 'r,
+    {
+        let y0 = records.clone().next().map_or(T::ZERO, |r| r.target);
         let mut st = Self {
+            n: 0,
             w: T::ZERO,
             s: T::ZERO,
             q: T::ZERO,
@@ -275,9 +314,10 @@ impl<T: Real, const D: usize> Stats<T, D> {
             lo: [T::INFINITY; D],
             hi: [T::NEG_INFINITY; D],
         };
-        for r in records {
+        for r in &mut records {
             let w = r.w(first);
             let dy = r.target - y0;
+            st.n += 1;
             st.w += w;
             st.s += w * dy;
             st.q += w * dy * dy;
@@ -306,7 +346,7 @@ impl<T: Real, const D: usize> Stats<T, D> {
 }
 
 /// The growth settings shared by every node of a fit.
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 struct Growth<T> {
     first: bool,
     min_weight: T,
@@ -315,8 +355,8 @@ struct Growth<T> {
 }
 
 /// Draws the candidate splits of a node and returns the best valid one.
-fn best_split<T: Real, const D: usize, R: Rng + ?Sized>(
-    records: &[TreeRecord<T, D>],
+fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
+    records: impl Iterator<Item = &'r TreeRecord<T, D>>,
     st: &Stats<T, D>,
     growth: &Growth<T>,
     rng: &mut R,
@@ -381,7 +421,7 @@ fn best_split<T: Real, const D: usize, R: Rng + ?Sized>(
             }
         }
     }
-    let n = records.len();
+    let n = st.n;
     let enough = |w: T| w > T::ZERO && w >= growth.min_weight;
     let mut best = None;
     let mut best_score = T::NEG_INFINITY;
@@ -474,7 +514,7 @@ fn grow<T: Real, const D: usize, R: Rng + ?Sized>(
         let Some(mine) = records.get_mut(start..end) else {
             break;
         };
-        let st = Stats::of(mine, growth.first);
+        let st = Stats::of(mine.iter(), growth.first);
         let mut node = TreeNode::leaf(st.mean());
         let splittable = mine.len() >= 2
             && mine.len() >= growth.min_node
@@ -482,7 +522,7 @@ fn grow<T: Real, const D: usize, R: Rng + ?Sized>(
             && st.impurity() > impurity_floor
             && len + 2 <= nodes.len();
         if splittable {
-            if let Some((feature, tau)) = best_split(mine, &st, growth, rng) {
+            if let Some((feature, tau)) = best_split(mine.iter(), &st, growth, rng) {
                 let mid = start + partition(mine, feature, tau);
                 if let (Some(children), Ok(left), Ok(feature), Ok(mid), Ok(end)) = (
                     nodes.get_mut(len..len + 2),
@@ -543,6 +583,99 @@ fn predict<T: Real, const D: usize>(nodes: &[TreeNode<T>], state: &[T; D]) -> T 
     T::ZERO
 }
 
+/// SplitMix64's output function: a bijective mix of 64 bits.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The random stream of one node of a streamed forest's final trees (SplitMix64 from the
+/// node's seed): a node's draws depend only on its seed, so a query can grow the nodes on
+/// its path alone and get the tree a full growth would.
+struct NodeStream(u64);
+
+impl rand_core::TryRng for NodeStream {
+    type Error = core::convert::Infallible;
+
+    fn try_next_u32(&mut self) -> core::result::Result<u32, Self::Error> {
+        Ok((self.try_next_u64()? >> 32) as u32)
+    }
+
+    fn try_next_u64(&mut self) -> core::result::Result<u64, Self::Error> {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        Ok(mix(self.0))
+    }
+
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> core::result::Result<(), Self::Error> {
+        for chunk in dst.chunks_mut(8) {
+            let bytes = self.try_next_u64()?.to_le_bytes();
+            for (d, b) in chunk.iter_mut().zip(bytes) {
+                *d = b;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The seed of tree `tree` of `action` in a streamed forest drawn with `seed`.
+fn tree_seed(seed: u64, action: usize, tree: usize) -> u64 {
+    mix(seed ^ mix(((action as u64) << 32) ^ tree as u64 ^ 0x5851_F42D_4C95_7F2D))
+}
+
+/// The seed of a node's left (`right = false`) or right child.
+fn child_seed(seed: u64, right: bool) -> u64 {
+    mix(seed ^ if right { 0xD1B5_4A32_D192_ED03 } else { 0x8CB9_2BA7_2F3D_8DD7 })
+}
+
+/// The prediction at `state` of the tree that `seed` grows on `records` (one action's),
+/// grown only along `state`'s path: at each node the records inside the node's box are
+/// found by a scan, the node's split drawn from its own stream, and the walk goes to the
+/// child that holds `state`. Each level holds fewer records than the last (both children
+/// of a split are non-empty), so the walk ends within `records.len() + 1` levels.
+fn lazy_tree<T: Real, const D: usize>(
+    records: &[TreeRecord<T, D>],
+    state: &[T; D],
+    seed: u64,
+    growth: &Growth<T>,
+) -> T {
+    // The node's box: lo < x ≤ hi on every axis.
+    let mut lo = [T::NEG_INFINITY; D];
+    let mut hi = [T::INFINITY; D];
+    let mut node_seed = seed;
+    let impurity_floor = T::from_f64(MIN_IMPURITY);
+    let mut value = T::ZERO;
+    for _ in 0..=records.len() {
+        let (lo_now, hi_now) = (lo, hi);
+        let members = records.iter().filter(move |r| {
+            r.state
+                .iter()
+                .zip(lo_now.iter().zip(&hi_now))
+                .all(|(&x, (&l, &h))| l < x && x <= h)
+        });
+        let st = Stats::of(members.clone(), growth.first);
+        value = st.mean();
+        let splittable = st.n >= 2
+            && st.n >= growth.min_node
+            && st.w > T::ZERO
+            && st.impurity() > impurity_floor;
+        if !splittable {
+            return value;
+        }
+        let mut stream = NodeStream(node_seed);
+        let Some((feature, tau)) = best_split(members, &st, growth, &mut stream) else {
+            return value;
+        };
+        let right = state.get(feature).is_some_and(|&x| x > tau);
+        let bound = if right { lo.get_mut(feature) } else { hi.get_mut(feature) };
+        if let Some(b) = bound {
+            *b = tau;
+        }
+        node_seed = child_seed(node_seed, right);
+    }
+    value
+}
+
 /// A Q-function of per-action Extra-Trees forests (module docs), over caller-lent records
 /// and nodes.
 #[derive(Debug)]
@@ -552,6 +685,10 @@ pub struct TreeFqi<'a, T, const D: usize> {
     records: &'a mut [TreeRecord<T, D>],
     nodes: &'a mut [TreeNode<T>],
     len: usize,
+    /// Streamed: the growth rules of the final trees (their weights, the minimum weight)
+    /// and their seed.
+    last: Growth<T>,
+    seed: u64,
 }
 
 impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
@@ -591,6 +728,13 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             records,
             nodes,
             len: 0,
+            last: Growth {
+                first: true,
+                min_weight: T::ZERO,
+                min_leaf: forests.min_samples_leaf,
+                min_node: forests.min_node(),
+            },
+            seed: 0,
         };
         q.clear();
         Ok(q)
@@ -611,9 +755,10 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
         self.records.get(..self.len).unwrap_or(&[])
     }
 
-    /// The nodes of tree `tree` of `action` (its root first), if both exist.
+    /// The nodes of tree `tree` of `action` (its root first), if both exist and the trees
+    /// are stored (not [`ExtraTrees::streamed`]).
     pub fn tree(&self, action: usize, tree: usize) -> Option<&[TreeNode<T>]> {
-        if action >= self.actions || tree >= self.forests.trees {
+        if action >= self.actions || tree >= self.forests.trees || self.forests.streamed {
             return None;
         }
         let start = (action * self.forests.trees + tree) * self.forests.max_nodes;
@@ -623,6 +768,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
     /// Resets Q to 0 everywhere (forgets the records).
     pub fn clear(&mut self) {
         self.len = 0;
+        self.seed = 0;
         self.nodes.fill(TreeNode::EMPTY);
     }
 
@@ -674,6 +820,9 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
                         weight: w_s,
                         reward: w_r,
                         target: reward,
+                        acc: T::ZERO,
+                        best: T::ZERO,
+                        own: T::ZERO,
                         action: s.action as u16,
                         absorbing: s.absorbing,
                     };
@@ -688,6 +837,10 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             min_leaf: self.forests.min_samples_leaf,
             min_node: self.forests.min_node(),
         };
+        if self.forests.streamed {
+            self.fit_streamed(growth, config, rng);
+            return Ok(());
+        }
         self.grow_all(&growth, rng);
         // R̂ at every record (its reward weight is no longer needed).
         for i in 0..self.len {
@@ -720,6 +873,88 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             self.grow_all(&growth, rng);
         }
         Ok(())
+    }
+
+    /// FQI with streamed trees: iterations 1..N−1 grow every tree in the scratch tree and
+    /// add it to the sums of the records it is evaluated at; iteration N is only its seed
+    /// (the final trees are grown along each query's path).
+    fn fit_streamed<R: Rng + ?Sized>(&mut self, mut growth: Growth<T>, config: &FqiConfig<T>, rng: &mut R) {
+        let gamma = config.discount();
+        if config.iterations() > 1 {
+            self.stream_iteration(&growth, rng);
+            growth.first = false;
+            for _ in 2..config.iterations() {
+                self.bootstrap_targets(gamma);
+                self.stream_iteration(&growth, rng);
+            }
+            self.bootstrap_targets(gamma);
+        }
+        self.last = growth;
+        self.seed = rng.next_u64();
+    }
+
+    /// `y = R̂ + γ(1 − ω)·maxₐ′ Q(s′, a′)` from the streamed sums.
+    fn bootstrap_targets(&mut self, gamma: T) {
+        for r in self.records.get_mut(..self.len).unwrap_or(&mut []) {
+            let future = if r.absorbing { T::ZERO } else { r.best };
+            r.target = r.reward + gamma * future;
+        }
+    }
+
+    /// One streamed iteration: every action's trees grown on the current targets, each
+    /// evaluated at every record's next state (`best` = the largest action mean) and, in
+    /// iteration 1, at its own records' states (`reward` = `R̂` afterwards).
+    fn stream_iteration<R: Rng + ?Sized>(&mut self, growth: &Growth<T>, rng: &mut R) {
+        let trees = T::from_usize(self.forests.trees);
+        for r in self.records.get_mut(..self.len).unwrap_or(&mut []) {
+            r.best = T::NEG_INFINITY;
+            r.own = T::ZERO;
+        }
+        for a in 0..self.actions {
+            let (start, end) = self.range_of(a);
+            for r in self.records.get_mut(..self.len).unwrap_or(&mut []) {
+                r.acc = T::ZERO;
+            }
+            let total: T = self
+                .records
+                .get(start..end)
+                .unwrap_or(&[])
+                .iter()
+                .map(|r| r.w(growth.first))
+                .sum();
+            for _ in 0..self.forests.trees {
+                if let Some(mine) = self.records.get_mut(start..end) {
+                    grow(mine, self.nodes, growth, total, rng);
+                }
+                let tree: &[TreeNode<T>] = self.nodes;
+                for (i, r) in self
+                    .records
+                    .get_mut(..self.len)
+                    .unwrap_or(&mut [])
+                    .iter_mut()
+                    .enumerate()
+                {
+                    if !r.absorbing {
+                        r.acc += predict(tree, &r.next_state);
+                    }
+                    if growth.first && (start..end).contains(&i) {
+                        r.own += predict(tree, &r.state);
+                    }
+                }
+            }
+            for (i, r) in self
+                .records
+                .get_mut(..self.len)
+                .unwrap_or(&mut [])
+                .iter_mut()
+                .enumerate()
+            {
+                r.best = r.best.max(r.acc / trees);
+                if growth.first && (start..end).contains(&i) {
+                    r.reward = r.own / trees;
+                }
+            }
+        }
     }
 
     /// Orders the records by action (one partition pass per action).
@@ -776,6 +1011,15 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
     /// The forest of `action` at `state`: the mean of its trees.
     fn forest_value(&self, state: &[T; D], action: usize) -> T {
         let trees = self.forests.trees;
+        if self.forests.streamed {
+            let (start, end) = self.range_of(action);
+            let records = self.records.get(start..end).unwrap_or(&[]);
+            let mut sum = T::ZERO;
+            for t in 0..trees {
+                sum += lazy_tree(records, state, tree_seed(self.seed, action, t), &self.last);
+            }
+            return sum / T::from_usize(trees);
+        }
         let per_tree = self.forests.max_nodes;
         let base = action * trees * per_tree;
         let mut sum = T::ZERO;

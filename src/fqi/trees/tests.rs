@@ -472,3 +472,162 @@ fn a_fresh_or_cleared_q_is_zero() {
     assert_eq!(q.value([1.0], 1).unwrap(), 0.0);
     assert!(q.records().is_empty());
 }
+
+/// Streamed forests: the same expectations as the stored ones.
+#[test]
+fn streamed_trees_on_the_chain_are_value_iteration_at_the_states() {
+    let gamma = 0.9f64;
+    let mut samples = Vec::new();
+    for c in 0..4 {
+        let x = c as f64 + 0.5;
+        for _ in 0..2 {
+            samples.push(at(x, 0, -1.0, x + 1.0, c + 1 == 4));
+            samples.push(at(x, 1, -1.0, (x - 1.0).max(0.5), false));
+        }
+    }
+    let forests = ExtraTrees::streamed(10, 15).unwrap();
+    assert!(forests.is_streamed());
+    assert_eq!(forests.required_nodes(2), Some(15));
+    let (mut records, mut nodes) = storage(16, &forests);
+    let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+    let config = FqiConfig::new(gamma, 120, EmptyCells::Nearest).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    q.fit(&[SampleSet::unweighted(&samples)], &config, &mut rng)
+        .unwrap();
+    assert!(q.tree(0, 0).is_none());
+    let v_star = |c: usize| -(1.0 - gamma.powi(4 - c as i32)) / (1.0 - gamma);
+    for c in 0..4 {
+        let s = [c as f64 + 0.5];
+        assert!((q.value(s, 0).unwrap() - v_star(c)).abs() < 1e-9);
+        let want_left = -1.0 + gamma * v_star(c.saturating_sub(1));
+        assert!((q.value(s, 1).unwrap() - want_left).abs() < 1e-9);
+        assert_eq!(q.greedy_action(s).unwrap(), 0);
+        assert!((q.max_value(s).unwrap() - v_star(c)).abs() < 1e-9);
+    }
+    assert!(q.records().iter().all(|r| r.reward_model() == -1.0));
+}
+
+#[test]
+fn streamed_trees_reproduce_the_obvious_split_and_ignore_zero_weights() {
+    let samples = [
+        at(0.0, 0, 1.0, 0.0, true),
+        at(1.0, 0, 10.0, 0.0, true),
+        at(0.0, 0, 2.0, 0.0, true),
+        at(0.0, 0, 3.0, 0.0, true),
+        at(1.0, 0, 20.0, 0.0, true),
+        at(2.0, 0, 100.0, 0.0, true),
+    ];
+    let wr = [1.0, 1.0, 2.0, 3.0, 1.0, 0.0];
+    let sets = [SampleSet::weighted(&samples, Some(&wr), None)];
+    let forests = ExtraTrees::streamed(5, 1).unwrap();
+    let (mut records, mut nodes) = storage(6, &forests);
+    let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+    let allowed = [14.0 / 6.0, 15.0, 44.0 / 8.0];
+    for seed in 0..30 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        q.fit(&sets, &one_iteration(), &mut rng).unwrap();
+        // Each tree's leaf at 0 is {x = 0} or everything of positive weight.
+        for x in [0.0, 1.0, 2.0] {
+            for t in 0..5 {
+                let v = lazy_tree(q.records(), &[x], tree_seed(q.seed, 0, t), &q.last);
+                assert!(allowed.iter().any(|a| (v - a).abs() < 1e-12), "{v} at {x}");
+            }
+        }
+        // With no zero-weight record beside them the groups always separate.
+        q.fit(
+            &[SampleSet::weighted(&samples[..5], Some(&wr[..5]), None)],
+            &one_iteration(),
+            &mut rng,
+        )
+        .unwrap();
+        assert!((q.value([0.0], 0).unwrap() - 14.0 / 6.0).abs() < 1e-12);
+        assert!((q.value([1.0], 0).unwrap() - 15.0).abs() < 1e-12);
+        assert_eq!(q.value([0.0], 1).unwrap(), 0.0);
+    }
+}
+
+#[test]
+fn fully_grown_trees_interpolate_distinct_training_states() {
+    // Distinct 2-D states with arbitrary rewards, one iteration: a fully grown tree's leaf
+    // holding a record holds only records of its target (else it would split), so every
+    // tree — stored or streamed — predicts each record's reward at its state.
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let samples: Vec<Transition<[f64; 2], f64>> = (0..60)
+        .map(|i| Transition {
+            state: [
+                crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
+                crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
+            ],
+            action: i % 3,
+            reward: crate::rng::uniform::<f64, _>(&mut rng) * 20.0 - 10.0,
+            next_state: [0.0, 0.0],
+            absorbing: true,
+        })
+        .collect();
+    for forests in [
+        ExtraTrees::new(4, 127).unwrap(),
+        ExtraTrees::streamed(4, 1).unwrap(),
+    ] {
+        let mut records = vec![TreeRecord::<f64, 2>::EMPTY; 60];
+        let mut nodes = vec![TreeNode::EMPTY; forests.required_nodes(3).unwrap()];
+        let mut q = TreeFqi::new(forests, 3, &mut records, &mut nodes).unwrap();
+        q.fit(&[SampleSet::unweighted(&samples)], &one_iteration(), &mut rng)
+            .unwrap();
+        for s in &samples {
+            let v = q.value(s.state, s.action).unwrap();
+            assert!((v - s.reward).abs() < 1e-9, "{v} {}", s.reward);
+        }
+    }
+}
+
+#[test]
+fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut samples = Vec::new();
+    let mut rewards = Vec::new();
+    for i in 0..30 {
+        let x = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
+        let next = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
+        samples.push(at(x, i % 2, -1.0, next, i % 9 == 0));
+        rewards.push(-(x - 2.0).abs());
+    }
+    let carried: Vec<S1> = samples
+        .iter()
+        .zip(&rewards)
+        .map(|(s, &r)| Transition { reward: r, ..*s })
+        .collect();
+    let forests = ExtraTrees::streamed(3, 63).unwrap();
+    let config = FqiConfig::new(0.9, 10, EmptyCells::Nearest).unwrap();
+    let fit = |sets: &[SampleSet<'_, f64, 1>]| {
+        let (mut records, mut nodes) = storage(30, &forests);
+        let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+        q.fit(sets, &config, &mut ChaCha8Rng::seed_from_u64(4))
+            .unwrap();
+        (0..50)
+            .map(|i| q.value([i as f64 / 10.0], i % 2).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let replaced = fit(&[SampleSet::unweighted(&samples).with_rewards(Some(&rewards))]);
+    assert_eq!(replaced, fit(&[SampleSet::unweighted(&carried)]));
+    // Values stay within the range of the discounted rewards.
+    assert!(replaced.iter().all(|v| v.is_finite() && *v <= 0.0 && *v >= -2.5 / 0.1));
+    let (mut records, mut nodes) = storage(30, &forests);
+    let short = vec![TreeNode::EMPTY; 62];
+    let mut few = short.clone();
+    assert_eq!(
+        TreeFqi::new(forests, 2, &mut records, &mut few).err(),
+        Some(Error::CapacityExceeded { capacity: 62 })
+    );
+    let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+    q.fit(&[SampleSet::unweighted(&carried)], &config, &mut rng)
+        .unwrap();
+    let before: Vec<f64> = (0..10).map(|i| q.value([i as f64 / 2.0], 0).unwrap()).collect();
+    let mut bad = carried.clone();
+    bad[3].next_state = [f64::NAN];
+    assert!(
+        q.fit(&[SampleSet::unweighted(&bad)], &config, &mut rng)
+            .is_err()
+    );
+    let after: Vec<f64> = (0..10).map(|i| q.value([i as f64 / 2.0], 0).unwrap()).collect();
+    assert_eq!(before, after);
+}

@@ -248,6 +248,11 @@ pub struct Args {
     /// `min_samples_leaf` of `--adaptive-kernel-q trees`.
     #[arg(long, default_value_t = 1)]
     pub kernel_min_samples_leaf: usize,
+    /// `--adaptive-kernel-q trees`: stream the trees (grow each in one scratch tree of
+    /// `--kernel-tree-nodes` nodes during FQI, and the final trees along each query's path),
+    /// so the memory does not grow with `--kernel-trees`.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
+    pub kernel_tree_streamed: bool,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -726,6 +731,7 @@ pub fn build_experiment<const D: usize>(
                     args.kernel_tree_nodes,
                     args.kernel_min_samples_split,
                     args.kernel_min_samples_leaf,
+                    args.kernel_tree_streamed,
                 )?);
             }
                 (AdaptiveKernelQ::Tiles, _, _) => {}

@@ -58,8 +58,10 @@ pub enum KernelQFunction {
     /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
     Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
     /// Per-action Extra-Trees forests: trees per action, node budget per tree,
-    /// `min_samples_split`, `min_samples_leaf`; `awfqi-adaptive-kernel` only.
-    Trees(usize, usize, usize, usize),
+    /// `min_samples_split`, `min_samples_leaf`, streamed (one scratch tree of that budget,
+    /// the final trees grown along each query's path) or stored; `awfqi-adaptive-kernel`
+    /// only.
+    Trees(usize, usize, usize, usize, bool),
 }
 
 impl KernelQFunction {
@@ -100,7 +102,7 @@ impl KernelQFunction {
     }
 
     /// Per-action Extra-Trees forests (`--kernel-trees`, `--kernel-tree-nodes`,
-    /// `--kernel-min-samples-split`, `--kernel-min-samples-leaf`).
+    /// `--kernel-min-samples-split`, `--kernel-min-samples-leaf`, `--kernel-tree-streamed`).
     ///
     /// Errors: those of [`awfqi::ExtraTrees::new`] and
     /// [`awfqi::ExtraTrees::with_min_samples`].
@@ -109,8 +111,9 @@ impl KernelQFunction {
         max_nodes: usize,
         min_samples_split: usize,
         min_samples_leaf: usize,
+        streamed: bool,
     ) -> anyhow::Result<Self> {
-        let out = Self::Trees(trees, max_nodes, min_samples_split, min_samples_leaf);
+        let out = Self::Trees(trees, max_nodes, min_samples_split, min_samples_leaf, streamed);
         out.approximator()?;
         Ok(out)
     }
@@ -125,8 +128,13 @@ impl KernelQFunction {
                 Tilings::cube(0.0, 10.0, n, t)?,
                 neighbours(k, h, reach, common)?,
             ),
-            Self::Trees(trees, nodes, split, leaf) => {
-                ExtraTrees::new(trees, nodes)?.with_min_samples(split, leaf)?.into()
+            Self::Trees(trees, nodes, split, leaf, streamed) => {
+                let forests = if streamed {
+                    ExtraTrees::streamed(trees, nodes)?
+                } else {
+                    ExtraTrees::new(trees, nodes)?
+                };
+                forests.with_min_samples(split, leaf)?.into()
             }
         })
     }
@@ -342,7 +350,8 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_bandwidth"] = h.into();
                 out["fqi_reach"] = reach.into();
             }
-            KernelQFunction::Trees(trees, nodes, split, leaf) => {
+            KernelQFunction::Trees(trees, nodes, split, leaf, streamed) => {
+                out["fqi_trees_streamed"] = streamed.into();
                 out["fqi_trees"] = trees.into();
                 out["fqi_tree_nodes"] = nodes.into();
                 out["fqi_min_samples_split"] = split.into();
