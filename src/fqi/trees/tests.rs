@@ -631,3 +631,60 @@ fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
     let after: Vec<f64> = (0..10).map(|i| q.value([i as f64 / 2.0], 0).unwrap()).collect();
     assert_eq!(before, after);
 }
+
+#[test]
+fn streamed_and_stored_forests_of_many_trees_agree() {
+    // The same data and rules, different random streams: with 300 trees per action the two
+    // forests' means differ by Monte-Carlo noise only — as much as two stored forests of
+    // different seeds do — after 8 FQI iterations on noisy 2-D data.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let samples: Vec<Transition<[f64; 2], f64>> = (0..120)
+        .map(|i| {
+            let s = [
+                crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+                crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+            ];
+            let step = if i % 2 == 0 { 0.5 } else { -0.5 };
+            let next = [(s[0] + step).clamp(0.0, 4.0), s[1]];
+            let noise = crate::rng::uniform::<f64, _>(&mut rng) - 0.5;
+            Transition {
+                state: s,
+                action: i % 2,
+                reward: -((s[0] - 3.0).powi(2) + (s[1] - 1.0).powi(2)).sqrt() + noise,
+                next_state: next,
+                absorbing: false,
+            }
+        })
+        .collect();
+    let config = FqiConfig::new(0.8, 8, EmptyCells::Nearest).unwrap();
+    let values = |forests: ExtraTrees, seed: u64| {
+        let mut records = vec![TreeRecord::<f64, 2>::EMPTY; 120];
+        let mut nodes = vec![TreeNode::EMPTY; forests.required_nodes(2).unwrap()];
+        let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+        q.fit(
+            &[SampleSet::unweighted(&samples)],
+            &config,
+            &mut ChaCha8Rng::seed_from_u64(seed),
+        )
+        .unwrap();
+        let mut out = Vec::new();
+        for i in 0..8 {
+            for j in 0..8 {
+                let s = [0.25 + 0.5 * i as f64, 0.25 + 0.5 * j as f64];
+                out.push(q.value(s, (i + j) % 2).unwrap());
+            }
+        }
+        out
+    };
+    let stored = values(ExtraTrees::new(300, 127).unwrap(), 9);
+    let worst = |other: &[f64]| {
+        stored
+            .iter()
+            .zip(other)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+    };
+    // The noise between two stored forests of other seeds, as the yardstick.
+    let noise = worst(&values(ExtraTrees::new(300, 127).unwrap(), 10));
+    let streamed = worst(&values(ExtraTrees::streamed(300, 127).unwrap(), 9));
+    assert!(streamed < 2.0 * noise, "{streamed} against {noise}");
+}
