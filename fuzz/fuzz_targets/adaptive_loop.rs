@@ -5,7 +5,7 @@
 //! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
 //! pairs or source rows); the approximator (table, tiles, kernel averaging with a fuzzed
 //! `k`, kernel, reach and common ball, the hybrid of tiles and kernel averaging, or
-//! Extra-Trees with fuzzed trees, node budget and growth limits);
+//! Extra-Trees, stored or streamed, with fuzzed trees, node budget and growth limits);
 //! buffers of every size (one short of what is needed too); then steps and `reset`.
 //!
 //! Invariants: no panic; errors only of the documented kinds; a successful step spends the
@@ -217,7 +217,12 @@ fn run<T: Real>(b: &mut Bytes) {
         4 => {
             let (trees, nodes) = (b.index(6), b.index(40));
             let (split, leaf) = (b.index(4), b.index(3));
-            match ExtraTrees::new(trees, nodes).and_then(|f| f.with_min_samples(split, leaf)) {
+            let forests = if b.bool() {
+                ExtraTrees::streamed(trees, nodes)
+            } else {
+                ExtraTrees::new(trees, nodes)
+            };
+            match forests.and_then(|f| f.with_min_samples(split, leaf)) {
                 Ok(f) => f.into(),
                 Err(e) => {
                     expect_kind("ExtraTrees", &e, &[Kind::Invalid]);

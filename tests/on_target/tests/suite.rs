@@ -1032,6 +1032,39 @@ mod tests {
         assert!(fqi.value([4.5], 1) == Ok(10.0));
     }
 
+    /// Extra-Trees Q on the target (f32), stored and streamed: on the 5-cell chain fully
+    /// grown trees put each state's records in leaves of their own value, so FQI is value
+    /// iteration and Q is the closed-form Q* at the states.
+    #[test]
+    fn trees_q_on_a_chain() {
+        use awfqi::{EmptyCells, ExtraTrees, FqiConfig, SampleSet, TreeFqi, TreeNode, TreeRecord};
+        use rand_chacha::ChaCha8Rng;
+        use rand_core::SeedableRng;
+        let at = super::chain_state;
+        let samples = super::chain_samples();
+        let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
+        let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
+        for forests in [
+            ExtraTrees::new(5, 15).unwrap(),
+            ExtraTrees::streamed(5, 15).unwrap(),
+        ] {
+            let mut records = [TreeRecord::<f32, 1>::EMPTY; 8];
+            let mut nodes = [TreeNode::<f32>::EMPTY; 2 * 5 * 15];
+            let mut fqi = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            fqi.fit(&[SampleSet::unweighted(&samples)], &config, &mut rng)
+                .unwrap();
+            for c in 0..4 {
+                let right = fqi.value(at(c), 0).unwrap() as f64;
+                assert!(close(right, v(c), 1e-5, 1e-5), "Q({}, right) {}", c, right);
+                let left = fqi.value(at(c), 1).unwrap() as f64;
+                assert!(close(left, -1.0 + 0.9 * v(c.saturating_sub(1)), 1e-5, 1e-5));
+                assert!(fqi.greedy_action(at(c)) == Ok(0));
+            }
+            assert!(fqi.value([f32::NAN], 0).is_err());
+        }
+    }
+
     /// Transition weights in the loop, on a 1-D plant whose two sources share the target's
     /// reward: the twin (same dynamics) keeps far more weight than the source whose moves
     /// are 2.5 instead of 1, the report's `ws_mean` is theirs, and FQI used them (an

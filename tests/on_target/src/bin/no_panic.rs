@@ -772,7 +772,12 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
     }
 
     // fqi: Extra-Trees forests, directly and behind QFunction
-    let forests = ExtraTrees::new(index(3), index(15))
+    let forests = if opaque(true) {
+        ExtraTrees::new(index(3), index(15))
+    } else {
+        ExtraTrees::streamed(index(3), index(15))
+    };
+    let forests = forests
         .and_then(|f| f.with_min_samples(index(2), index(1)))
         .or_else(|_| ExtraTrees::new(index(2), index(7)));
     if let Ok(forests) = forests {
@@ -782,7 +787,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
             forests.min_samples_split(),
             forests.min_samples_leaf(),
         ));
-        keep(forests.required_nodes(actions));
+        keep((forests.required_nodes(actions), forests.is_streamed()));
         let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
             .and_then(|c| c.with_min_weight(num(0.5)))
             .unwrap_or_else(|_| FqiConfig::published());
@@ -1072,8 +1077,14 @@ fn adaptive<T, G, const D: usize, const I: usize>(
             keep(kernel.q().greedy_action([num(0.5); D]));
         }
     }
-    // The kernel with Extra-Trees Q: records for the target and source records, nodes.
-    if let Ok(forests) = ExtraTrees::new(index(2), index(15)) {
+    // The kernel with Extra-Trees Q (stored or streamed): records for the target and source
+    // records, nodes.
+    let forests = if opaque(true) {
+        ExtraTrees::streamed(index(2), index(15))
+    } else {
+        ExtraTrees::new(index(2), index(15))
+    };
+    if let Ok(forests) = forests {
         let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
         let mut trees = TreeStorage::<T, D, 24, { 2 * 4 * 15 }>::new();
         let mut buffers = storage.buffers();
