@@ -118,7 +118,11 @@ impl ExtraTrees {
     ///
     /// Errors: `min_samples_split < 2` or `min_samples_leaf < 1`
     /// ([`Error::InvalidParameter`] naming it).
-    pub fn with_min_samples(self, min_samples_split: usize, min_samples_leaf: usize) -> Result<Self> {
+    pub fn with_min_samples(
+        self,
+        min_samples_split: usize,
+        min_samples_leaf: usize,
+    ) -> Result<Self> {
         if min_samples_split < 2 {
             return Err(Error::InvalidParameter {
                 parameter: "min_samples_split",
@@ -625,7 +629,12 @@ fn tree_seed(seed: u64, action: usize, tree: usize) -> u64 {
 
 /// The seed of a node's left (`right = false`) or right child.
 fn child_seed(seed: u64, right: bool) -> u64 {
-    mix(seed ^ if right { 0xD1B5_4A32_D192_ED03 } else { 0x8CB9_2BA7_2F3D_8DD7 })
+    mix(seed
+        ^ if right {
+            0xD1B5_4A32_D192_ED03
+        } else {
+            0x8CB9_2BA7_2F3D_8DD7
+        })
 }
 
 /// The prediction at `state` of the tree that `seed` grows on `records` (one action's),
@@ -667,7 +676,11 @@ fn lazy_tree<T: Real, const D: usize>(
             return value;
         };
         let right = state.get(feature).is_some_and(|&x| x > tau);
-        let bound = if right { lo.get_mut(feature) } else { hi.get_mut(feature) };
+        let bound = if right {
+            lo.get_mut(feature)
+        } else {
+            hi.get_mut(feature)
+        };
         if let Some(b) = bound {
             *b = tau;
         }
@@ -878,7 +891,12 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
     /// FQI with streamed trees: iterations 1..N−1 grow every tree in the scratch tree and
     /// add it to the sums of the records it is evaluated at; iteration N is only its seed
     /// (the final trees are grown along each query's path).
-    fn fit_streamed<R: Rng + ?Sized>(&mut self, mut growth: Growth<T>, config: &FqiConfig<T>, rng: &mut R) {
+    fn fit_streamed<R: Rng + ?Sized>(
+        &mut self,
+        mut growth: Growth<T>,
+        config: &FqiConfig<T>,
+        rng: &mut R,
+    ) {
         let gamma = config.discount();
         if config.iterations() > 1 {
             self.stream_iteration(&growth, rng);

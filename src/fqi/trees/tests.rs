@@ -199,7 +199,11 @@ fn fqi_on_a_chain_is_value_iteration_at_the_states() {
     }
     // R̂ = −1 at every record; the records are grouped by action.
     assert!(q.records().iter().all(|r| r.reward_model() == -1.0));
-    assert!(q.records().windows(2).all(|w| w[0].action() <= w[1].action()));
+    assert!(
+        q.records()
+            .windows(2)
+            .all(|w| w[0].action() <= w[1].action())
+    );
 }
 
 #[test]
@@ -241,14 +245,20 @@ fn the_chain_in_f32() {
 fn the_node_budget_cuts_breadth_first() {
     // Records at x = 0, 1, 2, 3 with rewards 0, 1, 2, 3: a budget of 3 nodes is one split
     // and two leaves, each the mean of its side; a budget of 1 is the overall mean.
-    let samples: Vec<S1> = (0..4).map(|i| at(i as f64, 0, i as f64, 0.0, true)).collect();
+    let samples: Vec<S1> = (0..4)
+        .map(|i| at(i as f64, 0, i as f64, 0.0, true))
+        .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let forests = ExtraTrees::new(1, 3).unwrap();
     let (mut records, mut nodes) = storage(4, &forests);
     let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
     for _ in 0..20 {
-        q.fit(&[SampleSet::unweighted(&samples)], &one_iteration(), &mut rng)
-            .unwrap();
+        q.fit(
+            &[SampleSet::unweighted(&samples)],
+            &one_iteration(),
+            &mut rng,
+        )
+        .unwrap();
         let tree = q.tree(0, 0).unwrap();
         assert_eq!(tree.len(), 3);
         let tau = tree[0].value();
@@ -262,8 +272,12 @@ fn the_node_budget_cuts_breadth_first() {
     let forests = ExtraTrees::new(1, 1).unwrap();
     let (mut records, mut nodes) = storage(4, &forests);
     let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
-    q.fit(&[SampleSet::unweighted(&samples)], &one_iteration(), &mut rng)
-        .unwrap();
+    q.fit(
+        &[SampleSet::unweighted(&samples)],
+        &one_iteration(),
+        &mut rng,
+    )
+    .unwrap();
     assert_eq!(q.value([0.0], 0).unwrap(), 1.5);
 }
 
@@ -271,7 +285,9 @@ fn the_node_budget_cuts_breadth_first() {
 fn min_samples_leaf_keeps_three_records_per_leaf() {
     // Six records x = y = 0..5, min_samples_leaf 3: the only valid split is {0,1,2} |
     // {3,4,5}, so every prediction is 1, 4 or (no valid threshold drawn) 2.5.
-    let samples: Vec<S1> = (0..6).map(|i| at(i as f64, 0, i as f64, 0.0, true)).collect();
+    let samples: Vec<S1> = (0..6)
+        .map(|i| at(i as f64, 0, i as f64, 0.0, true))
+        .collect();
     let forests = ExtraTrees::new(1, 63)
         .unwrap()
         .with_min_samples(2, 3)
@@ -281,8 +297,12 @@ fn min_samples_leaf_keeps_three_records_per_leaf() {
     let mut seen_split = false;
     for seed in 0..40 {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        q.fit(&[SampleSet::unweighted(&samples)], &one_iteration(), &mut rng)
-            .unwrap();
+        q.fit(
+            &[SampleSet::unweighted(&samples)],
+            &one_iteration(),
+            &mut rng,
+        )
+        .unwrap();
         for x in 0..6 {
             let v = q.value([f64::from(x)], 0).unwrap();
             assert!([1.0, 4.0, 2.5].contains(&v), "{v}");
@@ -368,10 +388,14 @@ fn bad_input_and_short_capacity_are_errors_that_leave_q_as_it_was() {
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     q.fit(&[SampleSet::unweighted(&samples)], &config, &mut rng)
         .unwrap();
-    let before: Vec<f64> = (0..6).map(|i| q.value([i as f64 / 2.0], i % 2).unwrap()).collect();
+    let before: Vec<f64> = (0..6)
+        .map(|i| q.value([i as f64 / 2.0], i % 2).unwrap())
+        .collect();
     let kept_records = q.records().to_vec();
     let check = |q: &TreeFqi<'_, f64, 1>| {
-        let now: Vec<f64> = (0..6).map(|i| q.value([i as f64 / 2.0], i % 2).unwrap()).collect();
+        let now: Vec<f64> = (0..6)
+            .map(|i| q.value([i as f64 / 2.0], i % 2).unwrap())
+            .collect();
         assert_eq!(now, before);
         assert_eq!(q.records(), &kept_records[..]);
     };
@@ -571,8 +595,12 @@ fn fully_grown_trees_interpolate_distinct_training_states() {
         let mut records = vec![TreeRecord::<f64, 2>::EMPTY; 60];
         let mut nodes = vec![TreeNode::EMPTY; forests.required_nodes(3).unwrap()];
         let mut q = TreeFqi::new(forests, 3, &mut records, &mut nodes).unwrap();
-        q.fit(&[SampleSet::unweighted(&samples)], &one_iteration(), &mut rng)
-            .unwrap();
+        q.fit(
+            &[SampleSet::unweighted(&samples)],
+            &one_iteration(),
+            &mut rng,
+        )
+        .unwrap();
         for s in &samples {
             let v = q.value(s.state, s.action).unwrap();
             assert!((v - s.reward).abs() < 1e-9, "{v} {}", s.reward);
@@ -610,7 +638,11 @@ fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
     let replaced = fit(&[SampleSet::unweighted(&samples).with_rewards(Some(&rewards))]);
     assert_eq!(replaced, fit(&[SampleSet::unweighted(&carried)]));
     // Values stay within the range of the discounted rewards.
-    assert!(replaced.iter().all(|v| v.is_finite() && *v <= 0.0 && *v >= -2.5 / 0.1));
+    assert!(
+        replaced
+            .iter()
+            .all(|v| v.is_finite() && *v <= 0.0 && *v >= -2.5 / 0.1)
+    );
     let (mut records, mut nodes) = storage(30, &forests);
     let short = vec![TreeNode::EMPTY; 62];
     let mut few = short.clone();
@@ -621,14 +653,18 @@ fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
     let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
     q.fit(&[SampleSet::unweighted(&carried)], &config, &mut rng)
         .unwrap();
-    let before: Vec<f64> = (0..10).map(|i| q.value([i as f64 / 2.0], 0).unwrap()).collect();
+    let before: Vec<f64> = (0..10)
+        .map(|i| q.value([i as f64 / 2.0], 0).unwrap())
+        .collect();
     let mut bad = carried.clone();
     bad[3].next_state = [f64::NAN];
     assert!(
         q.fit(&[SampleSet::unweighted(&bad)], &config, &mut rng)
             .is_err()
     );
-    let after: Vec<f64> = (0..10).map(|i| q.value([i as f64 / 2.0], 0).unwrap()).collect();
+    let after: Vec<f64> = (0..10)
+        .map(|i| q.value([i as f64 / 2.0], 0).unwrap())
+        .collect();
     assert_eq!(before, after);
 }
 

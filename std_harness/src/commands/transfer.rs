@@ -726,14 +726,14 @@ pub fn build_experiment<const D: usize>(
                     anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")
                 }
                 (AdaptiveKernelQ::Trees, _, _) => {
-                kernel = kernel.with_adaptive_q(KernelQFunction::trees(
-                    args.kernel_trees,
-                    args.kernel_tree_nodes,
-                    args.kernel_min_samples_split,
-                    args.kernel_min_samples_leaf,
-                    args.kernel_tree_streamed,
-                )?);
-            }
+                    kernel = kernel.with_adaptive_q(KernelQFunction::trees(
+                        args.kernel_trees,
+                        args.kernel_tree_nodes,
+                        args.kernel_min_samples_split,
+                        args.kernel_min_samples_leaf,
+                        args.kernel_tree_streamed,
+                    )?);
+                }
                 (AdaptiveKernelQ::Tiles, _, _) => {}
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))

@@ -18,9 +18,8 @@ use std::time::Instant;
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
     AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, ExtraTrees,
-    FqiEntry, Gp,
-    GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores,
-    SubsetRule, Tilings, Transition, WeightParams,
+    FqiEntry, Gp, GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable,
+    Scores, SubsetRule, Tilings, Transition, WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -113,7 +112,13 @@ impl KernelQFunction {
         min_samples_leaf: usize,
         streamed: bool,
     ) -> anyhow::Result<Self> {
-        let out = Self::Trees(trees, max_nodes, min_samples_split, min_samples_leaf, streamed);
+        let out = Self::Trees(
+            trees,
+            max_nodes,
+            min_samples_split,
+            min_samples_leaf,
+            streamed,
+        );
         out.approximator()?;
         Ok(out)
     }

@@ -36,11 +36,11 @@ use awfqi::weights::{
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
-    FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
+    ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
     Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, Neighbours, Output,
     QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData,
-    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, WhenFull,
-    ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage, evaluate, evaluate_greedy, rollout,
+    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, TreeFqi,
+    TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
