@@ -66,6 +66,7 @@ pub struct ExtraTrees {
     max_nodes: usize,
     min_samples_split: usize,
     min_samples_leaf: usize,
+    max_depth: usize,
     streamed: bool,
 }
 
@@ -89,6 +90,7 @@ impl ExtraTrees {
             max_nodes,
             min_samples_split: 2,
             min_samples_leaf: 1,
+            max_depth: usize::MAX,
             streamed: false,
         })
     }
@@ -138,6 +140,17 @@ impl ExtraTrees {
             min_samples_leaf,
             ..self
         })
+    }
+
+    /// The same forests with every node at depth `max_depth` a leaf (the root is at depth
+    /// 0): a limit that, unlike the node budget, a streamed forest's final trees obey too.
+    pub fn with_max_depth(self, max_depth: usize) -> Self {
+        Self { max_depth, ..self }
+    }
+
+    /// The depth limit (`usize::MAX`: none).
+    pub fn max_depth(&self) -> usize {
+        self.max_depth
     }
 
     /// Trees per action.
@@ -356,6 +369,7 @@ struct Growth<T> {
     min_weight: T,
     min_leaf: usize,
     min_node: usize,
+    max_depth: usize,
 }
 
 /// Draws the candidate splits of a node and returns the best valid one.
@@ -510,7 +524,14 @@ fn grow<T: Real, const D: usize, R: Rng + ?Sized>(
     let impurity_floor = T::from_f64(MIN_IMPURITY);
     let mut len = 1usize;
     let mut cursor = 0usize;
+    // Breadth first: the nodes of one depth are `cursor..level_end`, their children after.
+    let mut depth = 0usize;
+    let mut level_end = 1usize;
     while cursor < len {
+        if cursor == level_end {
+            depth += 1;
+            level_end = len;
+        }
         let Some(&pending) = nodes.get(cursor) else {
             break;
         };
@@ -521,6 +542,7 @@ fn grow<T: Real, const D: usize, R: Rng + ?Sized>(
         let st = Stats::of(mine.iter(), growth.first);
         let mut node = TreeNode::leaf(st.mean());
         let splittable = mine.len() >= 2
+            && depth < growth.max_depth
             && mine.len() >= growth.min_node
             && st.w > T::ZERO
             && st.impurity() > impurity_floor
@@ -654,7 +676,7 @@ fn lazy_tree<T: Real, const D: usize>(
     let mut node_seed = seed;
     let impurity_floor = T::from_f64(MIN_IMPURITY);
     let mut value = T::ZERO;
-    for _ in 0..=records.len() {
+    for depth in 0..=records.len() {
         let (lo_now, hi_now) = (lo, hi);
         let members = records.iter().filter(move |r| {
             r.state
@@ -665,6 +687,7 @@ fn lazy_tree<T: Real, const D: usize>(
         let st = Stats::of(members.clone(), growth.first);
         value = st.mean();
         let splittable = st.n >= 2
+            && depth < growth.max_depth
             && st.n >= growth.min_node
             && st.w > T::ZERO
             && st.impurity() > impurity_floor;
@@ -746,6 +769,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
                 min_weight: T::ZERO,
                 min_leaf: forests.min_samples_leaf,
                 min_node: forests.min_node(),
+                max_depth: forests.max_depth,
             },
             seed: 0,
         };
@@ -849,6 +873,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             min_weight: config.min_weight(),
             min_leaf: self.forests.min_samples_leaf,
             min_node: self.forests.min_node(),
+            max_depth: self.forests.max_depth,
         };
         if self.forests.streamed {
             self.fit_streamed(growth, config, rng);

@@ -670,7 +670,7 @@ fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
 
 #[test]
 fn streamed_and_stored_forests_of_many_trees_agree() {
-    // The same data and rules, different random streams: with 300 trees per action the two
+    // The same data and rules, different random streams: with 100 trees per action the two
     // forests' means differ by Monte-Carlo noise only — as much as two stored forests of
     // different seeds do — after 8 FQI iterations on noisy 2-D data.
     let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -712,7 +712,7 @@ fn streamed_and_stored_forests_of_many_trees_agree() {
         }
         out
     };
-    let stored = values(ExtraTrees::new(300, 127).unwrap(), 9);
+    let stored = values(ExtraTrees::new(100, 127).unwrap(), 9);
     let worst = |other: &[f64]| {
         stored
             .iter()
@@ -720,7 +720,46 @@ fn streamed_and_stored_forests_of_many_trees_agree() {
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
     };
     // The noise between two stored forests of other seeds, as the yardstick.
-    let noise = worst(&values(ExtraTrees::new(300, 127).unwrap(), 10));
-    let streamed = worst(&values(ExtraTrees::streamed(300, 127).unwrap(), 9));
+    let noise = worst(&values(ExtraTrees::new(100, 127).unwrap(), 10));
+    let streamed = worst(&values(ExtraTrees::streamed(100, 127).unwrap(), 9));
     assert!(streamed < 2.0 * noise, "{streamed} against {noise}");
+}
+
+#[test]
+fn the_depth_limit_holds_for_stored_and_streamed_trees() {
+    // x = y = 0..3: at depth limit 1 a tree is one split, so its value at x = 0 is the mean
+    // of {0, …, k} for the k its threshold cuts at (0, 0.5 or 1); at limit 0 it is 1.5.
+    let samples: Vec<S1> = (0..4)
+        .map(|i| at(i as f64, 0, i as f64, 0.0, true))
+        .collect();
+    for base in [
+        ExtraTrees::new(1, 15).unwrap(),
+        ExtraTrees::streamed(1, 15).unwrap(),
+    ] {
+        assert_eq!(base.max_depth(), usize::MAX);
+        for seed in 0..20 {
+            let forests = base.with_max_depth(1);
+            let (mut records, mut nodes) = storage(4, &forests);
+            let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            q.fit(
+                &[SampleSet::unweighted(&samples)],
+                &one_iteration(),
+                &mut rng,
+            )
+            .unwrap();
+            let v = q.value([0.0], 0).unwrap();
+            assert!([0.0, 0.5, 1.0].contains(&v), "{v}");
+            let forests = base.with_max_depth(0);
+            let (mut records, mut nodes) = storage(4, &forests);
+            let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+            q.fit(
+                &[SampleSet::unweighted(&samples)],
+                &one_iteration(),
+                &mut rng,
+            )
+            .unwrap();
+            assert_eq!(q.value([0.0], 0).unwrap(), 1.5);
+        }
+    }
 }

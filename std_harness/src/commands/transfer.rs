@@ -26,7 +26,9 @@ use rayon::prelude::*;
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
-use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, KernelSetup};
+use crate::transfer::algorithms::awfqi_kernel::{
+    KernelConfig, KernelQFunction, KernelSetup, TreeKnobs,
+};
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
@@ -253,6 +255,9 @@ pub struct Args {
     /// so the memory does not grow with `--kernel-trees`.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
     pub kernel_tree_streamed: bool,
+    /// Depth limit of `--adaptive-kernel-q trees` (absent: none; the root is at depth 0).
+    #[arg(long)]
+    pub kernel_tree_max_depth: Option<usize>,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -726,13 +731,14 @@ pub fn build_experiment<const D: usize>(
                     anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")
                 }
                 (AdaptiveKernelQ::Trees, _, _) => {
-                    kernel = kernel.with_adaptive_q(KernelQFunction::trees(
-                        args.kernel_trees,
-                        args.kernel_tree_nodes,
-                        args.kernel_min_samples_split,
-                        args.kernel_min_samples_leaf,
-                        args.kernel_tree_streamed,
-                    )?);
+                    kernel = kernel.with_adaptive_q(KernelQFunction::trees(TreeKnobs {
+                        trees: args.kernel_trees,
+                        nodes: args.kernel_tree_nodes,
+                        min_samples_split: args.kernel_min_samples_split,
+                        min_samples_leaf: args.kernel_min_samples_leaf,
+                        max_depth: args.kernel_tree_max_depth,
+                        streamed: args.kernel_tree_streamed,
+                    })?);
                 }
                 (AdaptiveKernelQ::Tiles, _, _) => {}
             }

@@ -56,11 +56,25 @@ pub enum KernelQFunction {
     /// The mean of tile coding (tiles per axis, tilings) and kernel averaging (as
     /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
     Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
-    /// Per-action Extra-Trees forests: trees per action, node budget per tree,
-    /// `min_samples_split`, `min_samples_leaf`, streamed (one scratch tree of that budget,
-    /// the final trees grown along each query's path) or stored; `awfqi-adaptive-kernel`
-    /// only.
-    Trees(usize, usize, usize, usize, bool),
+    /// Per-action Extra-Trees forests; `awfqi-adaptive-kernel` only.
+    Trees(TreeKnobs),
+}
+
+/// The knobs of [`KernelQFunction::Trees`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TreeKnobs {
+    /// Trees per action.
+    pub trees: usize,
+    /// Node budget of a tree (of the scratch tree when streamed).
+    pub nodes: usize,
+    /// `min_samples_split`.
+    pub min_samples_split: usize,
+    /// `min_samples_leaf`.
+    pub min_samples_leaf: usize,
+    /// Depth limit (`None`: none).
+    pub max_depth: Option<usize>,
+    /// Streamed (one scratch tree; the final trees grown along each query's path) or stored.
+    pub streamed: bool,
 }
 
 impl KernelQFunction {
@@ -101,24 +115,13 @@ impl KernelQFunction {
     }
 
     /// Per-action Extra-Trees forests (`--kernel-trees`, `--kernel-tree-nodes`,
-    /// `--kernel-min-samples-split`, `--kernel-min-samples-leaf`, `--kernel-tree-streamed`).
+    /// `--kernel-min-samples-split`, `--kernel-min-samples-leaf`, `--kernel-tree-max-depth`,
+    /// `--kernel-tree-streamed`).
     ///
     /// Errors: those of [`awfqi::ExtraTrees::new`] and
     /// [`awfqi::ExtraTrees::with_min_samples`].
-    pub fn trees(
-        trees: usize,
-        max_nodes: usize,
-        min_samples_split: usize,
-        min_samples_leaf: usize,
-        streamed: bool,
-    ) -> anyhow::Result<Self> {
-        let out = Self::Trees(
-            trees,
-            max_nodes,
-            min_samples_split,
-            min_samples_leaf,
-            streamed,
-        );
+    pub fn trees(knobs: TreeKnobs) -> anyhow::Result<Self> {
+        let out = Self::Trees(knobs);
         out.approximator()?;
         Ok(out)
     }
@@ -133,13 +136,16 @@ impl KernelQFunction {
                 Tilings::cube(0.0, 10.0, n, t)?,
                 neighbours(k, h, reach, common)?,
             ),
-            Self::Trees(trees, nodes, split, leaf, streamed) => {
-                let forests = if streamed {
-                    ExtraTrees::streamed(trees, nodes)?
+            Self::Trees(k) => {
+                let forests = if k.streamed {
+                    ExtraTrees::streamed(k.trees, k.nodes)?
                 } else {
-                    ExtraTrees::new(trees, nodes)?
+                    ExtraTrees::new(k.trees, k.nodes)?
                 };
-                forests.with_min_samples(split, leaf)?.into()
+                let forests = forests.with_min_samples(k.min_samples_split, k.min_samples_leaf)?;
+                k.max_depth
+                    .map_or(forests, |d| forests.with_max_depth(d))
+                    .into()
             }
         })
     }
@@ -355,12 +361,13 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_bandwidth"] = h.into();
                 out["fqi_reach"] = reach.into();
             }
-            KernelQFunction::Trees(trees, nodes, split, leaf, streamed) => {
-                out["fqi_trees_streamed"] = streamed.into();
-                out["fqi_trees"] = trees.into();
-                out["fqi_tree_nodes"] = nodes.into();
-                out["fqi_min_samples_split"] = split.into();
-                out["fqi_min_samples_leaf"] = leaf.into();
+            KernelQFunction::Trees(k) => {
+                out["fqi_trees_streamed"] = k.streamed.into();
+                out["fqi_trees"] = k.trees.into();
+                out["fqi_tree_nodes"] = k.nodes.into();
+                out["fqi_min_samples_split"] = k.min_samples_split.into();
+                out["fqi_min_samples_leaf"] = k.min_samples_leaf.into();
+                out["fqi_tree_max_depth"] = k.max_depth.into();
             }
         }
         out
