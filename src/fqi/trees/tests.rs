@@ -670,7 +670,7 @@ fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
 
 #[test]
 fn streamed_and_stored_forests_of_many_trees_agree() {
-    // The same data and rules, different random streams: with 100 trees per action the two
+    // The same data and rules, different random streams: with 60 trees per action the two
     // forests' means differ by Monte-Carlo noise only — as much as two stored forests of
     // different seeds do — after FQI on noisy 2-D data with 3 actions of uneven counts,
     // unweighted and with reward weights (a third of them near 0) and a minimum weight.
@@ -704,7 +704,7 @@ fn streamed_and_stored_forests_of_many_trees_agree() {
             }
         })
         .collect();
-    let plain = FqiConfig::new(0.9, 12, EmptyCells::Nearest).unwrap();
+    let plain = FqiConfig::new(0.9, 8, EmptyCells::Nearest).unwrap();
     let weighted = plain.with_min_weight(0.5).unwrap();
     for (sets, config) in [
         ([SampleSet::unweighted(&samples)], plain),
@@ -725,7 +725,7 @@ fn streamed_and_stored_forests_of_many_trees_agree() {
             }
             out
         };
-        let stored = values(ExtraTrees::new(100, 255).unwrap(), 9);
+        let stored = values(ExtraTrees::new(60, 255).unwrap(), 9);
         let mean_gap = |other: &[f64]| {
             stored
                 .iter()
@@ -735,8 +735,8 @@ fn streamed_and_stored_forests_of_many_trees_agree() {
                 / 64.0
         };
         // The noise between two stored forests of other seeds, as the yardstick.
-        let noise = mean_gap(&values(ExtraTrees::new(100, 255).unwrap(), 10));
-        let streamed = mean_gap(&values(ExtraTrees::streamed(100, 255).unwrap(), 9));
+        let noise = mean_gap(&values(ExtraTrees::new(60, 255).unwrap(), 10));
+        let streamed = mean_gap(&values(ExtraTrees::streamed(60, 255).unwrap(), 9));
         assert!(streamed < 1.5 * noise, "{streamed} against {noise}");
     }
 }
