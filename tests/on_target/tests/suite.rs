@@ -623,15 +623,15 @@ mod tests {
     /// relabelled source rewards and that every output is finite and in range.
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
+        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12, 0, 0> = AdaptiveMemory::new();
         // SAFETY: the only reference.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let run = AdaptiveRun {
             budget: 12,
             steps: 2,
             candidates: 60,
-            tiles: (6, 2),
+            q: AdaptiveQ::Tiles(6, 2),
             search: Some((40, 1)),
             relabel: true,
         };
@@ -660,6 +660,46 @@ mod tests {
         assert!(report.step == 2 && report.n_target_samples == 24);
         assert!(report.n_source_samples == 1033 && report.gp_points == 16);
         assert!(report.wr_eff > 0.0 && report.wr_eff <= 1057.0 * 1.0001);
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
+    }
+
+    /// Adaptive AWFQI on the target with streamed Extra-Trees FQI (f32), small: as above
+    /// with 4 streamed trees per action in a 511-node scratch tree (one record slot per
+    /// target and source record), reward weights instead of relabelling. Checks the run's
+    /// sizes, that every weight and the evaluation are finite, and that the greedy policy
+    /// of the final trees (grown along each query's path) acts.
+    #[test]
+    fn adaptive_awfqi_with_streamed_trees() {
+        use awfqi::ExtraTrees;
+        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12, 1057, 511> = AdaptiveMemory::new();
+        // SAFETY: the only reference.
+        let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+        let run = AdaptiveRun {
+            budget: 12,
+            steps: 2,
+            candidates: 60,
+            q: AdaptiveQ::Trees(ExtraTrees::streamed(4, 511).unwrap()),
+            search: Some((40, 1)),
+            relabel: false,
+        };
+        let mut checked = false;
+        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+            let weights = kernel.reward_weights();
+            let action = kernel.q().greedy_action([0.0, 0.0]);
+            checked = kernel.target_samples().len() == 24
+                && weights.len() == 1033
+                && weights.iter().all(|w| w.is_finite() && *w >= 0.0)
+                && matches!(action, Ok(a) if a < 4)
+                && kernel
+                    .q()
+                    .max_value([5.0, 5.0])
+                    .is_ok_and(|v| v.is_finite());
+        })
+        .unwrap();
+        assert!(checked);
+        assert!(report.step == 2 && report.n_target_samples == 24);
         assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
         assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
     }
