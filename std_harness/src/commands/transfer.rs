@@ -26,6 +26,9 @@ use rayon::prelude::*;
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
+use crate::transfer::algorithms::adaptive_kernel::{
+    ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
+};
 use crate::transfer::algorithms::awfqi_kernel::{
     KernelConfig, KernelQFunction, KernelSetup, TreeKnobs,
 };
@@ -81,15 +84,17 @@ pub enum KernelQ {
 /// The Q-function approximator of `awfqi-adaptive-kernel`'s FQI.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum AdaptiveKernelQ {
-    /// Tile coding (12 × 12 tiles × 8 tilings unless `--kernel-resolution` is given).
+    /// Tile coding (12 × 12 tiles × 8 tilings unless `--kernel-resolution` is given; the
+    /// default before the trees).
     Tiles,
     /// Kernel averaging over the `--kernel-neighbours` nearest records (the core's
     /// `KnnFqi`), uniform or Gaussian (`--kernel-bandwidth`).
     Knn,
     /// The mean of both, each fitted on the same data (tiles as for `tiles`).
     Hybrid,
-    /// Per-action Extra-Trees forests in fixed memory (the core's `TreeFqi`):
-    /// `--kernel-trees` trees of at most `--kernel-tree-nodes` nodes.
+    /// Per-action Extra-Trees forests in fixed memory (the core's `TreeFqi`, the default):
+    /// `--kernel-trees` trees, streamed through a scratch tree of `--kernel-tree-nodes`
+    /// nodes (or stored, each of at most that many, with `--kernel-tree-streamed false`).
     Trees,
 }
 
@@ -210,15 +215,16 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "tiles")]
     pub kernel_q: KernelQ,
     /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
-    /// the table, 6 for tiles; awfqi-adaptive-kernel has its own default, 12 × 8 tiles,
-    /// which an explicit resolution replaces (with `--kernel-q` and `--kernel-tilings`).
+    /// the table, 6 for tiles; awfqi-adaptive-kernel's tiles (`--adaptive-kernel-q tiles`
+    /// or `hybrid`) have their own default, 12 × 8, which an explicit resolution replaces
+    /// (with `--kernel-q` and `--kernel-tilings`).
     #[arg(long)]
     pub kernel_resolution: Option<usize>,
     /// Offset tilings of `--kernel-q tiles`.
     #[arg(long, default_value_t = 4)]
     pub kernel_tilings: usize,
     /// Q-function approximator of awfqi-adaptive-kernel's FQI.
-    #[arg(long, value_enum, default_value = "tiles")]
+    #[arg(long, value_enum, default_value = "trees")]
     pub adaptive_kernel_q: AdaptiveKernelQ,
     /// Neighbours per prediction of `--adaptive-kernel-q knn`.
     #[arg(long, default_value_t = 4)]
@@ -238,11 +244,12 @@ pub struct Args {
     #[arg(long)]
     pub kernel_common_ball: bool,
     /// Trees per action of `--adaptive-kernel-q trees`.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = ADAPTIVE_TREES)]
     pub kernel_trees: usize,
-    /// Node budget of each tree of `--adaptive-kernel-q trees` (at most 65 535; a tree is
-    /// grown breadth first and cut when full).
-    #[arg(long, default_value_t = 255)]
+    /// Node budget of `--adaptive-kernel-q trees`: of the scratch tree when streamed, of
+    /// each tree when stored (at most 65 535; a tree is grown breadth first and cut when
+    /// full).
+    #[arg(long, default_value_t = ADAPTIVE_TREE_NODES)]
     pub kernel_tree_nodes: usize,
     /// `min_samples_split` of `--adaptive-kernel-q trees`.
     #[arg(long, default_value_t = 2)]
@@ -252,8 +259,8 @@ pub struct Args {
     pub kernel_min_samples_leaf: usize,
     /// `--adaptive-kernel-q trees`: stream the trees (grow each in one scratch tree of
     /// `--kernel-tree-nodes` nodes during FQI, and the final trees along each query's path),
-    /// so the memory does not grow with `--kernel-trees`.
-    #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
+    /// so the memory does not grow with `--kernel-trees`; `false`: store every tree.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = true)]
     pub kernel_tree_streamed: bool,
     /// Depth limit of `--adaptive-kernel-q trees` (absent: none; the root is at depth 0).
     #[arg(long)]
@@ -706,10 +713,13 @@ pub fn build_experiment<const D: usize>(
                 args.kernel_tilings,
             )?;
             let mut kernel = KernelConfig::new(config.setting, config.spacing).with_q(q);
-            // An explicit resolution sets both kernels' approximators.
-            if args.kernel_resolution.is_some() {
-                kernel = kernel.with_adaptive_q(q);
-            }
+            // The adaptive kernel's tiles (`tiles`, `hybrid`): 12 × 12 × 8 unless a
+            // resolution is given, which then sets both kernels' tiles.
+            let tiles = if args.kernel_resolution.is_some() {
+                q
+            } else {
+                KernelQFunction::Tiles(ADAPTIVE_TILES, ADAPTIVE_TILINGS)
+            };
             let knn = || {
                 KernelQFunction::knn(
                     args.kernel_neighbours,
@@ -718,7 +728,7 @@ pub fn build_experiment<const D: usize>(
                     args.kernel_common_ball,
                 )
             };
-            match (args.adaptive_kernel_q, knn()?, kernel.adaptive_q) {
+            match (args.adaptive_kernel_q, knn()?, tiles) {
                 (AdaptiveKernelQ::Knn, q, _) => kernel = kernel.with_adaptive_q(q),
                 (
                     AdaptiveKernelQ::Hybrid,
@@ -740,7 +750,7 @@ pub fn build_experiment<const D: usize>(
                         streamed: args.kernel_tree_streamed,
                     })?);
                 }
-                (AdaptiveKernelQ::Tiles, _, _) => {}
+                (AdaptiveKernelQ::Tiles, _, tiles) => kernel = kernel.with_adaptive_q(tiles),
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }

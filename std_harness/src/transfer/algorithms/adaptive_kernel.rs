@@ -24,16 +24,36 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use super::adaptive::AdaptiveOptions;
 use super::awfqi_kernel::{
-    GP_POINTS, KernelSetup, Record32, T, reward_gp_summary, row_set, to_f64,
+    GP_POINTS, KernelQFunction, KernelSetup, Record32, T, TreeKnobs, reward_gp_summary, row_set,
+    to_f64,
 };
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
 
-/// Tiles per axis of the adaptive kernel's FQI by default: chosen on the tuning runs
+/// Trees per action of the adaptive kernel's FQI by default (streamed Extra-Trees, the
+/// default approximator since the trees round): chosen on the tuning runs (`--seed 100`, 20
+/// runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
+pub const ADAPTIVE_TREES: usize = 50;
+/// Nodes of the streamed trees' scratch tree by default (the FQI iterations' trees of the
+/// largest action are cut at this budget; the final trees are fully grown).
+pub const ADAPTIVE_TREE_NODES: usize = 1023;
+/// The adaptive kernel's default approximator: [`ADAPTIVE_TREES`] streamed Extra-Trees per
+/// action, a scratch tree of [`ADAPTIVE_TREE_NODES`] nodes, otherwise fully grown.
+pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Trees(TreeKnobs {
+    trees: ADAPTIVE_TREES,
+    nodes: ADAPTIVE_TREE_NODES,
+    min_samples_split: 2,
+    min_samples_leaf: 1,
+    max_depth: None,
+    streamed: true,
+});
+
+/// Tiles per axis of the adaptive kernel's tile coding (`--adaptive-kernel-q tiles`, the
+/// default before the trees): chosen on the tuning runs
 /// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
 /// 16 × 8, 20 × 8; 12 × 8 best at every step but one, see `docs/active-budget.md`).
 pub const ADAPTIVE_TILES: usize = 12;
-/// Offset tilings of the adaptive kernel's FQI by default.
+/// Offset tilings of the adaptive kernel's tile coding.
 pub const ADAPTIVE_TILINGS: usize = 8;
 
 /// The core's configuration for `experiment`: the recommended one with the harness's

@@ -212,16 +212,15 @@ pub struct KernelConfig {
 
 impl KernelConfig {
     /// The kernel with the setting's score table (`mode`, `spacing`) and the default
-    /// approximator, tile coding with [`TILINGS`] tilings of [`TILES`] tiles per axis.
+    /// approximators: for `awfqi-kernel` tile coding with [`TILINGS`] tilings of [`TILES`]
+    /// tiles per axis, for `awfqi-adaptive-kernel` streamed Extra-Trees
+    /// ([`super::adaptive_kernel::ADAPTIVE_Q`]).
     pub fn new(mode: Mode, spacing: f64) -> Self {
         Self {
             mode,
             spacing,
             q: KernelQFunction::Tiles(TILES, TILINGS),
-            adaptive_q: KernelQFunction::Tiles(
-                super::adaptive_kernel::ADAPTIVE_TILES,
-                super::adaptive_kernel::ADAPTIVE_TILINGS,
-            ),
+            adaptive_q: super::adaptive_kernel::ADAPTIVE_Q,
         }
     }
 
