@@ -514,8 +514,9 @@ impl<
 pub enum AdaptiveQ {
     /// Tile coding: tiles per axis and tilings (`E` must hold its entries).
     Tiles(usize, usize),
-    /// Extra-Trees (`R` must hold the target and source records, `K` the nodes).
-    Trees(ExtraTrees),
+    /// Streamed Extra-Trees: trees per action and the scratch tree's nodes (`R` must hold
+    /// the target and source records, `K` the nodes).
+    Trees(usize, usize),
 }
 
 /// What a run of [`adaptive_puddle`] changes from the recommended configuration.
@@ -579,9 +580,9 @@ pub fn adaptive_puddle<
     let mut buffers = kernel.buffers();
     let approximator: Approximator<f32, 2> = match run.q {
         AdaptiveQ::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
-        AdaptiveQ::Trees(forests) => {
+        AdaptiveQ::Trees(count, nodes) => {
             buffers.fqi = trees.storage();
-            forests.into()
+            ExtraTrees::streamed(count, nodes)?.into()
         }
     };
     for (mean, source) in means.iter_mut().zip(&sources) {
@@ -616,17 +617,28 @@ pub fn adaptive_puddle<
 /// The recommended Puddle World configuration of adaptive AWFQI (the one the harness
 /// measures as `awfqi-adaptive-kernel`): the sources' 64-point mean functions and the
 /// kernel's memory — a 64-point target GP, 6 steps × 50 target records, one weight per
-/// published source record, 4 000 candidate slots (and their alias table), 12 × 12 tiles
-/// × 8 tilings of FQI entries (13² · 8 · 4 = 5 408), 50 verified states, 3 beliefs.
-pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 5408, 50, 0, 0>;
+/// published source record, 4 000 candidate slots (and their alias table), 50 verified
+/// states, 3 beliefs — and streamed Extra-Trees FQI: one record slot per target and source
+/// record (300 + 1 033) and a 1 023-node scratch tree.
+pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 0, 50, 1333, 1023>;
 
-/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 12 × 8
-/// tiles, the thesis's GP search.
+/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 50
+/// streamed trees per action, the thesis's GP search.
 pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
     candidates: 4000,
-    q: AdaptiveQ::Tiles(12, 8),
+    q: AdaptiveQ::Trees(50, 1023),
     search: None,
     relabel: false,
+};
+
+/// The former recommendation's memory, tile coding: 12 × 12 tiles × 8 tilings of FQI
+/// entries (13² · 8 · 4 = 5 408) instead of the trees.
+pub type AdaptiveTiles = AdaptiveMemory<64, 300, 4000, 5408, 50, 0, 0>;
+
+/// The former recommendation's run: [`ADAPTIVE_RECOMMENDED`] with 12 × 8 tiles.
+pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
+    q: AdaptiveQ::Tiles(12, 8),
+    ..ADAPTIVE_RECOMMENDED
 };

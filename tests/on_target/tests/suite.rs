@@ -671,7 +671,6 @@ mod tests {
     /// of the final trees (grown along each query's path) acts.
     #[test]
     fn adaptive_awfqi_with_streamed_trees() {
-        use awfqi::ExtraTrees;
         use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
         static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12, 1057, 511> = AdaptiveMemory::new();
         // SAFETY: the only reference.
@@ -680,7 +679,7 @@ mod tests {
             budget: 12,
             steps: 2,
             candidates: 60,
-            q: AdaptiveQ::Trees(ExtraTrees::streamed(4, 511).unwrap()),
+            q: AdaptiveQ::Trees(4, 511),
             search: Some((40, 1)),
             relabel: false,
         };
