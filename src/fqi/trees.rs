@@ -677,11 +677,29 @@ fn child_seed(seed: u64, right: bool) -> u64 {
         })
 }
 
+/// A node of a lazily grown tree with at most this many records lists them (indices on
+/// the stack) instead of finding them by a scan of the action's records.
+const LISTED: usize = 192;
+
+/// The records listed in `list[..k]`, in order.
+fn listed_members<'r, T: Real, const D: usize>(
+    list: &'r [u16],
+    k: usize,
+    records: &'r [TreeRecord<T, D>],
+) -> impl Iterator<Item = &'r TreeRecord<T, D>> + Clone {
+    list.get(..k)
+        .unwrap_or(&[])
+        .iter()
+        .filter_map(|&i| records.get(usize::from(i)))
+}
+
 /// The prediction at `state` of the tree that `seed` grows on `records` (one action's),
 /// grown only along `state`'s path: at each node the records inside the node's box are
-/// found by a scan, the node's split drawn from its own stream, and the walk goes to the
-/// child that holds `state`. Each level holds fewer records than the last (both children
-/// of a split are non-empty), so the walk ends within `records.len() + 1` levels.
+/// found by a scan (or, once few, kept in a list), the node's split drawn from its own
+/// stream, and the walk goes to the child that holds `state`. Each level holds fewer
+/// records than the last (both children of a split are non-empty), so the walk ends within
+/// `records.len() + 1` levels. Members are visited in record order either way, so the sums
+/// and the tree are the same.
 fn lazy_tree<T: Real, const D: usize>(
     records: &[TreeRecord<T, D>],
     state: &[T; D],
@@ -691,18 +709,23 @@ fn lazy_tree<T: Real, const D: usize>(
     // The node's box: lo < x ≤ hi on every axis.
     let mut lo = [T::NEG_INFINITY; D];
     let mut hi = [T::INFINITY; D];
+    let mut list = [0u16; LISTED];
+    let mut listed: Option<usize> = None;
     let mut node_seed = seed;
     let impurity_floor = T::from_f64(MIN_IMPURITY);
     let mut value = T::ZERO;
     for depth in 0..=records.len() {
         let (lo_now, hi_now) = (lo, hi);
-        let members = records.iter().filter(move |r| {
+        let inside = move |r: &&TreeRecord<T, D>| {
             r.state
                 .iter()
                 .zip(lo_now.iter().zip(&hi_now))
                 .all(|(&x, (&l, &h))| l < x && x <= h)
-        });
-        let st = Stats::of(members.clone(), growth.first);
+        };
+        let st = match listed {
+            Some(k) => Stats::of(listed_members(&list, k, records), growth.first),
+            None => Stats::of(records.iter().filter(inside), growth.first),
+        };
         value = st.mean();
         let splittable = st.n >= 2
             && depth < growth.max_depth
@@ -712,8 +735,24 @@ fn lazy_tree<T: Real, const D: usize>(
         if !splittable {
             return value;
         }
+        if listed.is_none() && st.n <= LISTED {
+            let mut k = 0;
+            for (i, r) in records.iter().enumerate() {
+                if inside(&r) {
+                    if let (Some(slot), Ok(i)) = (list.get_mut(k), u16::try_from(i)) {
+                        *slot = i;
+                        k += 1;
+                    }
+                }
+            }
+            listed = Some(k);
+        }
         let mut stream = NodeStream(node_seed);
-        let Some((feature, tau)) = best_split(members, &st, growth, &mut stream) else {
+        let split = match listed {
+            Some(k) => best_split(listed_members(&list, k, records), &st, growth, &mut stream),
+            None => best_split(records.iter().filter(inside), &st, growth, &mut stream),
+        };
+        let Some((feature, tau)) = split else {
             return value;
         };
         let right = state.get(feature).is_some_and(|&x| x > tau);
@@ -724,6 +763,23 @@ fn lazy_tree<T: Real, const D: usize>(
         };
         if let Some(b) = bound {
             *b = tau;
+        }
+        if let Some(k) = listed {
+            // Keep the members on `state`'s side, in order.
+            let mut kept = 0;
+            for j in 0..k {
+                let Some(&i) = list.get(j) else { break };
+                let goes_right = records
+                    .get(usize::from(i))
+                    .is_some_and(|r| r.coordinate(feature) > tau);
+                if goes_right == right {
+                    if let Some(slot) = list.get_mut(kept) {
+                        *slot = i;
+                    }
+                    kept += 1;
+                }
+            }
+            listed = Some(kept);
         }
         node_seed = child_seed(node_seed, right);
     }
