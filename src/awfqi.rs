@@ -500,6 +500,7 @@ where
             transition,
             None,
             &self.config.fqi,
+            rng,
         )?;
         self.steps += 1;
         Ok(StepReport {
@@ -570,7 +571,8 @@ pub(crate) fn for_each_source<T: Real, U, const D: usize>(
 /// rewards `rewards` (source after source; `None`: all 1, their own rewards).
 ///
 /// Errors: those of [`QFunction::fit_sets`] (e.g. a weight slice of the wrong length).
-pub(crate) fn fit_weighted_fqi<'s, T: Real, const D: usize>(
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fit_weighted_fqi<'s, T: Real, const D: usize, R: Rng + ?Sized>(
     fqi: &mut QFunction<'_, T, D>,
     target: &'s [Transition<[T; D], T>],
     sources: &'s SourceData<'_, T, D>,
@@ -578,6 +580,7 @@ pub(crate) fn fit_weighted_fqi<'s, T: Real, const D: usize>(
     transition: Option<&'s [T]>,
     rewards: Option<&'s [T]>,
     config: &FqiConfig<T>,
+    rng: &mut R,
 ) -> Result<()> {
     let sets = core::iter::once(SampleSet::unweighted(target)).chain(sources.records.iter().scan(
         0usize,
@@ -591,7 +594,7 @@ pub(crate) fn fit_weighted_fqi<'s, T: Real, const D: usize>(
             )
         },
     ));
-    fqi.fit_sets(sets, config)
+    fqi.fit_sets(sets, config, rng)
 }
 
 /// The reward weights of one source's records under the target GP (§7.2 steps 2–3).

@@ -4,7 +4,8 @@
 //! posteriors from the fuzzer (NaN, ±∞ and huge values included); each source's
 //! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
 //! pairs or source rows); the approximator (table, tiles, kernel averaging with a fuzzed
-//! `k`, kernel, reach and common ball, or the hybrid of tiles and kernel averaging);
+//! `k`, kernel, reach and common ball, the hybrid of tiles and kernel averaging, or
+//! Extra-Trees, stored or streamed, with fuzzed trees, node budget and growth limits);
 //! buffers of every size (one short of what is needed too); then steps and `reset`.
 //!
 //! Invariants: no panic; errors only of the documented kinds; a successful step spends the
@@ -17,8 +18,9 @@ use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::record_gp::GpTraining;
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, CellGrid, EmptyCells, Error,
-    FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, Neighbours, PointGrid, Posterior,
-    QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition,
+    ExtraTrees, FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, Neighbours, PointGrid,
+    Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition, TreeNode,
+    TreeRecord,
 };
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
@@ -201,7 +203,7 @@ fn run<T: Real>(b: &mut Bytes) {
             return;
         }
     };
-    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 4 {
+    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 5 {
         0 => match Tilings::cube(T::ZERO, T::from_f64(10.0), b.index(4), b.index(4)) {
             Ok(t) => t.into(),
             Err(e) => {
@@ -212,6 +214,22 @@ fn run<T: Real>(b: &mut Bytes) {
         1 => CellGrid::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(4))
             .expect("a valid cube")
             .into(),
+        4 => {
+            let (trees, nodes) = (b.index(6), b.index(40));
+            let (split, leaf) = (b.index(4), b.index(3));
+            let forests = if b.bool() {
+                ExtraTrees::streamed(trees, nodes)
+            } else {
+                ExtraTrees::new(trees, nodes)
+            };
+            match forests.and_then(|f| f.with_min_samples(split, leaf)) {
+                Ok(f) => f.into(),
+                Err(e) => {
+                    expect_kind("ExtraTrees", &e, &[Kind::Invalid]);
+                    return;
+                }
+            }
+        }
         _ => {
             let kernel = if b.bool() {
                 Kernel::Gaussian(real(b))
@@ -254,20 +272,30 @@ fn run<T: Real>(b: &mut Bytes) {
     let mut candidates = vec![Candidate::EMPTY; size(b, slots)];
     let mut alias = vec![AliasEntry::EMPTY; size(b, slots)];
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
-    // Kernel averaging: one record slot per target and source record, and their links.
-    let (records_needed, links_needed) = match approximator {
+    // Kernel averaging: one record slot per target and source record, and their links;
+    // trees: as many record slots, and their nodes.
+    let (records_needed, links_needed, nodes_needed) = match approximator {
         awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
             let r = samples.len() + total;
             (
                 r,
                 nb.required_links(r, 4).unwrap_or(usize::MAX).min(1 << 16),
+                0,
             )
         }
-        _ => (0, 0),
+        awfqi::Approximator::Trees(f) => (
+            samples.len() + total,
+            0,
+            f.required_nodes(4).unwrap_or(usize::MAX).min(1 << 14),
+        ),
+        _ => (0, 0, 0),
     };
+    let trees = matches!(approximator, awfqi::Approximator::Trees(_));
     let record_slots = size(b, records_needed);
-    let mut records = vec![KnnRecord::EMPTY; record_slots];
+    let mut records = vec![KnnRecord::EMPTY; if trees { 0 } else { record_slots }];
     let mut links = vec![0u16; size(b, links_needed)];
+    let mut tree_records = vec![TreeRecord::EMPTY; if trees { record_slots } else { 0 }];
+    let mut nodes = vec![TreeNode::EMPTY; size(b, nodes_needed)];
     let mut path = vec![[T::ZERO; 2]; size(b, budget)];
     let mut beliefs = vec![SourceBelief::EMPTY; size(b, slices.len())];
     let buffers = AdaptiveBuffers {
@@ -280,6 +308,8 @@ fn run<T: Real>(b: &mut Bytes) {
             entries: &mut fqi,
             records: &mut records,
             links: &mut links,
+            tree_records: &mut tree_records,
+            nodes: &mut nodes,
         },
         path: &mut path,
         beliefs: &mut beliefs,
@@ -331,7 +361,7 @@ fn run<T: Real>(b: &mut Bytes) {
                     assert_eq!(kernel.steps(), done, "a failed step advanced the count");
                     if let Error::CapacityExceeded { .. } = e {
                         // The only capacity a step can lack is D₀'s, refused up front —
-                        // or, for kernel averaging, the record slots of a re-plan.
+                        // or, for kernel averaging and trees, the record slots of a re-plan.
                         if record_slots >= records_needed {
                             assert_eq!(kernel.target_samples().len(), len);
                         }

@@ -135,7 +135,9 @@ fn run<T: Real, const D: usize>(b: &mut Bytes, tiles: bool) {
         .collect();
     trace!("fit({samples:?}, rewards {rewards:?}, transitions {transitions:?}, {config:?})");
     let before: Vec<FqiEntry<T>> = fqi.entries().to_vec();
-    match fqi.fit(&sets, &config) {
+    // Only trees draw random numbers; the table and tiles take the generator and ignore it.
+    let mut rng = <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(0);
+    match fqi.fit(&sets, &config, &mut rng) {
         Ok(()) => {
             for e in fqi.entries() {
                 finite("fit", "q", e.q().to_f64());

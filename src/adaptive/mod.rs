@@ -37,9 +37,11 @@
 //!
 //! **Differences from the harness's `awfqi-adaptive`** (its default configuration is what is
 //! ported; its options `prior`, `model_rewards`, `source_weights`, `surprise_stop` and
-//! `plan_trees` are left out, all off by default): the Q-function is the core's table, tile
-//! coding or kernel averaging over the records ([`crate::fqi::KnnFqi`]) instead of
-//! Extra-Trees; every GP has a fixed capacity `N` fitted on an even
+//! `plan_trees` are left out, all off by default): the Q-function is any of the core's
+//! approximators — recommended on Puddle World, the core's own Extra-Trees, streamed
+//! ([`crate::fqi::ExtraTrees::streamed`]: 50 trees per action in the memory of one, the
+//! harness's choice on the tuning runs), or the table, tile coding or kernel averaging;
+//! every GP has a fixed capacity `N` fitted on an even
 //! spread of its data ([`crate::SubsetRule`]) instead of up to 4 000 points; the residual GP
 //! is fitted after the weights' GP (one GP in memory), so the random streams differ.
 //!
@@ -116,7 +118,8 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The harness's default configuration (`docs/active-budget.md`): 3 sub-batches, 70 %
     /// verification, surprise, uncertainty and decision relevance on, floor 0.1, 4 000
     /// candidates, relevance width 0.1, relabelling off (on the tuning runs it helped the
-    /// harness's Extra-Trees FQI but not the core's tile coding), on the thesis's AWFQI
+    /// harness's Extra-Trees FQI but neither the core's tile coding nor, measured again
+    /// with them, the core's streamed trees), on the thesis's AWFQI
     /// settings for `budget` ([`AwfqiConfig::thesis`]), for a plant that starts in
     /// `start`, with episodes of `horizon` steps, exploration `epsilon` (the protocol's
     /// 0.3) and state `bounds`.
@@ -604,6 +607,7 @@ where
                 None,
                 None,
                 &config.fqi,
+                rng,
             )?;
             wr.add_ones(self.sources.len());
             self.planned = true;
@@ -661,6 +665,7 @@ where
             None,
             rewards,
             &config.fqi,
+            rng,
         )?;
         self.relabelled = relabel;
         self.planned = true;

@@ -292,7 +292,8 @@ fn a_step_spends_its_budget_on_verified_paths_and_drawn_rows() {
         .iter()
         .map(|s| crate::fqi::SampleSet::unweighted(s))
         .collect();
-    q.fit(&sets, &valid.awfqi.fqi).unwrap();
+    q.fit(&sets, &valid.awfqi.fqi, &mut ChaCha8Rng::seed_from_u64(0))
+        .unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let report = kernel.step(&mut rng).unwrap();
     assert_eq!((report.step, report.n_target_samples), (1, 12));
@@ -452,7 +453,8 @@ fn kernel_averaging_plans_on_d0_and_the_relabelled_sources() {
         .build(4, reference.storage())
         .unwrap();
     let plain: Vec<_> = slices.iter().map(|s| SampleSet::unweighted(s)).collect();
-    q.fit(&plain, &valid.awfqi.fqi).unwrap();
+    q.fit(&plain, &valid.awfqi.fqi, &mut ChaCha8Rng::seed_from_u64(0))
+        .unwrap();
     kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
     let d0 = kernel.target_samples().to_vec();
     assert_eq!(d0[0].action, q.greedy_action([0.0, 0.0]).unwrap());
@@ -465,7 +467,8 @@ fn kernel_averaging_plans_on_d0_and_the_relabelled_sources() {
         sets.push(SampleSet::unweighted(s).with_rewards(Some(&y[offset..offset + s.len()])));
         offset += s.len();
     }
-    q.fit(&sets, &valid.awfqi.fqi).unwrap();
+    q.fit(&sets, &valid.awfqi.fqi, &mut ChaCha8Rng::seed_from_u64(0))
+        .unwrap();
     for x in [0.0, 1.3, 4.0, 7.7, 9.9] {
         for y in [0.0, 2.5, 6.1, 9.5] {
             for a in 0..4 {

@@ -747,6 +747,8 @@ impl<T: Real, const D: usize, const R: usize, const L: usize> KnnStorage<T, D, R
             entries: &mut [],
             records: &mut self.records,
             links: &mut self.links,
+            tree_records: &mut [],
+            nodes: &mut [],
         }
     }
 }

@@ -55,11 +55,13 @@ mod grid;
 pub mod knn;
 mod q_function;
 mod tiles;
+pub mod trees;
 
 pub use grid::CellGrid;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use tiles::{TileFqi, Tilings};
+pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};
 
 use crate::env::Transition;
 use crate::error::ensure_finite;

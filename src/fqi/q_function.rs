@@ -1,17 +1,20 @@
 //! The Q-function approximators of weighted FQI behind one type, so the AWFQI loop (and a
 //! user) picks one by configuration: the table of [`CellGrid`] cells, tile coding
-//! ([`Tilings`]) or kernel averaging over the records ([`Neighbours`]). The first two keep
-//! their values in [`FqiEntry`] storage, the third in [`KnnRecord`]s and links
-//! ([`QStorage`] lends either).
+//! ([`Tilings`]), kernel averaging over the records ([`Neighbours`]) or Extra-Trees
+//! ([`ExtraTrees`]). The first two keep their values in [`FqiEntry`] storage, the third in
+//! [`KnnRecord`]s and links, the fourth in [`TreeRecord`]s and [`TreeNode`]s ([`QStorage`]
+//! lends any of them). Only the trees draw random numbers, from the caller's generator.
 
 use super::{
-    CellGrid, FqiConfig, FqiEntry, KnnFqi, KnnRecord, Neighbours, SampleSet, TabularFqi, TileFqi,
-    Tilings,
+    CellGrid, ExtraTrees, FqiConfig, FqiEntry, KnnFqi, KnnRecord, Neighbours, SampleSet,
+    TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord,
 };
 use crate::{Real, Result};
+use rand_core::Rng;
 
 /// The memory a [`QFunction`] is built in: FQI entries for a table or tiles, records and
-/// links for kernel averaging (what an approximator does not use may be empty).
+/// links for kernel averaging, records and nodes for trees (what an approximator does not
+/// use may be empty).
 #[derive(Debug)]
 pub struct QStorage<'a, T, const D: usize> {
     /// Entries of a table or tiles ([`Approximator::required_entries`]).
@@ -20,6 +23,10 @@ pub struct QStorage<'a, T, const D: usize> {
     pub records: &'a mut [KnnRecord<T, D>],
     /// Its links ([`Neighbours::required_links`] for the record slots).
     pub links: &'a mut [u16],
+    /// One record slot per sample a tree fit may hold.
+    pub tree_records: &'a mut [TreeRecord<T, D>],
+    /// The trees' nodes ([`ExtraTrees::required_nodes`]).
+    pub nodes: &'a mut [TreeNode<T>],
 }
 
 impl<'a, T, const D: usize> From<&'a mut [FqiEntry<T>]> for QStorage<'a, T, D> {
@@ -28,6 +35,8 @@ impl<'a, T, const D: usize> From<&'a mut [FqiEntry<T>]> for QStorage<'a, T, D> {
             entries,
             records: &mut [],
             links: &mut [],
+            tree_records: &mut [],
+            nodes: &mut [],
         }
     }
 }
@@ -46,6 +55,14 @@ pub enum Approximator<T, const D: usize> {
     /// Q-values averaged (an ensemble of two averagers: the tiles' coarse, consistent
     /// values where the records are sparse, the records' local ones where they are dense).
     Hybrid(Tilings<T, D>, Neighbours<T, D>),
+    /// Per-action Extra-Trees forests ([`TreeFqi`]).
+    Trees(ExtraTrees),
+}
+
+impl<T: Real, const D: usize> From<ExtraTrees> for Approximator<T, D> {
+    fn from(forests: ExtraTrees) -> Self {
+        Approximator::Trees(forests)
+    }
 }
 
 impl<T: Real, const D: usize> From<Neighbours<T, D>> for Approximator<T, D> {
@@ -68,20 +85,22 @@ impl<T: Real, const D: usize> From<Tilings<T, D>> for Approximator<T, D> {
 
 impl<T: Real, const D: usize> Approximator<T, D> {
     /// Number of [`FqiEntry`] it needs with `actions` actions (`None` on overflow; 0 for
-    /// kernel averaging, which needs records and links instead).
+    /// kernel averaging and trees, which need records and links or nodes instead).
     pub fn required_entries(&self, actions: usize) -> Option<usize> {
         match self {
             Approximator::Table(grid) => TabularFqi::required_entries(grid, actions),
             Approximator::Tiles(tilings) => TileFqi::required_entries(tilings, actions),
             Approximator::Knn(_) => Some(0),
             Approximator::Hybrid(tilings, _) => TileFqi::required_entries(tilings, actions),
+            Approximator::Trees(_) => Some(0),
         }
     }
 
     /// A Q-function that is 0 everywhere in `storage` (a slice of [`FqiEntry`] for a table
     /// or tiles).
     ///
-    /// Errors: those of [`TabularFqi::new`], [`TileFqi::new`] or [`KnnFqi::new`].
+    /// Errors: those of [`TabularFqi::new`], [`TileFqi::new`], [`KnnFqi::new`] or
+    /// [`TreeFqi::new`].
     pub fn build<'a>(
         self,
         actions: usize,
@@ -105,6 +124,12 @@ impl<T: Real, const D: usize> Approximator<T, D> {
                 TileFqi::new(tilings, actions, storage.entries)?,
                 KnnFqi::new(neighbours, actions, storage.records, storage.links)?,
             ),
+            Approximator::Trees(forests) => QFunction::Trees(TreeFqi::new(
+                forests,
+                actions,
+                storage.tree_records,
+                storage.nodes,
+            )?),
         })
     }
 }
@@ -120,6 +145,8 @@ pub enum QFunction<'a, T, const D: usize> {
     Knn(KnnFqi<'a, T, D>),
     /// The mean of tile coding and kernel averaging.
     Hybrid(TileFqi<'a, T, D>, KnnFqi<'a, T, D>),
+    /// Per-action Extra-Trees forests.
+    Trees(TreeFqi<'a, T, D>),
 }
 
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
@@ -130,16 +157,18 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tiles(q) => q.actions(),
             QFunction::Knn(q) => q.actions(),
             QFunction::Hybrid(q, _) => q.actions(),
+            QFunction::Trees(q) => q.actions(),
         }
     }
 
     /// The entries in use (layout per approximator: [`TabularFqi::entries`],
-    /// [`TileFqi::entries`]; none for kernel averaging, see [`KnnFqi::records`]).
+    /// [`TileFqi::entries`]; none for kernel averaging or trees, see [`KnnFqi::records`],
+    /// [`TreeFqi::records`]).
     pub fn entries(&self) -> &[FqiEntry<T>] {
         match self {
             QFunction::Tabular(q) => q.entries(),
             QFunction::Tiles(q) | QFunction::Hybrid(q, _) => q.entries(),
-            QFunction::Knn(_) => &[],
+            QFunction::Knn(_) | QFunction::Trees(_) => &[],
         }
     }
 
@@ -147,7 +176,10 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     pub fn as_tabular(&self) -> Option<&TabularFqi<'a, T, D>> {
         match self {
             QFunction::Tabular(q) => Some(q),
-            QFunction::Tiles(_) | QFunction::Knn(_) | QFunction::Hybrid(..) => None,
+            QFunction::Tiles(_)
+            | QFunction::Knn(_)
+            | QFunction::Hybrid(..)
+            | QFunction::Trees(_) => None,
         }
     }
 
@@ -161,16 +193,19 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
                 t.clear();
                 k.clear();
             }
+            QFunction::Trees(q) => q.clear(),
         }
     }
 
-    /// Fits Q from scratch by weighted FQI on sets produced by an iterator.
+    /// Fits Q from scratch by weighted FQI on sets produced by an iterator; the trees draw
+    /// their randomness from `rng` (the other approximators draw nothing).
     ///
     /// Errors: those of [`TabularFqi::fit`].
-    pub fn fit_sets<'s, I>(&mut self, sets: I, config: &FqiConfig<T>) -> Result<()>
+    pub fn fit_sets<'s, I, R>(&mut self, sets: I, config: &FqiConfig<T>, rng: &mut R) -> Result<()>
     where
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
+        R: Rng + ?Sized,
     {
         match self {
             QFunction::Tabular(q) => q.fit_sets(sets, config),
@@ -182,14 +217,21 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
                 k.fit_sets(sets.clone(), config)?;
                 t.fit_sets(sets, config)
             }
+            QFunction::Trees(q) => q.fit_sets(sets, config, rng),
         }
     }
 
-    /// Fits Q from scratch by weighted FQI on the union of `sets`.
+    /// Fits Q from scratch by weighted FQI on the union of `sets` (randomness as
+    /// [`QFunction::fit_sets`]).
     ///
     /// Errors: those of [`TabularFqi::fit`].
-    pub fn fit(&mut self, sets: &[SampleSet<'_, T, D>], config: &FqiConfig<T>) -> Result<()> {
-        self.fit_sets(sets.iter().copied(), config)
+    pub fn fit<R: Rng + ?Sized>(
+        &mut self,
+        sets: &[SampleSet<'_, T, D>],
+        config: &FqiConfig<T>,
+        rng: &mut R,
+    ) -> Result<()> {
+        self.fit_sets(sets.iter().copied(), config, rng)
     }
 
     /// `Q(state, action)`.
@@ -200,6 +242,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.value(state, action),
             QFunction::Tiles(q) => q.value(state, action),
             QFunction::Knn(q) => q.value(state, action),
+            QFunction::Trees(q) => q.value(state, action),
             QFunction::Hybrid(t, k) => {
                 Ok((t.value(state, action)? + k.value(state, action)?) / T::from_f64(2.0))
             }
@@ -214,6 +257,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.max_value(state),
             QFunction::Tiles(q) => q.max_value(state),
             QFunction::Knn(q) => q.max_value(state),
+            QFunction::Trees(q) => q.max_value(state),
             QFunction::Hybrid(..) => {
                 let mut best = T::NEG_INFINITY;
                 for a in 0..self.actions() {
@@ -232,6 +276,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.greedy_action(state),
             QFunction::Tiles(q) => q.greedy_action(state),
             QFunction::Knn(q) => q.greedy_action(state),
+            QFunction::Trees(q) => q.greedy_action(state),
             QFunction::Hybrid(..) => {
                 // The largest mean value, ties to the smallest index.
                 let mut best = 0;
@@ -271,6 +316,12 @@ impl<T: Real, const D: usize> Greedy<T, D> for TileFqi<'_, T, D> {
 }
 
 impl<T: Real, const D: usize> Greedy<T, D> for KnnFqi<'_, T, D> {
+    fn greedy(&self, state: [T; D]) -> Result<usize> {
+        self.greedy_action(state)
+    }
+}
+
+impl<T: Real, const D: usize> Greedy<T, D> for TreeFqi<'_, T, D> {
     fn greedy(&self, state: [T; D]) -> Result<usize> {
         self.greedy_action(state)
     }

@@ -115,7 +115,15 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     assert_eq!(summary.lines().count(), 1 + 2 * algorithms.len());
     // IWFQI and the kernel report their weight diagnostics, RBT its compliances.
     let d = base.join("d");
-    run(&args(&d, "1", "iwfqi,awfqi-kernel,awfqi-adaptive-kernel")).unwrap();
+    // (3 streamed trees per action instead of the default 50: a debug build.)
+    let few_trees = ["--kernel-trees", "3"];
+    run(&args_with(
+        &d,
+        "1",
+        "iwfqi,awfqi-kernel,awfqi-adaptive-kernel",
+        &few_trees,
+    ))
+    .unwrap();
     for name in ["iwfqi", "awfqi-kernel", "awfqi-adaptive-kernel"] {
         let json: serde_json::Value =
             serde_json::from_str(&read(&d, &format!("{name}.json"))).unwrap();
@@ -130,8 +138,9 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     assert_eq!(steps[0]["n_target_samples"].as_f64(), Some(50.0));
     assert_eq!(steps[1]["n_target_samples"].as_f64(), Some(100.0));
     let kernel = &adaptive["runs"][0]["parameters"]["kernel"];
-    assert_eq!(kernel["fqi_tiles"], serde_json::json!([12, 12]), "{kernel}");
-    assert_eq!(kernel["fqi_tilings"], serde_json::json!(8));
+    assert_eq!(kernel["fqi_trees"], serde_json::json!(3), "{kernel}");
+    assert_eq!(kernel["fqi_trees_streamed"], serde_json::json!(true));
+    assert_eq!(kernel["fqi_tree_nodes"], serde_json::json!(1023));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
         .as_array()

@@ -2,6 +2,7 @@ extern crate std;
 use super::*;
 use crate::Transition;
 use crate::fqi::EmptyCells;
+use rand_core::SeedableRng;
 use std::vec;
 use std::vec::Vec;
 
@@ -276,10 +277,13 @@ fn the_hybrid_is_the_mean_of_its_two_fits() {
                 entries: &mut e1,
                 records: &mut r1,
                 links: &mut l1,
+                tree_records: &mut [],
+                nodes: &mut [],
             },
         )
         .unwrap();
-    hybrid.fit(&sets, &config).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::from_seed([0; 32]);
+    hybrid.fit(&sets, &config, &mut rng).unwrap();
     let mut tiles = TileFqi::new(tilings, 2, &mut e2).unwrap();
     tiles.fit(&sets, &config).unwrap();
     let mut knn = KnnFqi::new(nb, 2, &mut r2, &mut l2).unwrap();
@@ -300,7 +304,7 @@ fn the_hybrid_is_the_mean_of_its_two_fits() {
     let before = hybrid.value([1.7], 0).unwrap();
     let nine = [samples.clone(), vec![samples[0]]].concat();
     assert_eq!(
-        hybrid.fit(&[SampleSet::unweighted(&nine)], &config),
+        hybrid.fit(&[SampleSet::unweighted(&nine)], &config, &mut rng),
         Err(Error::CapacityExceeded { capacity: 8 })
     );
     assert_eq!(hybrid.value([1.7], 0).unwrap(), before);

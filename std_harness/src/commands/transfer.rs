@@ -26,7 +26,12 @@ use rayon::prelude::*;
 use crate::domains::{Domain, IdealMeans};
 use crate::run_range::RunRange;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
-use crate::transfer::algorithms::awfqi_kernel::{KernelConfig, KernelQFunction, KernelSetup};
+use crate::transfer::algorithms::adaptive_kernel::{
+    ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
+};
+use crate::transfer::algorithms::awfqi_kernel::{
+    KernelConfig, KernelQFunction, KernelSetup, TreeKnobs,
+};
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
@@ -79,13 +84,18 @@ pub enum KernelQ {
 /// The Q-function approximator of `awfqi-adaptive-kernel`'s FQI.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum AdaptiveKernelQ {
-    /// Tile coding (12 × 12 tiles × 8 tilings unless `--kernel-resolution` is given).
+    /// Tile coding (12 × 12 tiles × 8 tilings unless `--kernel-resolution` is given; the
+    /// default before the trees).
     Tiles,
     /// Kernel averaging over the `--kernel-neighbours` nearest records (the core's
     /// `KnnFqi`), uniform or Gaussian (`--kernel-bandwidth`).
     Knn,
     /// The mean of both, each fitted on the same data (tiles as for `tiles`).
     Hybrid,
+    /// Per-action Extra-Trees forests in fixed memory (the core's `TreeFqi`, the default):
+    /// `--kernel-trees` trees, streamed through a scratch tree of `--kernel-tree-nodes`
+    /// nodes (or stored, each of at most that many, with `--kernel-tree-streamed false`).
+    Trees,
 }
 
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
@@ -205,15 +215,16 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "tiles")]
     pub kernel_q: KernelQ,
     /// Cells (tabular) or tiles (tiles) per axis of awfqi-kernel's FQI. Default: 11 for
-    /// the table, 6 for tiles; awfqi-adaptive-kernel has its own default, 12 × 8 tiles,
-    /// which an explicit resolution replaces (with `--kernel-q` and `--kernel-tilings`).
+    /// the table, 6 for tiles; awfqi-adaptive-kernel's tiles (`--adaptive-kernel-q tiles`
+    /// or `hybrid`) have their own default, 12 × 8, which an explicit resolution replaces
+    /// (with `--kernel-q` and `--kernel-tilings`).
     #[arg(long)]
     pub kernel_resolution: Option<usize>,
     /// Offset tilings of `--kernel-q tiles`.
     #[arg(long, default_value_t = 4)]
     pub kernel_tilings: usize,
     /// Q-function approximator of awfqi-adaptive-kernel's FQI.
-    #[arg(long, value_enum, default_value = "tiles")]
+    #[arg(long, value_enum, default_value = "trees")]
     pub adaptive_kernel_q: AdaptiveKernelQ,
     /// Neighbours per prediction of `--adaptive-kernel-q knn`.
     #[arg(long, default_value_t = 4)]
@@ -232,6 +243,28 @@ pub struct Args {
     /// acts as the reach).
     #[arg(long)]
     pub kernel_common_ball: bool,
+    /// Trees per action of `--adaptive-kernel-q trees`.
+    #[arg(long, default_value_t = ADAPTIVE_TREES)]
+    pub kernel_trees: usize,
+    /// Node budget of `--adaptive-kernel-q trees`: of the scratch tree when streamed, of
+    /// each tree when stored (at most 65 535; a tree is grown breadth first and cut when
+    /// full).
+    #[arg(long, default_value_t = ADAPTIVE_TREE_NODES)]
+    pub kernel_tree_nodes: usize,
+    /// `min_samples_split` of `--adaptive-kernel-q trees`.
+    #[arg(long, default_value_t = 2)]
+    pub kernel_min_samples_split: usize,
+    /// `min_samples_leaf` of `--adaptive-kernel-q trees`.
+    #[arg(long, default_value_t = 1)]
+    pub kernel_min_samples_leaf: usize,
+    /// `--adaptive-kernel-q trees`: stream the trees (grow each in one scratch tree of
+    /// `--kernel-tree-nodes` nodes during FQI, and the final trees along each query's path),
+    /// so the memory does not grow with `--kernel-trees`; `false`: store every tree.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = true)]
+    pub kernel_tree_streamed: bool,
+    /// Depth limit of `--adaptive-kernel-q trees` (absent: none; the root is at depth 0).
+    #[arg(long)]
+    pub kernel_tree_max_depth: Option<usize>,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -680,10 +713,13 @@ pub fn build_experiment<const D: usize>(
                 args.kernel_tilings,
             )?;
             let mut kernel = KernelConfig::new(config.setting, config.spacing).with_q(q);
-            // An explicit resolution sets both kernels' approximators.
-            if args.kernel_resolution.is_some() {
-                kernel = kernel.with_adaptive_q(q);
-            }
+            // The adaptive kernel's tiles (`tiles`, `hybrid`): 12 × 12 × 8 unless a
+            // resolution is given, which then sets both kernels' tiles.
+            let tiles = if args.kernel_resolution.is_some() {
+                q
+            } else {
+                KernelQFunction::Tiles(ADAPTIVE_TILES, ADAPTIVE_TILINGS)
+            };
             let knn = || {
                 KernelQFunction::knn(
                     args.kernel_neighbours,
@@ -692,7 +728,7 @@ pub fn build_experiment<const D: usize>(
                     args.kernel_common_ball,
                 )
             };
-            match (args.adaptive_kernel_q, knn()?, kernel.adaptive_q) {
+            match (args.adaptive_kernel_q, knn()?, tiles) {
                 (AdaptiveKernelQ::Knn, q, _) => kernel = kernel.with_adaptive_q(q),
                 (
                     AdaptiveKernelQ::Hybrid,
@@ -704,7 +740,17 @@ pub fn build_experiment<const D: usize>(
                 (AdaptiveKernelQ::Hybrid, _, _) => {
                     anyhow::bail!("--adaptive-kernel-q hybrid needs tiles (--kernel-q tiles)")
                 }
-                (AdaptiveKernelQ::Tiles, _, _) => {}
+                (AdaptiveKernelQ::Trees, _, _) => {
+                    kernel = kernel.with_adaptive_q(KernelQFunction::trees(TreeKnobs {
+                        trees: args.kernel_trees,
+                        nodes: args.kernel_tree_nodes,
+                        min_samples_split: args.kernel_min_samples_split,
+                        min_samples_leaf: args.kernel_min_samples_leaf,
+                        max_depth: args.kernel_tree_max_depth,
+                        streamed: args.kernel_tree_streamed,
+                    })?);
+                }
+                (AdaptiveKernelQ::Tiles, _, tiles) => kernel = kernel.with_adaptive_q(tiles),
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }

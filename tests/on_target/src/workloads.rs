@@ -48,7 +48,10 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 }
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::{AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, MeanFunction, SourceData, Tilings};
+use awfqi::{
+    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, ExtraTrees, MeanFunction,
+    SourceData, Tilings, TreeStorage,
+};
 use awfqi::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
     FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
@@ -462,23 +465,35 @@ pub fn grid_identification(
 
 /// The sources' reward mean functions and the adaptive kernel's [`AdaptiveStorage`]: a
 /// target GP of `N` points, `Q` target records (steps × budget), one weight per published
-/// source record (1033), `C` candidate slots, `E` FQI entries, room for `B` verified
-/// states (the budget), 3 source beliefs.
+/// source record (1033), `C` candidate slots, `E` FQI entries (tiles), room for `B`
+/// verified states (the budget), 3 source beliefs; and for Extra-Trees FQI `R` record slots
+/// (target and source records) and `K` nodes (0 and 0 with tiles).
 pub struct AdaptiveMemory<
     const N: usize,
     const Q: usize,
     const C: usize,
     const E: usize,
     const B: usize,
+    const R: usize,
+    const K: usize,
 > {
     /// Each published source's reward-GP posterior mean, fitted on the device.
     pub means: [MeanFunction<f32, N, 3>; 3],
     /// The kernel's memory.
     pub kernel: AdaptiveStorage<f32, 2, 3, N, Q, 1033, C, E, B, 3>,
+    /// The trees' records and nodes.
+    pub trees: TreeStorage<f32, 2, R, K>,
 }
 
-impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: usize>
-    AdaptiveMemory<N, Q, C, E, B>
+impl<
+    const N: usize,
+    const Q: usize,
+    const C: usize,
+    const E: usize,
+    const B: usize,
+    const R: usize,
+    const K: usize,
+> AdaptiveMemory<N, Q, C, E, B, R, K>
 {
     /// All-zero memory, for a `static` in `.bss`.
     pub const fn new() -> Self {
@@ -489,8 +504,19 @@ impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: us
                 MeanFunction::EMPTY,
             ],
             kernel: AdaptiveStorage::new(),
+            trees: TreeStorage::new(),
         }
     }
+}
+
+/// The FQI approximator of an adaptive run.
+#[derive(Clone, Copy)]
+pub enum AdaptiveQ {
+    /// Tile coding: tiles per axis and tilings (`E` must hold its entries).
+    Tiles(usize, usize),
+    /// Streamed Extra-Trees: trees per action and the scratch tree's nodes (`R` must hold
+    /// the target and source records, `K` the nodes).
+    Trees(usize, usize),
 }
 
 /// What a run of [`adaptive_puddle`] changes from the recommended configuration.
@@ -502,8 +528,8 @@ pub struct AdaptiveRun {
     pub steps: usize,
     /// Candidate rows per sub-batch (`C` must hold them).
     pub candidates: usize,
-    /// Tiles per axis and tilings of the FQI approximator (`E` must hold its entries).
-    pub tiles: (usize, usize),
+    /// The FQI approximator.
+    pub q: AdaptiveQ,
     /// Likelihood evaluations and restarts of each GP search (`None`: the thesis's).
     pub search: Option<(usize, usize)>,
     /// Relabel the sources' rewards instead of weighting them (`AdaptiveConfig::relabel`).
@@ -521,15 +547,21 @@ pub fn adaptive_puddle<
     const C: usize,
     const E: usize,
     const B: usize,
+    const R: usize,
+    const K: usize,
 >(
-    memory: &mut AdaptiveMemory<N, Q, C, E, B>,
+    memory: &mut AdaptiveMemory<N, Q, C, E, B, R, K>,
     run: AdaptiveRun,
     seed: u64,
     inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
 ) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
     use crate::puddle_tables as t;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let AdaptiveMemory { means, kernel } = memory;
+    let AdaptiveMemory {
+        means,
+        kernel,
+        trees,
+    } = memory;
     let target = PuddleWorld::target(Dynamics::Shared);
     let mut config = AdaptiveConfig::recommended(
         run.budget,
@@ -545,7 +577,14 @@ pub fn adaptive_puddle<
         config.awfqi.gp_training.search.restarts = restarts;
     }
     let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
-    let buffers = kernel.buffers();
+    let mut buffers = kernel.buffers();
+    let approximator: Approximator<f32, 2> = match run.q {
+        AdaptiveQ::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
+        AdaptiveQ::Trees(count, nodes) => {
+            buffers.fqi = trees.storage();
+            ExtraTrees::streamed(count, nodes)?.into()
+        }
+    };
     for (mean, source) in means.iter_mut().zip(&sources) {
         mean.fit_rewards(
             &mut *buffers.gp,
@@ -558,7 +597,7 @@ pub fn adaptive_puddle<
     let rows = RowSet::grid(PuddleWorld::score_grid(0.1)?, PUDDLE_ACTIONS)?;
     let mut kernel = AdaptiveAwfqi::new(
         config.validate()?,
-        Tilings::cube(0.0, 10.0, run.tiles.0, run.tiles.1)?,
+        approximator,
         SourceData::new(&sources, &t::SOURCE_POSTERIORS)?,
         &*means,
         rows,
@@ -578,17 +617,28 @@ pub fn adaptive_puddle<
 /// The recommended Puddle World configuration of adaptive AWFQI (the one the harness
 /// measures as `awfqi-adaptive-kernel`): the sources' 64-point mean functions and the
 /// kernel's memory — a 64-point target GP, 6 steps × 50 target records, one weight per
-/// published source record, 4 000 candidate slots (and their alias table), 12 × 12 tiles
-/// × 8 tilings of FQI entries (13² · 8 · 4 = 5 408), 50 verified states, 3 beliefs.
-pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 5408, 50>;
+/// published source record, 4 000 candidate slots (and their alias table), 50 verified
+/// states, 3 beliefs — and streamed Extra-Trees FQI: one record slot per target and source
+/// record (300 + 1 033) and a 1 023-node scratch tree.
+pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 0, 50, 1333, 1023>;
 
-/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 12 × 8
-/// tiles, the thesis's GP search.
+/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 50
+/// streamed trees per action, the thesis's GP search.
 pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
     candidates: 4000,
-    tiles: (12, 8),
+    q: AdaptiveQ::Trees(50, 1023),
     search: None,
     relabel: false,
+};
+
+/// The former recommendation's memory, tile coding: 12 × 12 tiles × 8 tilings of FQI
+/// entries (13² · 8 · 4 = 5 408) instead of the trees.
+pub type AdaptiveTiles = AdaptiveMemory<64, 300, 4000, 5408, 50, 0, 0>;
+
+/// The former recommendation's run: [`ADAPTIVE_RECOMMENDED`] with 12 × 8 tiles.
+pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
+    q: AdaptiveQ::Tiles(12, 8),
+    ..ADAPTIVE_RECOMMENDED
 };

@@ -623,15 +623,15 @@ mod tests {
     /// relabelled source rewards and that every output is finite and in range.
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
+        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12, 0, 0> = AdaptiveMemory::new();
         // SAFETY: the only reference.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let run = AdaptiveRun {
             budget: 12,
             steps: 2,
             candidates: 60,
-            tiles: (6, 2),
+            q: AdaptiveQ::Tiles(6, 2),
             search: Some((40, 1)),
             relabel: true,
         };
@@ -660,6 +660,45 @@ mod tests {
         assert!(report.step == 2 && report.n_target_samples == 24);
         assert!(report.n_source_samples == 1033 && report.gp_points == 16);
         assert!(report.wr_eff > 0.0 && report.wr_eff <= 1057.0 * 1.0001);
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
+    }
+
+    /// Adaptive AWFQI on the target with streamed Extra-Trees FQI (f32), small: as above
+    /// with 4 streamed trees per action in a 511-node scratch tree (one record slot per
+    /// target and source record), reward weights instead of relabelling. Checks the run's
+    /// sizes, that every weight and the evaluation are finite, and that the greedy policy
+    /// of the final trees (grown along each query's path) acts.
+    #[test]
+    fn adaptive_awfqi_with_streamed_trees() {
+        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12, 1057, 511> = AdaptiveMemory::new();
+        // SAFETY: the only reference.
+        let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+        let run = AdaptiveRun {
+            budget: 12,
+            steps: 2,
+            candidates: 60,
+            q: AdaptiveQ::Trees(4, 511),
+            search: Some((40, 1)),
+            relabel: false,
+        };
+        let mut checked = false;
+        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+            let weights = kernel.reward_weights();
+            let action = kernel.q().greedy_action([0.0, 0.0]);
+            checked = kernel.target_samples().len() == 24
+                && weights.len() == 1033
+                && weights.iter().all(|w| w.is_finite() && *w >= 0.0)
+                && matches!(action, Ok(a) if a < 4)
+                && kernel
+                    .q()
+                    .max_value([5.0, 5.0])
+                    .is_ok_and(|v| v.is_finite());
+        })
+        .unwrap();
+        assert!(checked);
+        assert!(report.step == 2 && report.n_target_samples == 24);
         assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
         assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
     }
@@ -1030,6 +1069,39 @@ mod tests {
         assert!(fqi.value([0.5], 1) == Ok(-1.0));
         assert!(fqi.greedy_action([0.5]) == Ok(0));
         assert!(fqi.value([4.5], 1) == Ok(10.0));
+    }
+
+    /// Extra-Trees Q on the target (f32), stored and streamed: on the 5-cell chain fully
+    /// grown trees put each state's records in leaves of their own value, so FQI is value
+    /// iteration and Q is the closed-form Q* at the states.
+    #[test]
+    fn trees_q_on_a_chain() {
+        use awfqi::{EmptyCells, ExtraTrees, FqiConfig, SampleSet, TreeFqi, TreeNode, TreeRecord};
+        use rand_chacha::ChaCha8Rng;
+        use rand_core::SeedableRng;
+        let at = super::chain_state;
+        let samples = super::chain_samples();
+        let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
+        let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
+        for forests in [
+            ExtraTrees::new(5, 15).unwrap(),
+            ExtraTrees::streamed(5, 15).unwrap(),
+        ] {
+            let mut records = [TreeRecord::<f32, 1>::EMPTY; 8];
+            let mut nodes = [TreeNode::<f32>::EMPTY; 2 * 5 * 15];
+            let mut fqi = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            fqi.fit(&[SampleSet::unweighted(&samples)], &config, &mut rng)
+                .unwrap();
+            for c in 0..4 {
+                let right = fqi.value(at(c), 0).unwrap() as f64;
+                assert!(close(right, v(c), 1e-5, 1e-5), "Q({}, right) {}", c, right);
+                let left = fqi.value(at(c), 1).unwrap() as f64;
+                assert!(close(left, -1.0 + 0.9 * v(c.saturating_sub(1)), 1e-5, 1e-5));
+                assert!(fqi.greedy_action(at(c)) == Ok(0));
+            }
+            assert!(fqi.value([f32::NAN], 0).is_err());
+        }
     }
 
     /// Transition weights in the loop, on a 1-D plant whose two sources share the target's

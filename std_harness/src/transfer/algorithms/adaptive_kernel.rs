@@ -8,32 +8,52 @@
 //! posterior means are the sources' [`MeanFunction`]s), tile coding with
 //! [`ADAPTIVE_TILINGS`] offset tilings of [`ADAPTIVE_TILES`] tiles per axis (chosen on the
 //! tuning runs `--seed 100`, `docs/active-budget.md`; `--kernel-resolution` given
-//! explicitly sets the approximator of both kernels; `--adaptive-kernel-q knn|hybrid` selects
-//! the core's kernel averaging over the records, or its mean with the tiles, measured in
-//! `docs/active-budget.md`), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
+//! explicitly sets the approximator of both kernels; `--adaptive-kernel-q knn|hybrid|trees`
+//! selects the core's kernel averaging over the records, its mean with the tiles, or
+//! per-action Extra-Trees forests, measured in `docs/active-budget.md`), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
 //! verification share, surprise, uncertainty, decision relevance, floor, candidates,
 //! relevance width; the others must keep their defaults).
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, KnnRecord,
-    MeanFunction, QStorage, SourceData, Transition,
+    MeanFunction, QStorage, SourceData, Transition, TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::adaptive::AdaptiveOptions;
 use super::awfqi_kernel::{
-    GP_POINTS, KernelSetup, Record32, T, reward_gp_summary, row_set, to_f64,
+    GP_POINTS, KernelQFunction, KernelSetup, Record32, T, TreeKnobs, reward_gp_summary, row_set,
+    to_f64,
 };
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
 
-/// Tiles per axis of the adaptive kernel's FQI by default: chosen on the tuning runs
+/// Trees per action of the adaptive kernel's FQI by default (streamed Extra-Trees, the
+/// default approximator since the trees round): chosen on the tuning runs (`--seed 100`, 20
+/// runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
+pub const ADAPTIVE_TREES: usize = 50;
+/// Nodes of the streamed trees' scratch tree by default (the FQI iterations' trees of the
+/// largest action are cut at this budget; the final trees are fully grown).
+pub const ADAPTIVE_TREE_NODES: usize = 1023;
+/// The adaptive kernel's default approximator: [`ADAPTIVE_TREES`] streamed Extra-Trees per
+/// action, a scratch tree of [`ADAPTIVE_TREE_NODES`] nodes, otherwise fully grown.
+pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Trees(TreeKnobs {
+    trees: ADAPTIVE_TREES,
+    nodes: ADAPTIVE_TREE_NODES,
+    min_samples_split: 2,
+    min_samples_leaf: 1,
+    max_depth: None,
+    streamed: true,
+});
+
+/// Tiles per axis of the adaptive kernel's tile coding (`--adaptive-kernel-q tiles`, the
+/// default before the trees): chosen on the tuning runs
 /// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
 /// 16 × 8, 20 × 8; 12 × 8 best at every step but one, see `docs/active-budget.md`).
 pub const ADAPTIVE_TILES: usize = 12;
-/// Offset tilings of the adaptive kernel's FQI by default.
+/// Offset tilings of the adaptive kernel's tile coding.
 pub const ADAPTIVE_TILINGS: usize = 8;
 
 /// The core's configuration for `experiment`: the recommended one with the harness's
@@ -98,6 +118,8 @@ struct Memory {
     fqi: Vec<FqiEntry<T>>,
     records: Vec<KnnRecord<T, 2>>,
     links: Vec<u16>,
+    tree_records: Vec<TreeRecord<T, 2>>,
+    nodes: Vec<TreeNode<T>>,
     path: Vec<[T; 2]>,
     beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
 }
@@ -114,6 +136,8 @@ impl Memory {
                 entries: &mut self.fqi,
                 records: &mut self.records,
                 links: &mut self.links,
+                tree_records: &mut self.tree_records,
+                nodes: &mut self.nodes,
             },
             path: &mut self.path,
             beliefs: &mut self.beliefs,
@@ -177,14 +201,23 @@ pub fn with_learner(
         .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
     let budget = experiment.budget();
     let slots = config.candidates.min(rows.len());
-    // Kernel averaging holds every target and source record of a fit.
+    // Kernel averaging and trees hold every target and source record of a fit.
+    let n = experiment.protocol.steps * budget + setup.posteriors().len();
     let (records, links) = match approximator {
         awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
-            let n = experiment.protocol.steps * budget + setup.posteriors().len();
             let links = nb
                 .required_links(n, awfqi::env::PUDDLE_ACTIONS)
                 .ok_or_else(|| anyhow::anyhow!("kNN links overflow"))?;
             (n, links)
+        }
+        _ => (0, 0),
+    };
+    let (tree_records, nodes) = match approximator {
+        awfqi::Approximator::Trees(forests) => {
+            let nodes = forests
+                .required_nodes(awfqi::env::PUDDLE_ACTIONS)
+                .ok_or_else(|| anyhow::anyhow!("tree nodes overflow"))?;
+            (n, nodes)
         }
         _ => (0, 0),
     };
@@ -197,6 +230,8 @@ pub fn with_learner(
         fqi: vec![FqiEntry::EMPTY; entries],
         records: vec![KnnRecord::EMPTY; records],
         links: vec![0; links],
+        tree_records: vec![TreeRecord::EMPTY; tree_records],
+        nodes: vec![TreeNode::EMPTY; nodes],
         path: vec![[0.0; 2]; budget],
         beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
     };

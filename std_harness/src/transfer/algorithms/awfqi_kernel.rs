@@ -17,9 +17,9 @@ use std::time::Instant;
 
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
-    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, FqiEntry, Gp,
-    GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores,
-    SubsetRule, Tilings, Transition, WeightParams,
+    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, Estimator, ExtraTrees,
+    FqiEntry, Gp, GpTraining, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable,
+    Scores, SubsetRule, Tilings, Transition, WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -56,6 +56,25 @@ pub enum KernelQFunction {
     /// The mean of tile coding (tiles per axis, tilings) and kernel averaging (as
     /// [`KernelQFunction::Knn`]); `awfqi-adaptive-kernel` only.
     Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
+    /// Per-action Extra-Trees forests; `awfqi-adaptive-kernel` only.
+    Trees(TreeKnobs),
+}
+
+/// The knobs of [`KernelQFunction::Trees`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TreeKnobs {
+    /// Trees per action.
+    pub trees: usize,
+    /// Node budget of a tree (of the scratch tree when streamed).
+    pub nodes: usize,
+    /// `min_samples_split`.
+    pub min_samples_split: usize,
+    /// `min_samples_leaf`.
+    pub min_samples_leaf: usize,
+    /// Depth limit (`None`: none).
+    pub max_depth: Option<usize>,
+    /// Streamed (one scratch tree; the final trees grown along each query's path) or stored.
+    pub streamed: bool,
 }
 
 impl KernelQFunction {
@@ -95,6 +114,18 @@ impl KernelQFunction {
         Ok(out)
     }
 
+    /// Per-action Extra-Trees forests (`--kernel-trees`, `--kernel-tree-nodes`,
+    /// `--kernel-min-samples-split`, `--kernel-min-samples-leaf`, `--kernel-tree-max-depth`,
+    /// `--kernel-tree-streamed`).
+    ///
+    /// Errors: those of [`awfqi::ExtraTrees::new`] and
+    /// [`awfqi::ExtraTrees::with_min_samples`].
+    pub fn trees(knobs: TreeKnobs) -> anyhow::Result<Self> {
+        let out = Self::Trees(knobs);
+        out.approximator()?;
+        Ok(out)
+    }
+
     /// The core's approximator over Puddle World's `[0, 10]²`.
     pub(super) fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
@@ -105,6 +136,17 @@ impl KernelQFunction {
                 Tilings::cube(0.0, 10.0, n, t)?,
                 neighbours(k, h, reach, common)?,
             ),
+            Self::Trees(k) => {
+                let forests = if k.streamed {
+                    ExtraTrees::streamed(k.trees, k.nodes)?
+                } else {
+                    ExtraTrees::new(k.trees, k.nodes)?
+                };
+                let forests = forests.with_min_samples(k.min_samples_split, k.min_samples_leaf)?;
+                k.max_depth
+                    .map_or(forests, |d| forests.with_max_depth(d))
+                    .into()
+            }
         })
     }
 }
@@ -170,16 +212,15 @@ pub struct KernelConfig {
 
 impl KernelConfig {
     /// The kernel with the setting's score table (`mode`, `spacing`) and the default
-    /// approximator, tile coding with [`TILINGS`] tilings of [`TILES`] tiles per axis.
+    /// approximators: for `awfqi-kernel` tile coding with [`TILINGS`] tilings of [`TILES`]
+    /// tiles per axis, for `awfqi-adaptive-kernel` streamed Extra-Trees
+    /// ([`super::adaptive_kernel::ADAPTIVE_Q`]).
     pub fn new(mode: Mode, spacing: f64) -> Self {
         Self {
             mode,
             spacing,
             q: KernelQFunction::Tiles(TILES, TILINGS),
-            adaptive_q: KernelQFunction::Tiles(
-                super::adaptive_kernel::ADAPTIVE_TILES,
-                super::adaptive_kernel::ADAPTIVE_TILINGS,
-            ),
+            adaptive_q: super::adaptive_kernel::ADAPTIVE_Q,
         }
     }
 
@@ -318,6 +359,14 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_neighbours"] = k.into();
                 out["fqi_bandwidth"] = h.into();
                 out["fqi_reach"] = reach.into();
+            }
+            KernelQFunction::Trees(k) => {
+                out["fqi_trees_streamed"] = k.streamed.into();
+                out["fqi_trees"] = k.trees.into();
+                out["fqi_tree_nodes"] = k.nodes.into();
+                out["fqi_min_samples_split"] = k.min_samples_split.into();
+                out["fqi_min_samples_leaf"] = k.min_samples_leaf.into();
+                out["fqi_tree_max_depth"] = k.max_depth.into();
             }
         }
         out

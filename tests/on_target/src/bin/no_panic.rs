@@ -36,11 +36,11 @@ use awfqi::weights::{
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
-    FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
+    ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
     Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, Neighbours, Output,
     QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData,
-    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, WhenFull,
-    evaluate, evaluate_greedy, rollout,
+    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, TreeFqi,
+    TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -681,7 +681,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         keep(approximator.required_entries(actions));
         let mut storage = [FqiEntry::<T>::EMPTY; 400];
         if let Ok(mut q) = approximator.build(actions, &mut storage[..]) {
-            keep(q.fit(&sets, &config));
+            keep(q.fit(&sets, &config, rng));
             let s = [num::<T>(0.7); D];
             keep((
                 q.value(s, 0),
@@ -752,7 +752,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
             let hybrid = Approximator::Hybrid(tilings, neighbours);
             keep(hybrid.required_entries(actions));
             if let Ok(mut q) = hybrid.build(actions, storage) {
-                keep(q.fit(&sets, &config));
+                keep(q.fit(&sets, &config, rng));
                 let s = [num::<T>(0.4); D];
                 keep((q.value(s, 0), q.max_value(s), q.greedy_action(s)));
                 keep((q.actions(), q.entries().len()));
@@ -762,12 +762,75 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
         let approximator: Approximator<T, D> = neighbours.into();
         if let Ok(mut q) = approximator.build(actions, block.storage()) {
-            keep(q.fit(&sets, &config));
+            keep(q.fit(&sets, &config, rng));
             keep((
                 q.value([num(0.7); D], 0),
                 q.greedy_action([num(0.7); D]),
                 q.entries().len(),
             ));
+        }
+    }
+
+    // fqi: Extra-Trees forests, directly and behind QFunction
+    let forests = if opaque(true) {
+        ExtraTrees::new(index(3), index(15))
+    } else {
+        ExtraTrees::streamed(index(3), index(15))
+    };
+    let forests = forests
+        .and_then(|f| f.with_min_samples(index(2), index(1)))
+        .or_else(|_| ExtraTrees::new(index(2), index(7)));
+    if let Ok(forests) = forests {
+        keep((
+            forests.trees(),
+            forests.max_nodes(),
+            forests.min_samples_split(),
+            forests.min_samples_leaf(),
+        ));
+        keep((forests.required_nodes(actions), forests.is_streamed()));
+        let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
+            .and_then(|c| c.with_min_weight(num(0.5)))
+            .unwrap_or_else(|_| FqiConfig::published());
+        let w = [num::<T>(0.5); 12];
+        let y = [num::<T>(-1.0); 12];
+        let sets = [
+            SampleSet::unweighted(&records[..6]).with_rewards(Some(&y[..6])),
+            SampleSet::weighted(&records[6..], Some(&w[6..]), Some(&w[..6])),
+        ];
+        let mut slots = [TreeRecord::<T, D>::EMPTY; 12];
+        let mut nodes = [TreeNode::<T>::EMPTY; 4 * 3 * 15];
+        if let Ok(mut fqi) = TreeFqi::new(forests, actions, &mut slots, &mut nodes) {
+            keep(fqi.fit(&sets, &config, rng));
+            keep(fqi.fit_sets(sets.iter().copied(), &config, rng));
+            keep((fqi.forests().trees(), fqi.actions(), fqi.records().len()));
+            let s = [num::<T>(0.2); D];
+            keep((
+                fqi.value(s, index(1)),
+                fqi.max_value(s),
+                fqi.greedy_action(s),
+            ));
+            keep(fqi.greedy(s));
+            if let Some(r) = fqi.records().get(index(2)) {
+                keep((r.reward_model(), r.target(), r.action()));
+            }
+            if let Some(n) = fqi.tree(index(1), index(1)).and_then(|t| t.get(index(0))) {
+                keep((n.is_leaf(), n.value(), n.feature()));
+            }
+            fqi.clear();
+        }
+        let mut block = TreeStorage::<T, D, 12, { 4 * 3 * 15 }>::new();
+        let approximator: Approximator<T, D> = forests.into();
+        keep(approximator.required_entries(actions));
+        if let Ok(mut q) = approximator.build(actions, block.storage()) {
+            keep(q.fit(&sets, &config, rng));
+            keep((
+                q.value([num(0.7); D], 0),
+                q.max_value([num(0.7); D]),
+                q.greedy_action([num(0.7); D]),
+                q.entries().len(),
+                q.actions(),
+            ));
+            q.clear();
         }
     }
 
@@ -1009,6 +1072,24 @@ fn adaptive<T, G, const D: usize, const I: usize>(
         let mut buffers = storage.buffers();
         buffers.fqi = knn.storage();
         let built = AdaptiveAwfqi::new(config, neighbours, data, &means, rows, plant, buffers);
+        if let Ok(mut kernel) = built {
+            keep(kernel.step(rng));
+            keep(kernel.q().greedy_action([num(0.5); D]));
+        }
+    }
+    // The kernel with Extra-Trees Q (stored or streamed): records for the target and source
+    // records, nodes.
+    let forests = if opaque(true) {
+        ExtraTrees::streamed(index(2), index(15))
+    } else {
+        ExtraTrees::new(index(2), index(15))
+    };
+    if let Ok(forests) = forests {
+        let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
+        let mut trees = TreeStorage::<T, D, 24, { 2 * 4 * 15 }>::new();
+        let mut buffers = storage.buffers();
+        buffers.fqi = trees.storage();
+        let built = AdaptiveAwfqi::new(config, forests, data, &means, rows, plant, buffers);
         if let Ok(mut kernel) = built {
             keep(kernel.step(rng));
             keep(kernel.q().greedy_action([num(0.5); D]));
