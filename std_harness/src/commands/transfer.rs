@@ -301,6 +301,10 @@ pub struct Args {
     /// awfqi-adaptive: trees of the intermediate plans (0: the protocol's).
     #[arg(long, default_value_t = AdaptiveOptions::default().plan_trees)]
     pub adaptive_plan_trees: usize,
+    /// awfqi-adaptive: trees of each step's last fit, the plan it ends with (0: the
+    /// protocol's).
+    #[arg(long, default_value_t = AdaptiveOptions::default().final_trees)]
+    pub adaptive_final_trees: usize,
     /// awfqi-adaptive: relevance-kernel width (share of each state coordinate's range).
     #[arg(long, default_value_t = AdaptiveOptions::default().relevance_width)]
     pub adaptive_relevance_width: f64,
@@ -369,6 +373,7 @@ impl Args {
             floor: self.adaptive_floor,
             candidates: self.adaptive_candidates,
             plan_trees: self.adaptive_plan_trees,
+            final_trees: self.adaptive_final_trees,
             relevance_width: self.adaptive_relevance_width,
             model_rewards: self.adaptive_model_rewards,
             source_weights: self.adaptive_source_weights,

@@ -64,6 +64,12 @@ pub struct AdaptiveOptions {
     /// Trees of the intermediate plans (0: the protocol's; the last sub-batch of a step
     /// always uses the protocol's).
     pub plan_trees: usize,
+    /// Trees of each step's last fit, the plan the step ends with (0: the protocol's).
+    /// More trees average away the Q-function's noise, which at 50 queries shows as
+    /// greedy 2-cycles in the open (docs/active-budget.md, "Remaining failures"). Written
+    /// to the result files only when set, so those of the protocol's trees are unchanged.
+    #[serde(skip_serializing_if = "is_protocol_trees")]
+    pub final_trees: usize,
     /// Width of the relevance kernel, as a share of each state coordinate's range.
     pub relevance_width: f64,
     /// FQI's rewards from the target reward model (prior mean plus residual GP mean) at
@@ -156,6 +162,7 @@ impl Default for AdaptiveOptions {
             floor: 0.1,
             candidates: 4000,
             plan_trees: 0,
+            final_trees: 0,
             relevance_width: 0.1,
             model_rewards: false,
             source_weights: false,
@@ -920,12 +927,21 @@ fn plausibility(e2: &[Vec<f64>], v: f64) -> Vec<f64> {
     w.into_iter().map(|x| x / total).collect()
 }
 
+/// `0`, the tree count that means "the protocol's" (serde's `skip_serializing_if`).
+fn is_protocol_trees(trees: &usize) -> bool {
+    *trees == 0
+}
+
 impl<const D: usize> Learner<D> for Adaptive<'_, D> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let n = self.experiment.budget();
         let s = self.options.sub_batches;
         let trees = self.run.protocol.trees;
         let plan_trees = match self.options.plan_trees {
+            0 => trees,
+            t => t,
+        };
+        let final_trees = match self.options.final_trees {
             0 => trees,
             t => t,
         };
@@ -947,7 +963,7 @@ impl<const D: usize> Learner<D> for Adaptive<'_, D> {
                 self.path.extend(simulated);
             }
             self.draw(quota - made, rng)?;
-            let t = if b + 1 == s { trees } else { plan_trees };
+            let t = if b + 1 == s { final_trees } else { plan_trees };
             self.refit(t, rng)?;
             if self.options.select > 0 {
                 plans.extend(self.run.q.clone());

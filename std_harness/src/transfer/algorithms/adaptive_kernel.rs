@@ -74,12 +74,13 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
             && o.consensus == d.consensus
             && o.corroborate == d.corroborate
             && o.oracle == d.oracle
-            && o.select == d.select,
+            && o.select == d.select
+            && o.final_trees == d.final_trees,
         "awfqi-adaptive-kernel has the default configuration of awfqi-adaptive only \
          (no --adaptive-prior, --adaptive-model-rewards, --adaptive-source-weights, \
          --adaptive-surprise-stop, --adaptive-simulate, --adaptive-resume, \
          --adaptive-temperature, --adaptive-consensus, --adaptive-corroborate, \
-         --adaptive-oracle, --adaptive-select)"
+         --adaptive-oracle, --adaptive-select, --adaptive-final-trees)"
     );
     let domain = &experiment.domain;
     let mut bounds = [(0.0, 0.0); 2];
