@@ -390,6 +390,27 @@ struct Growth<T> {
     max_depth: usize,
 }
 
+/// The two sides of one feature's candidate split: weight `W`, weighted sum `S` (relative
+/// to the node's first target) and, on the left, the record count.
+#[derive(Clone, Copy)]
+struct Sides<T> {
+    wl: T,
+    sl: T,
+    wr: T,
+    sr: T,
+    nl: usize,
+}
+
+impl<T: Real> Sides<T> {
+    const EMPTY: Self = Self {
+        wl: T::ZERO,
+        sl: T::ZERO,
+        wr: T::ZERO,
+        sr: T::ZERO,
+        nl: 0,
+    };
+}
+
 /// Draws the candidate splits of a node and returns the best valid one.
 fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
     records: impl Iterator<Item = &'r TreeRecord<T, D>>,
@@ -429,31 +450,18 @@ fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
         return None;
     }
     // Both sides summed on their own, so a side of zero weight has exactly W = 0.
-    let mut wl = [T::ZERO; D];
-    let mut sl = [T::ZERO; D];
-    let mut wr = [T::ZERO; D];
-    let mut sr = [T::ZERO; D];
-    let mut nl = [0usize; D];
+    let mut sides = [Sides::<T>::EMPTY; D];
     for r in records {
         let w = r.w(growth.first);
         let wy = w * (r.target - st.y0);
-        for (d, (&x, &tau)) in r.state.iter().zip(&thresholds).enumerate() {
-            let (Some(wl), Some(sl), Some(wr), Some(sr), Some(nl)) = (
-                wl.get_mut(d),
-                sl.get_mut(d),
-                wr.get_mut(d),
-                sr.get_mut(d),
-                nl.get_mut(d),
-            ) else {
-                continue;
-            };
+        for ((&x, &tau), side) in r.state.iter().zip(&thresholds).zip(&mut sides) {
             if x <= tau {
-                *wl += w;
-                *sl += wy;
-                *nl += 1;
+                side.wl += w;
+                side.sl += wy;
+                side.nl += 1;
             } else {
-                *wr += w;
-                *sr += wy;
+                side.wr += w;
+                side.sr += wy;
             }
         }
     }
@@ -462,17 +470,12 @@ fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
     let mut best = None;
     let mut best_score = T::NEG_INFINITY;
     for &f in &order {
-        let (Some(&c), Some(&wl), Some(&sl), Some(&wr), Some(&sr), Some(&nl), Some(&tau)) = (
-            candidate.get(f),
-            wl.get(f),
-            sl.get(f),
-            wr.get(f),
-            sr.get(f),
-            nl.get(f),
-            thresholds.get(f),
-        ) else {
+        let (Some(&c), Some(side), Some(&tau)) =
+            (candidate.get(f), sides.get(f), thresholds.get(f))
+        else {
             continue;
         };
+        let Sides { wl, sl, wr, sr, nl } = *side;
         let counted = nl >= growth.min_leaf && n - nl.min(n) >= growth.min_leaf;
         if !(c && counted && enough(wl) && enough(wr)) {
             continue;

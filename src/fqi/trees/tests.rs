@@ -27,6 +27,47 @@ fn storage(records: usize, forests: &ExtraTrees) -> (Vec<TreeRecord<f64, 1>>, Ve
     )
 }
 
+/// 30 records on `[0, 5)` of two actions: the samples (reward −1), the same samples
+/// carrying the replacement rewards `−|x − 2|`, those rewards, and the generator after
+/// drawing them.
+fn replacement_case() -> (Vec<S1>, Vec<S1>, Vec<f64>, ChaCha8Rng) {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut samples = Vec::new();
+    let mut rewards = Vec::new();
+    for i in 0..30 {
+        let x = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
+        let next = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
+        samples.push(at(x, i % 2, -1.0, next, i % 9 == 0));
+        rewards.push(-(x - 2.0).abs());
+    }
+    let carried = samples
+        .iter()
+        .zip(&rewards)
+        .map(|(s, &r)| Transition { reward: r, ..*s })
+        .collect();
+    (samples, carried, rewards, rng)
+}
+
+/// γ = 0.9, 10 iterations: the FQI of [`replacement_case`]'s tests.
+fn replacement_config() -> FqiConfig<f64> {
+    FqiConfig::new(0.9, 10, EmptyCells::Nearest).unwrap()
+}
+
+/// The values at 50 points of `forests` fitted on `sets` (seed 4).
+fn fitted_values(forests: ExtraTrees, sets: &[SampleSet<'_, f64, 1>]) -> Vec<f64> {
+    let (mut records, mut nodes) = storage(30, &forests);
+    let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
+    q.fit(
+        sets,
+        &replacement_config(),
+        &mut ChaCha8Rng::seed_from_u64(4),
+    )
+    .unwrap();
+    (0..50)
+        .map(|i| q.value([i as f64 / 10.0], i % 2).unwrap())
+        .collect()
+}
+
 /// One iteration: Q is the reward model.
 fn one_iteration() -> FqiConfig<f64> {
     FqiConfig::new(0.9, 1, EmptyCells::Nearest).unwrap()
@@ -314,31 +355,10 @@ fn min_samples_leaf_keeps_three_records_per_leaf() {
 
 #[test]
 fn same_seed_same_q_and_replacement_rewards_as_carried_rewards() {
-    let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let mut samples = Vec::new();
-    let mut rewards = Vec::new();
-    for i in 0..30 {
-        let x = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
-        let next = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
-        samples.push(at(x, i % 2, -1.0, next, i % 9 == 0));
-        rewards.push(-(x - 2.0).abs());
-    }
-    let carried: Vec<S1> = samples
-        .iter()
-        .zip(&rewards)
-        .map(|(s, &r)| Transition { reward: r, ..*s })
-        .collect();
+    let (samples, carried, rewards, _) = replacement_case();
     let forests = ExtraTrees::new(3, 31).unwrap();
-    let config = FqiConfig::new(0.9, 10, EmptyCells::Nearest).unwrap();
-    let fit = |sets: &[SampleSet<'_, f64, 1>]| {
-        let (mut records, mut nodes) = storage(30, &forests);
-        let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
-        q.fit(sets, &config, &mut ChaCha8Rng::seed_from_u64(4))
-            .unwrap();
-        (0..50)
-            .map(|i| q.value([i as f64 / 10.0], i % 2).unwrap())
-            .collect::<Vec<_>>()
-    };
+    let config = replacement_config();
+    let fit = |sets: &[SampleSet<'_, f64, 1>]| fitted_values(forests, sets);
     let replaced = fit(&[SampleSet::unweighted(&samples).with_rewards(Some(&rewards))]);
     assert_eq!(replaced, fit(&[SampleSet::unweighted(&carried)]));
     // Split across two sets: the same records, the same values.
@@ -610,31 +630,10 @@ fn fully_grown_trees_interpolate_distinct_training_states() {
 
 #[test]
 fn streamed_fits_are_reproducible_and_honour_replacement_rewards() {
-    let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let mut samples = Vec::new();
-    let mut rewards = Vec::new();
-    for i in 0..30 {
-        let x = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
-        let next = crate::rng::uniform::<f64, _>(&mut rng) * 5.0;
-        samples.push(at(x, i % 2, -1.0, next, i % 9 == 0));
-        rewards.push(-(x - 2.0).abs());
-    }
-    let carried: Vec<S1> = samples
-        .iter()
-        .zip(&rewards)
-        .map(|(s, &r)| Transition { reward: r, ..*s })
-        .collect();
+    let (samples, carried, rewards, mut rng) = replacement_case();
     let forests = ExtraTrees::streamed(3, 63).unwrap();
-    let config = FqiConfig::new(0.9, 10, EmptyCells::Nearest).unwrap();
-    let fit = |sets: &[SampleSet<'_, f64, 1>]| {
-        let (mut records, mut nodes) = storage(30, &forests);
-        let mut q = TreeFqi::new(forests, 2, &mut records, &mut nodes).unwrap();
-        q.fit(sets, &config, &mut ChaCha8Rng::seed_from_u64(4))
-            .unwrap();
-        (0..50)
-            .map(|i| q.value([i as f64 / 10.0], i % 2).unwrap())
-            .collect::<Vec<_>>()
-    };
+    let config = replacement_config();
+    let fit = |sets: &[SampleSet<'_, f64, 1>]| fitted_values(forests, sets);
     let replaced = fit(&[SampleSet::unweighted(&samples).with_rewards(Some(&rewards))]);
     assert_eq!(replaced, fit(&[SampleSet::unweighted(&carried)]));
     // Values stay within the range of the discounted rewards.
