@@ -286,10 +286,17 @@ fn awfqi_adaptive_final_trees_is_the_last_fit_only() {
     let default = run_with("default", None);
     let same = run_with("same", Some("3")); // the protocol's --trees 3
     let more = run_with("more", Some("9"));
-    assert!(default["parameters"]["adaptive"].get("final_trees").is_none());
+    assert!(
+        default["parameters"]["adaptive"]
+            .get("final_trees")
+            .is_none()
+    );
     assert_eq!(same["steps"], default["steps"]);
     assert_eq!(same["samples"], default["samples"]);
-    assert_eq!(more["parameters"]["adaptive"]["final_trees"], serde_json::json!(9));
+    assert_eq!(
+        more["parameters"]["adaptive"]["final_trees"],
+        serde_json::json!(9)
+    );
     assert_ne!(more["samples"], default["samples"]);
     std::fs::remove_dir_all(&base).unwrap();
 }

@@ -32,6 +32,7 @@ use crate::transfer::algorithms::adaptive_kernel::{
 use crate::transfer::algorithms::awfqi_kernel::{
     KernelConfig, KernelQFunction, KernelSetup, TreeKnobs,
 };
+use crate::transfer::algorithms::rbt::ComplianceSum;
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
@@ -190,9 +191,13 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub ideal_means: Option<IdealMeans>,
     /// RBT's n_total (source records per step). Default: Puddle World 500, Dam 60000,
-    /// Acrobot 10000.
+    /// Acrobot 8000.
     #[arg(long)]
     pub rbt_total: Option<usize>,
+    /// RBT's task compliance: `means` over a source's records (spec §8, the default) or
+    /// `sums` (what the published Acrobot RBT runs computed; docs/paper-domains.md).
+    #[arg(long, value_enum, default_value_t = ComplianceSum::Means)]
+    pub rbt_compliance: ComplianceSum,
     /// Step 1's collection policy: `uniform` (spec §3.2, the default) or `zero-q` (the
     /// reference code's ε-greedy around a zero Q-function: mostly the first action).
     #[arg(long, value_enum)]
@@ -665,6 +670,7 @@ pub fn build_experiment<const D: usize>(
         gp: config.gp(),
         transition_weights: args.transition_weights,
         rbt_total: config.rbt_total,
+        rbt_compliance: args.rbt_compliance,
         ideal_means: args.ideal_means,
         ..TransferOptions::default()
     };

@@ -22,6 +22,7 @@ use super::protocol::{Learner, Protocol};
 use super::score_tables::ScoreTableData;
 use super::sources::SourceSet;
 use crate::domains::{Domain, IdealMeans};
+use rbt::ComplianceSum;
 
 /// The algorithms of issue 5, in the order the outputs list them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
@@ -196,6 +197,10 @@ pub struct TransferOptions {
     pub transition_weights: Option<bool>,
     /// RBT's `n_total` (500).
     pub rbt_total: usize,
+    /// RBT's compliance aggregate (the spec's means; written to the result files only
+    /// when sums).
+    #[serde(skip_serializing_if = "ComplianceSum::is_spec")]
+    pub rbt_compliance: ComplianceSum,
     /// How the ideal weights get mean next states (`None`: the domain's published way).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ideal_means: Option<IdealMeans>,
@@ -218,6 +223,7 @@ impl Default for TransferOptions {
             gp: GpOptions::published(),
             transition_weights: None,
             rbt_total: 500,
+            rbt_compliance: ComplianceSum::Means,
             ideal_means: None,
         }
     }
@@ -383,6 +389,9 @@ impl<const D: usize> Experiment<D> {
                 o["delta_r"] = 0.1.into();
                 o["mu"] = 0.8.into();
                 o["n_total"] = self.options.rbt_total.into();
+                if !self.options.rbt_compliance.is_spec() {
+                    o["compliance"] = "sums".into();
+                }
             }
             Algorithm::AwfqiKernel => {
                 if let Some(k) = &self.kernel {

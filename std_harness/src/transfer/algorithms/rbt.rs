@@ -8,7 +8,8 @@
 //! action's value, as the reference's records hold it: the Dam's release, else the index):
 //! - compliance: `W_ij = φ_sa(d_ij)/Σ_j′ φ_sa(d_ij′)`, `P_ij = φ_s′(‖s′^t_i − (s^t_i + s′^k_j −
 //!   s^k_j)‖)`, `Q_ij = φ_r(|r^t_i − r^k_j|)`, `λ_i = (mean_j W_ij P_ij)(mean_j W_ij Q_ij)`,
-//!   `Λ_k = p_k · mean_i λ_i`;
+//!   `Λ_k = p_k · mean_i λ_i` (or sums over `j`, [`ComplianceSum::Sums`]: the published
+//!   Acrobot runs');
 //! - relevance: the same with the roles reversed (`W′` normalised over target samples),
 //!   `λ̃_j = λ′_j/Σλ′`, the average distance `D_j` of the lowest-weight target samples whose
 //!   cumulative weight is `≤ μ`, and `ρ_j = exp(−((λ̃_j − 1)/D_j)²)` (0 when `D_j = 0`).
@@ -20,6 +21,27 @@ use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::Record;
 use crate::forest_fqi::{Dataset, FqiOptions};
 use crate::transfer::protocol::Diagnostics;
+
+/// How a target sample's compliance aggregates over a source's records (spec §8 step 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ComplianceSum {
+    /// `λᵢ = (1/N_k Σ_j W_ij P_ij)(1/N_k Σ_j W_ij Q_ij)`: the spec's and the kept reference
+    /// code's. `Λ_k` then carries a factor `1/N_k²`, which favours smaller sources.
+    #[default]
+    Means,
+    /// `λᵢ = (Σ_j W_ij P_ij)(Σ_j W_ij Q_ij)`: what the published Acrobot RBT runs computed
+    /// (their compliances are ours with means, times `N_k²`, renormalised;
+    /// docs/paper-domains.md). Equal-sized sources give the same compliances either way.
+    Sums,
+}
+
+impl ComplianceSum {
+    /// `true` for the spec's [`ComplianceSum::Means`] (serde's `skip_serializing_if`).
+    pub fn is_spec(&self) -> bool {
+        *self == Self::Means
+    }
+}
 
 /// RBT's parameters (spec §8).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,6 +56,8 @@ pub struct RbtParams {
     pub mu: f64,
     /// `n_total`, source records transferred per step (500).
     pub n_total: usize,
+    /// The task compliance's aggregate over a source's records (means).
+    pub compliance: ComplianceSum,
 }
 
 impl RbtParams {
@@ -45,6 +69,7 @@ impl RbtParams {
             delta_r: 0.1,
             mu: 0.8,
             n_total: 500,
+            compliance: ComplianceSum::Means,
         }
     }
 }
@@ -78,13 +103,14 @@ fn transition_gap<const D: usize>(a: &Record<D>, b: &Record<D>) -> f64 {
 }
 
 /// The per-sample compliance of `a` (one record) against all of `others`, the roles as in
-/// §8 step 2 (`a` a target record, `others` a source) or step 3 (reversed). Returns the
-/// normalised kernel weights `W_a·` too.
+/// §8 step 2 (`a` a target record, `others` a source) or step 3 (reversed), with means over
+/// `others` or, for `sum`, sums. Returns the normalised kernel weights `W_a·` too.
 fn sample_compliance<const D: usize>(
     a: &Record<D>,
     others: &[Record<D>],
     values: &[f64],
     p: &RbtParams,
+    sum: ComplianceSum,
 ) -> (f64, Vec<f64>) {
     let mut w: Vec<f64> = others
         .iter()
@@ -96,7 +122,10 @@ fn sample_compliance<const D: usize>(
     } else {
         w.iter_mut().for_each(|x| *x = 0.0);
     }
-    let n = others.len() as f64;
+    let n = match sum {
+        ComplianceSum::Means => others.len() as f64,
+        ComplianceSum::Sums => 1.0,
+    };
     let (mut wp, mut wq) = (0.0, 0.0);
     for (b, &wb) in others.iter().zip(&w) {
         wp += wb * phi(transition_gap(a, b), p.delta_s);
@@ -106,7 +135,7 @@ fn sample_compliance<const D: usize>(
 }
 
 /// The task compliance `Λ_k = p_k · mean_i λ_i` of a source (§8 step 2), actions valued
-/// by `values`.
+/// by `values`, `λ_i` aggregated as `p.compliance` says.
 pub fn task_compliance<const D: usize>(
     target: &[Record<D>],
     source: &[Record<D>],
@@ -119,7 +148,7 @@ pub fn task_compliance<const D: usize>(
     }
     let sum: f64 = target
         .iter()
-        .map(|t| sample_compliance(t, source, values, p).0)
+        .map(|t| sample_compliance(t, source, values, p, p.compliance).0)
         .sum();
     prior * sum / target.len() as f64
 }
@@ -139,7 +168,8 @@ pub fn relevances<const D: usize>(
     let mut avg_distance = Vec::with_capacity(source.len());
     let mut order: Vec<usize> = (0..target.len()).collect();
     for s in source {
-        let (lambda, w) = sample_compliance(s, target, values, p);
+        // (Means or sums: a common factor 1/N_t² that λ̃'s normalisation cancels.)
+        let (lambda, w) = sample_compliance(s, target, values, p, ComplianceSum::Means);
         compliance.push(lambda);
         // Average distance: target samples by ascending weight; keep the prefix whose
         // cumulative weight is ≤ μ; divide the kept distances' sum by ι + 1, ι the first
@@ -217,6 +247,7 @@ impl<'e, const D: usize> Rbt<'e, D> {
             run: Episodic::new(experiment),
             params: RbtParams {
                 n_total: experiment.options.rbt_total,
+                compliance: experiment.options.rbt_compliance,
                 ..RbtParams::published()
             },
         }
@@ -313,10 +344,25 @@ mod tests {
             delta_r: 0.5,
             mu: 0.8,
             n_total: 500,
+            compliance: ComplianceSum::Means,
         };
         let values = [0.0, 1.0];
         let lambda = task_compliance(&target, &source, &values, 1.0 / 3.0, &p);
         assert!((lambda - 0.005649023346879907).abs() < 1e-14, "{lambda}");
+        // Sums over the 5 source records: the same terms without the two 1/5 factors.
+        let sums = RbtParams {
+            compliance: ComplianceSum::Sums,
+            ..p
+        };
+        let lambda_sums = task_compliance(&target, &source, &values, 1.0 / 3.0, &sums);
+        assert!(
+            (lambda_sums - 25.0 * 0.005649023346879907).abs() < 1e-13,
+            "{lambda_sums}"
+        );
+        assert_eq!(
+            relevances(&target, &source, &values, &sums),
+            relevances(&target, &source, &values, &p)
+        );
         let rho = relevances(&target, &source, &values, &p);
         let want = [
             0.9154365889774161,
