@@ -455,14 +455,15 @@ fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
         let w = r.w(growth.first);
         let wy = w * (r.target - st.y0);
         for ((&x, &tau), side) in r.state.iter().zip(&thresholds).zip(&mut sides) {
-            if x <= tau {
-                side.wl += w;
-                side.sl += wy;
-                side.nl += 1;
-            } else {
-                side.wr += w;
-                side.sr += wy;
-            }
+            // Both sides gain a term, +0 on the other (selects, not a branch the random
+            // threshold would mispredict half the time). The sums start at +0 and never
+            // become −0, so adding +0 leaves them as a branch would, to the bit.
+            let left = x <= tau;
+            side.wl += if left { w } else { T::ZERO };
+            side.sl += if left { wy } else { T::ZERO };
+            side.wr += if left { T::ZERO } else { w };
+            side.sr += if left { T::ZERO } else { wy };
+            side.nl += usize::from(left);
         }
     }
     let n = st.n;
@@ -628,6 +629,74 @@ fn predict<T: Real, const D: usize>(nodes: &[TreeNode<T>], state: &[T; D]) -> T 
         i = next;
     }
     T::ZERO
+}
+
+/// Records walked down a tree in lockstep by [`add_next_state_values`].
+const LANES: usize = 8;
+
+/// [`predict`] at `LANES` states at once, with the same values: each lane takes one step
+/// per round, so the lanes' node loads overlap on a core that runs ahead (the host's);
+/// on an in-order core it costs what `LANES` walks cost.
+fn predict_lanes<T: Real, const D: usize>(
+    nodes: &[TreeNode<T>],
+    states: &[[T; D]; LANES],
+) -> [T; LANES] {
+    let mut at = [0usize; LANES];
+    // Children come after their parent, so no walk takes `nodes.len()` steps.
+    for _ in 0..nodes.len() {
+        let mut moved = false;
+        for (i, state) in at.iter_mut().zip(states) {
+            let node = nodes.get(*i).copied().unwrap_or(TreeNode::EMPTY);
+            let next = if node.is_leaf() {
+                *i
+            } else {
+                let x = state
+                    .get(usize::from(node.feature).wrapping_sub(1))
+                    .copied()
+                    .unwrap_or(T::ZERO);
+                let child = usize::from(node.left) + usize::from(x > node.value);
+                // A child before its parent (never grown so) ends the walk at 0, as in
+                // `predict`: past the end.
+                if child > *i { child } else { nodes.len() }
+            };
+            moved |= next != *i;
+            *i = next;
+        }
+        if !moved {
+            break;
+        }
+    }
+    at.map(|i| {
+        nodes
+            .get(i)
+            .filter(|node| node.is_leaf())
+            .map_or(T::ZERO, |node| node.value)
+    })
+}
+
+/// Adds the tree's prediction at each non-absorbing record's next state to the record's
+/// `acc`: [`predict`]'s values, [`LANES`] records at a time ([`predict_lanes`]).
+fn add_next_state_values<T: Real, const D: usize>(
+    tree: &[TreeNode<T>],
+    records: &mut [TreeRecord<T, D>],
+) {
+    let mut chunks = records.chunks_exact_mut(LANES);
+    for chunk in &mut chunks {
+        let mut states = [[T::ZERO; D]; LANES];
+        for (state, r) in states.iter_mut().zip(chunk.iter()) {
+            *state = r.next_state;
+        }
+        for (r, value) in chunk.iter_mut().zip(predict_lanes(tree, &states)) {
+            if !r.absorbing {
+                r.acc += value;
+            }
+        }
+    }
+    for r in chunks.into_remainder() {
+        if !r.absorbing {
+            r.acc += predict(tree, &r.next_state);
+        }
+    }
 }
 
 /// SplitMix64's output function: a bijective mix of 64 bits.
@@ -1047,17 +1116,10 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
                     grow(mine, self.nodes, growth, total, rng);
                 }
                 let tree: &[TreeNode<T>] = self.nodes;
-                for (i, r) in self
-                    .records
-                    .get_mut(..self.len)
-                    .unwrap_or(&mut [])
-                    .iter_mut()
-                    .enumerate()
-                {
-                    if !r.absorbing {
-                        r.acc += predict(tree, &r.next_state);
-                    }
-                    if growth.first && (start..end).contains(&i) {
+                let live = self.records.get_mut(..self.len).unwrap_or(&mut []);
+                add_next_state_values(tree, live);
+                if growth.first {
+                    for r in live.get_mut(start..end).unwrap_or(&mut []) {
                         r.own += predict(tree, &r.state);
                     }
                 }

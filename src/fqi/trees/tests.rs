@@ -778,3 +778,62 @@ fn the_depth_limit_holds_for_stored_and_streamed_trees() {
         }
     }
 }
+
+/// The lockstep walk gives `predict`'s value at every state: on grown trees, and on node
+/// arrays no growth makes (a child before its parent, a child past the end, a feature past
+/// `D`, no nodes at all).
+#[test]
+fn lockstep_prediction_equals_the_single_walk() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut records: Vec<TreeRecord<f64, 2>> = (0..200)
+        .map(|i| {
+            let x = [
+                crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+                crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+            ];
+            TreeRecord {
+                state: x,
+                target: (x[0] * 3.0).sin() + x[1] + f64::from(i % 3),
+                weight: 1.0,
+                reward: 1.0,
+                ..TreeRecord::EMPTY
+            }
+        })
+        .collect();
+    let growth = Growth {
+        first: false,
+        min_weight: 0.0,
+        min_leaf: 1,
+        min_node: 2,
+        max_depth: usize::MAX,
+    };
+    let mut grown = vec![TreeNode::EMPTY; 255];
+    grow(&mut records, &mut grown, &growth, 200.0, &mut rng);
+    assert!(!grown[0].is_leaf());
+    let split = |feature: u16, value: f64, left: u16| TreeNode {
+        value,
+        left,
+        feature,
+    };
+    let leaf = TreeNode::<f64>::leaf;
+    let odd: [&[TreeNode<f64>]; 4] = [
+        &[split(1, 2.0, 1), leaf(1.0), split(2, 2.0, 0), leaf(5.0)], // child before parent
+        &[split(1, 2.0, 1), leaf(-1.0), split(1, 1.0, 7)],           // child past the end
+        &[split(3, 2.0, 1), leaf(4.0), leaf(8.0)],                   // feature past D
+        &[],
+    ];
+    for nodes in odd.into_iter().chain([grown.as_slice()]) {
+        for _ in 0..8 {
+            let states: [[f64; 2]; LANES] = core::array::from_fn(|_| {
+                [
+                    crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+                    crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+                ]
+            });
+            let lanes = predict_lanes(nodes, &states);
+            for (state, value) in states.iter().zip(lanes) {
+                assert_eq!(value.to_bits(), predict(nodes, state).to_bits(), "{nodes:?}");
+            }
+        }
+    }
+}
