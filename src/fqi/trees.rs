@@ -409,7 +409,38 @@ impl<T: Real> Sides<T> {
         sr: T::ZERO,
         nl: 0,
     };
+
+    /// Adds a record of weight `w` and weighted target `wy` to its side.
+    fn add(&mut self, left: bool, w: T, wy: T) {
+        if left {
+            self.wl += w;
+            self.sl += wy;
+            self.nl += 1;
+        } else {
+            self.wr += w;
+            self.sr += wy;
+        }
+    }
+
+    /// [`Sides::add`] without a branch: both sides gain a term, +0 on the other. The sums
+    /// start at +0 and never become −0, so adding +0 leaves them as they are: the same
+    /// bits as [`Sides::add`].
+    fn add_both(&mut self, left: bool, w: T, wy: T) {
+        self.wl += if left { w } else { T::ZERO };
+        self.sl += if left { wy } else { T::ZERO };
+        self.wr += if left { T::ZERO } else { w };
+        self.sr += if left { T::ZERO } else { wy };
+        self.nl += usize::from(left);
+    }
 }
+
+/// Whether the target runs ahead of its branches (a 64-bit host: out of order, deep
+/// pipeline). There, branch-free sums ([`Sides::add_both`]: a random threshold's branch
+/// is mispredicted half the time) and lockstep tree walks ([`predict_lanes`]) are faster;
+/// on an in-order microcontroller (a Cortex-M's 3-stage pipeline) they only add
+/// instructions (+25 % for a step of the adaptive kernel under QEMU). The values are the
+/// same either way, to the bit.
+const RUNS_AHEAD: bool = cfg!(target_pointer_width = "64");
 
 /// Draws the candidate splits of a node and returns the best valid one.
 fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
@@ -455,15 +486,11 @@ fn best_split<'r, T: Real + 'r, const D: usize, R: Rng + ?Sized>(
         let w = r.w(growth.first);
         let wy = w * (r.target - st.y0);
         for ((&x, &tau), side) in r.state.iter().zip(&thresholds).zip(&mut sides) {
-            // Both sides gain a term, +0 on the other (selects, not a branch the random
-            // threshold would mispredict half the time). The sums start at +0 and never
-            // become −0, so adding +0 leaves them as a branch would, to the bit.
-            let left = x <= tau;
-            side.wl += if left { w } else { T::ZERO };
-            side.sl += if left { wy } else { T::ZERO };
-            side.wr += if left { T::ZERO } else { w };
-            side.sr += if left { T::ZERO } else { wy };
-            side.nl += usize::from(left);
+            if RUNS_AHEAD {
+                side.add_both(x <= tau, w, wy);
+            } else {
+                side.add(x <= tau, w, wy);
+            }
         }
     }
     let n = st.n;
@@ -675,11 +702,19 @@ fn predict_lanes<T: Real, const D: usize>(
 }
 
 /// Adds the tree's prediction at each non-absorbing record's next state to the record's
-/// `acc`: [`predict`]'s values, [`LANES`] records at a time ([`predict_lanes`]).
+/// `acc`: [`predict`]'s values, one record at a time or, `lockstep`, [`LANES`] at a time
+/// ([`predict_lanes`]).
 fn add_next_state_values<T: Real, const D: usize>(
     tree: &[TreeNode<T>],
     records: &mut [TreeRecord<T, D>],
+    lockstep: bool,
 ) {
+    if !lockstep {
+        for r in records.iter_mut().filter(|r| !r.absorbing) {
+            r.acc += predict(tree, &r.next_state);
+        }
+        return;
+    }
     let mut chunks = records.chunks_exact_mut(LANES);
     for chunk in &mut chunks {
         let mut states = [[T::ZERO; D]; LANES];
@@ -1117,7 +1152,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
                 }
                 let tree: &[TreeNode<T>] = self.nodes;
                 let live = self.records.get_mut(..self.len).unwrap_or(&mut []);
-                add_next_state_values(tree, live);
+                add_next_state_values(tree, live, RUNS_AHEAD);
                 if growth.first {
                     for r in live.get_mut(start..end).unwrap_or(&mut []) {
                         r.own += predict(tree, &r.state);

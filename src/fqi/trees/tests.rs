@@ -832,8 +832,78 @@ fn lockstep_prediction_equals_the_single_walk() {
             });
             let lanes = predict_lanes(nodes, &states);
             for (state, value) in states.iter().zip(lanes) {
-                assert_eq!(value.to_bits(), predict(nodes, state).to_bits(), "{nodes:?}");
+                assert_eq!(
+                    value.to_bits(),
+                    predict(nodes, state).to_bits(),
+                    "{nodes:?}"
+                );
             }
         }
+    }
+}
+
+/// Both ways of summing a split's sides, and of adding a tree's next-state values, give the
+/// same bits (the target picks one by [`RUNS_AHEAD`]): signed targets, zero weights
+/// (whose `wy` is −0 for a negative target), absorbing records.
+#[test]
+fn branch_free_and_branching_sums_agree_to_the_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let (mut branching, mut branch_free) = (Sides::<f32>::EMPTY, Sides::<f32>::EMPTY);
+    for i in 0..500 {
+        let w = if i % 7 == 0 {
+            0.0
+        } else {
+            crate::rng::uniform::<f32, _>(&mut rng)
+        };
+        let wy = w * (crate::rng::uniform::<f32, _>(&mut rng) - 0.5) * 10.0;
+        let left = crate::rng::uniform::<f32, _>(&mut rng) < 0.5;
+        branching.add(left, w, wy);
+        branch_free.add_both(left, w, wy);
+    }
+    for (a, b) in [
+        (branching.wl, branch_free.wl),
+        (branching.sl, branch_free.sl),
+        (branching.wr, branch_free.wr),
+        (branching.sr, branch_free.sr),
+    ] {
+        assert_eq!(a.to_bits(), b.to_bits());
+    }
+    assert_eq!(branching.nl, branch_free.nl);
+    assert!(branching.nl > 200 && branching.nl < 300);
+
+    let mut records: Vec<TreeRecord<f64, 2>> = (0..61)
+        .map(|i| {
+            let x = [
+                crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+                crate::rng::uniform::<f64, _>(&mut rng) * 4.0,
+            ];
+            TreeRecord {
+                state: x,
+                next_state: [x[1], x[0]],
+                target: x[0] - x[1] * x[1],
+                weight: 1.0,
+                absorbing: i % 5 == 0,
+                ..TreeRecord::EMPTY
+            }
+        })
+        .collect();
+    let growth = Growth {
+        first: false,
+        min_weight: 0.0,
+        min_leaf: 1,
+        min_node: 2,
+        max_depth: usize::MAX,
+    };
+    let mut tree = vec![TreeNode::EMPTY; 127];
+    grow(&mut records, &mut tree, &growth, 61.0, &mut rng);
+    let mut walked = records.clone();
+    add_next_state_values(&tree, &mut records, true);
+    add_next_state_values(&tree, &mut walked, false);
+    for (a, b) in records.iter().zip(&walked) {
+        assert_eq!(a.acc.to_bits(), b.acc.to_bits());
+        assert_eq!(
+            a.acc == 0.0,
+            a.absorbing || predict(&tree, &a.next_state) == 0.0
+        );
     }
 }
