@@ -17,12 +17,12 @@ use awfqi::weights::{Estimator, NoiseSubtraction};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+use self::rbt::ComplianceSum;
 use super::gp::{GpOptions, GpSearch};
 use super::protocol::{Learner, Protocol};
 use super::score_tables::ScoreTableData;
 use super::sources::SourceSet;
 use crate::domains::{Domain, IdealMeans};
-use rbt::ComplianceSum;
 
 /// The algorithms of issue 5, in the order the outputs list them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
