@@ -314,6 +314,16 @@ impl<T: Real> TreeNode<T> {
     pub fn feature(&self) -> Option<usize> {
         usize::from(self.feature).checked_sub(1)
     }
+
+    /// The index of the split's child that holds `state` (`x ≤ τ` left; a feature past
+    /// `D` reads 0).
+    fn child<const D: usize>(&self, state: &[T; D]) -> usize {
+        let x = state
+            .get(usize::from(self.feature).wrapping_sub(1))
+            .copied()
+            .unwrap_or(T::ZERO);
+        usize::from(self.left) + usize::from(x > self.value)
+    }
 }
 
 impl<T: Real> Default for TreeNode<T> {
@@ -388,6 +398,20 @@ struct Growth<T> {
     min_leaf: usize,
     min_node: usize,
     max_depth: usize,
+}
+
+impl<T: Real> Growth<T> {
+    /// `forests`' limits for iteration 1 (reward weights), children of at least
+    /// `min_weight`.
+    fn of(forests: &ExtraTrees, min_weight: T) -> Self {
+        Self {
+            first: true,
+            min_weight,
+            min_leaf: forests.min_samples_leaf,
+            min_node: forests.min_node(),
+            max_depth: forests.max_depth,
+        }
+    }
 }
 
 /// The two sides of one feature's candidate split: weight `W`, weighted sum `S` (relative
@@ -645,11 +669,7 @@ fn predict<T: Real, const D: usize>(nodes: &[TreeNode<T>], state: &[T; D]) -> T 
         if node.is_leaf() {
             return node.value;
         }
-        let x = state
-            .get(usize::from(node.feature).wrapping_sub(1))
-            .copied()
-            .unwrap_or(T::ZERO);
-        let next = usize::from(node.left) + usize::from(x > node.value);
+        let next = node.child(state);
         if next <= i {
             break;
         }
@@ -677,11 +697,7 @@ fn predict_lanes<T: Real, const D: usize>(
             let next = if node.is_leaf() {
                 *i
             } else {
-                let x = state
-                    .get(usize::from(node.feature).wrapping_sub(1))
-                    .copied()
-                    .unwrap_or(T::ZERO);
-                let child = usize::from(node.left) + usize::from(x > node.value);
+                let child = node.child(state);
                 // A child before its parent (never grown so) ends the walk at 0, as in
                 // `predict`: past the end.
                 if child > *i { child } else { nodes.len() }
@@ -945,13 +961,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             records,
             nodes,
             len: 0,
-            last: Growth {
-                first: true,
-                min_weight: T::ZERO,
-                min_leaf: forests.min_samples_leaf,
-                min_node: forests.min_node(),
-                max_depth: forests.max_depth,
-            },
+            last: Growth::of(&forests, T::ZERO),
             seed: 0,
         };
         q.clear();
@@ -1049,13 +1059,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
         }
         self.len = total;
         self.group_by_action();
-        let mut growth = Growth {
-            first: true,
-            min_weight: config.min_weight(),
-            min_leaf: self.forests.min_samples_leaf,
-            min_node: self.forests.min_node(),
-            max_depth: self.forests.max_depth,
-        };
+        let mut growth = Growth::of(&self.forests, config.min_weight());
         if self.forests.streamed {
             self.fit_streamed(growth, config, rng);
             return Ok(());
