@@ -169,8 +169,6 @@ fn neighbours(
     Ok(nb)
 }
 
-impl KernelQFunction {}
-
 /// The kernels' scalar.
 pub(super) type T = f32;
 /// A record in the kernels' scalar.
