@@ -24,6 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::domains::{Domain, IdealMeans};
+use crate::gp_large::fixed::PredictiveVariance;
 use crate::run_range::RunRange;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
 use crate::transfer::algorithms::adaptive_kernel::{
@@ -173,6 +174,12 @@ pub struct Args {
     /// step); `refit` reconditions on all target records every step, as the reference.
     #[arg(long, value_enum, default_value_t = FixedGpUpdate::Incremental)]
     pub fixed_gp: FixedGpUpdate,
+    /// How the fixed-kernel GPs (Dam, Acrobot) compute their predictive variance:
+    /// `stable` (`k** − ‖L⁻¹k*‖²`) or `explicit-inverse` (`k** − k*ᵀK⁻¹k*` with `K⁻¹`
+    /// formed, negatives set to 0: scikit-learn ≤ 0.23's arithmetic, which the IWFQI
+    /// reference ran; an ablation, implies `--fixed-gp refit` for IWFQI's target GPs).
+    #[arg(long, value_enum, default_value_t = PredictiveVariance::Stable)]
+    pub fixed_gp_variance: PredictiveVariance,
     /// IWFQI/AWFQI estimator variances: `published` or (Puddle World only) `corrected`
     /// (0.01, 0.04), spec §14.6.
     #[arg(long, value_enum, default_value = "published")]
@@ -579,6 +586,7 @@ impl Config {
             search: self.args.gp_search,
             check: self.args.check_gp_search,
             fixed_update: self.args.fixed_gp,
+            fixed_variance: self.args.fixed_gp_variance,
         }
     }
 }

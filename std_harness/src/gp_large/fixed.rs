@@ -19,6 +19,13 @@
 //! the reference's `10⁻¹⁰` (noise-free kernels on thousands of nearby points) is retried
 //! with `10⁻⁸`, `10⁻⁶` and `10⁻⁴` (scikit-learn would raise); [`FixedGp::jitter`] says
 //! which one conditioned it.
+//!
+//! **Predictive variance.** By default `σ²(z) = k(z, z) − ‖L⁻¹k*‖²`, the stable form.
+//! [`PredictiveVariance::ExplicitInverse`] instead forms `K⁻¹ = L⁻ᵀL⁻¹` and computes
+//! `k(z, z) − k*ᵀK⁻¹k*`, negatives set to 0, as scikit-learn up to 0.23 did and so as the
+//! IWFQI reference's GPs did: on noise-free kernels over thousands of nearby points (the
+//! Dam's reward GP) that form is mostly rounding error, and the published weights carry
+//! it. An ablation for reproducing them, never the default.
 
 use awfqi::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -115,6 +122,35 @@ impl FixedKernel {
     }
 }
 
+/// How [`FixedGp`] computes its predictive variance (see the [module docs](self)).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum PredictiveVariance {
+    /// `k(z, z) − ‖L⁻¹k*‖²` (one triangular solve per query).
+    #[default]
+    Stable,
+    /// `k(z, z) − k*ᵀ(L⁻ᵀL⁻¹)k*` with the inverse formed explicitly, negatives set to 0:
+    /// scikit-learn ≤ 0.23's arithmetic, which the IWFQI reference ran.
+    ExplicitInverse,
+}
+
+impl PredictiveVariance {
+    /// Whether this is the default (kept out of result files).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 /// The points sharing one value of the split coordinate (or all points), conditioned.
 #[derive(Debug, Clone)]
 struct Block<const Z: usize> {
@@ -124,6 +160,8 @@ struct Block<const Z: usize> {
     factor: Mat<f64>,
     /// `K⁻¹y`.
     alpha: Vec<f64>,
+    /// `K⁻¹ = L⁻ᵀL⁻¹`, formed only for [`PredictiveVariance::ExplicitInverse`].
+    inverse: Option<Mat<f64>>,
 }
 
 /// A GP with a fixed kernel conditioned on its training data (see the [module docs](self)).
@@ -189,6 +227,20 @@ impl<const Z: usize> FixedGp<Z> {
             }
             jitter *= 100.0;
         }
+    }
+
+    /// The same GP, predicting its variance by `variance` (forms each block's `K⁻¹` for
+    /// [`PredictiveVariance::ExplicitInverse`]: `n²` more memory per block).
+    pub fn with_variance(mut self, variance: PredictiveVariance) -> Self {
+        for block in &mut self.blocks {
+            block.inverse = match variance {
+                PredictiveVariance::Stable => None,
+                PredictiveVariance::ExplicitInverse => {
+                    Some(explicit_inverse(block.factor.as_ref(), self.par))
+                }
+            };
+        }
+        self
     }
 
     /// Number of training points.
@@ -267,6 +319,28 @@ impl<const Z: usize> FixedGp<Z> {
                     }
                     means[q] = column.iter().zip(&block.alpha).map(|(a, b)| a * b).sum();
                 }
+                if let Some(inverse) = &block.inverse {
+                    // scikit-learn's `k** − einsum(K* K⁻¹, K*)`, negatives to 0.
+                    let mut product = Mat::<f64>::zeros(n, chunk.len());
+                    faer::linalg::matmul::matmul(
+                        product.as_mut(),
+                        faer::Accum::Replace,
+                        inverse.as_ref(),
+                        cross.as_ref(),
+                        1.0,
+                        self.par,
+                    );
+                    for (col, &q) in chunk.iter().enumerate() {
+                        let v: f64 = cross
+                            .col_as_slice(col)
+                            .iter()
+                            .zip(product.col_as_slice(col))
+                            .map(|(a, b)| a * b)
+                            .sum();
+                        stds[q] = (prior - v).max(0.0).sqrt();
+                    }
+                    continue;
+                }
                 faer::linalg::triangular_solve::solve_lower_triangular_in_place(
                     block.factor.as_ref(),
                     cross.as_mut(),
@@ -340,6 +414,28 @@ pub(super) fn separable<const Z: usize>(
     values.len() > 1 && kernel.uncorrelated_at(c, min_gap)
 }
 
+/// `K⁻¹ = L⁻ᵀL⁻¹` from the lower factor `L`, as scikit-learn formed it: `L⁻ᵀ` by an
+/// upper-triangular solve against the identity, then the product with its transpose.
+fn explicit_inverse(factor: faer::MatRef<'_, f64>, par: Par) -> Mat<f64> {
+    let n = factor.nrows();
+    let mut l_inv_t = Mat::<f64>::identity(n, n);
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+        factor.transpose(),
+        l_inv_t.as_mut(),
+        par,
+    );
+    let mut inverse = Mat::<f64>::zeros(n, n);
+    faer::linalg::matmul::matmul(
+        inverse.as_mut(),
+        faer::Accum::Replace,
+        l_inv_t.as_ref(),
+        l_inv_t.as_ref().transpose(),
+        1.0,
+        par,
+    );
+    inverse
+}
+
 /// Conditions one block; `None` when its Gram matrix is not positive definite.
 fn condition<const Z: usize>(
     key: f64,
@@ -378,6 +474,7 @@ fn condition<const Z: usize>(
         inputs,
         factor,
         alpha,
+        inverse: None,
     })
 }
 
@@ -494,6 +591,64 @@ pub(super) mod tests {
         let noisy = FixedGp::fit(&xs, &ys, &iso, None, Par::Seq).unwrap();
         noisy.predict_into(&xs[..1], &mut m, &mut s).unwrap();
         assert!(s[0] >= 0.3f64.sqrt() - 1e-12);
+    }
+
+    #[test]
+    fn explicit_inverse_variance_is_the_same_posterior_when_well_conditioned() {
+        let (xs, ys) = points(60);
+        let iso = FixedKernel::isotropic(1.5, 2.0, 3, 0.3);
+        let tests = [[1.1, 2.0, 3.0], [4.9, 8.0, 0.0], [2.5, 1.0, 5.0], xs[7]];
+        let stable = FixedGp::fit(&xs, &ys, &iso, None, Par::Seq).unwrap();
+        let explicit = stable
+            .clone()
+            .with_variance(PredictiveVariance::ExplicitInverse);
+        let (mut m1, mut s1, mut m2, mut s2) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+        stable.predict_into(&tests, &mut m1, &mut s1).unwrap();
+        explicit.predict_into(&tests, &mut m2, &mut s2).unwrap();
+        assert_eq!(m1, m2, "the means do not depend on the variance's form");
+        for (q, z) in tests.iter().enumerate() {
+            let (_, std) = dense(&xs, &ys, &iso, z);
+            assert!((s2[q] - std).abs() < 1e-9, "{q}: {} vs {std}", s2[q]);
+        }
+        // Back to the stable form: the inverse is dropped, the stds are the stable ones.
+        let back = explicit.with_variance(PredictiveVariance::Stable);
+        back.predict_into(&tests, &mut m2, &mut s2).unwrap();
+        assert_eq!(s1, s2);
+    }
+
+    #[test]
+    fn explicit_inverse_variance_shows_rounding_on_dense_noise_free_points() {
+        // 300 noise-free points 0.1 apart under a length scale of 3.2 (the Dam reward
+        // kernel's short term along the storage): the Gram matrix is numerically singular
+        // but for the jitter. At a training point the exact std is 0; the stable form stays
+        // near it, the explicit inverse returns rounding error of a larger size, but never
+        // a negative variance or a NaN.
+        let k = FixedKernel {
+            terms: vec![RbfTerm {
+                signal_variance: 3.25 * 3.25,
+                length_scales: vec![3.2, 1e5, 1e5],
+            }],
+            noise_variance: 0.0,
+        };
+        let xs: Vec<[f64; 3]> = (0..300).map(|i| [i as f64 * 0.1, 1.0, 0.0]).collect();
+        let ys: Vec<f64> = xs.iter().map(|x| (x[0] / 5.0).sin() * 10.0).collect();
+        let stable = FixedGp::fit(&xs, &ys, &k, None, Par::Seq).unwrap();
+        let explicit = stable
+            .clone()
+            .with_variance(PredictiveVariance::ExplicitInverse);
+        let (mut m1, mut s1) = (vec![0.0; 300], vec![0.0; 300]);
+        let (mut m2, mut s2) = (vec![0.0; 300], vec![0.0; 300]);
+        stable.predict_into(&xs, &mut m1, &mut s1).unwrap();
+        explicit.predict_into(&xs, &mut m2, &mut s2).unwrap();
+        let worst = |s: &[f64]| s.iter().fold(0.0f64, |a, &b| a.max(b));
+        assert!(s2.iter().all(|s| s.is_finite() && *s >= 0.0));
+        assert!(worst(&s1) < 1e-3, "{}", worst(&s1));
+        assert!(
+            worst(&s2) > 10.0 * worst(&s1),
+            "{} {}",
+            worst(&s2),
+            worst(&s1)
+        );
     }
 
     #[test]

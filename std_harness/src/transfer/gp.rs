@@ -9,7 +9,7 @@ use awfqi::weights::{NoiseSubtraction, Posterior, predictive_stds};
 use rand_core::Rng;
 
 use crate::domains::{Domain, GP_INPUT, GpInput, Record};
-use crate::gp_large::fixed::{FixedGp, FixedKernel};
+use crate::gp_large::fixed::{FixedGp, FixedKernel, PredictiveVariance};
 use crate::gp_large::growing::GrowingFixedGp;
 use crate::gp_large::{self, FitOptions, LargeGp};
 
@@ -99,6 +99,11 @@ pub struct GpOptions {
     /// Absent from result files when it is the default.
     #[serde(default, skip_serializing_if = "FixedGpUpdate::is_default")]
     pub fixed_update: FixedGpUpdate,
+    /// How the fixed-kernel GPs compute their predictive variance (`--fixed-gp-variance`;
+    /// the explicit inverse is scikit-learn's arithmetic, an ablation). Absent from result
+    /// files when it is the default.
+    #[serde(default, skip_serializing_if = "PredictiveVariance::is_default")]
+    pub fixed_variance: PredictiveVariance,
 }
 
 /// How a fixed-kernel target GP (the Dam's and Acrobot's) follows the target data, which
@@ -185,6 +190,7 @@ impl GpOptions {
             search: None,
             check: false,
             fixed_update: FixedGpUpdate::Incremental,
+            fixed_variance: PredictiveVariance::Stable,
         }
     }
 
@@ -282,7 +288,8 @@ impl RecordGp {
                     kernel,
                     split,
                     faer::Par::Seq,
-                )?;
+                )?
+                .with_variance(options.fixed_variance);
                 Model::Fixed(gp)
             }
         };

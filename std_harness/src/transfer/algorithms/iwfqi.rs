@@ -145,7 +145,9 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         let domain = &*self.experiment.domain;
         let noise = self.experiment.options.noise;
         let target = &self.run.data;
-        if self.gp.fixed_update == FixedGpUpdate::Incremental {
+        // The growing GP keeps no `K⁻¹`, so the explicit-inverse variance always refits.
+        if self.gp.fixed_update == FixedGpUpdate::Incremental && self.gp.fixed_variance.is_default()
+        {
             let index = match self.growing.iter().position(|(o, _)| *o == output) {
                 Some(i) => Some(i),
                 None => GrowingRecordGp::new(domain, output, zs)
