@@ -343,7 +343,9 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
 
 /// Per-coordinate `(min, max)` of the first two coordinates of `points` (`(0, 0)` when
 /// there are none), the box [`morton_key`] quantises over.
-fn bounding_box<'a, const D: usize>(points: impl Iterator<Item = &'a [f64; D]>) -> [(f64, f64); 2] {
+pub(crate) fn bounding_box<'a, const D: usize>(
+    points: impl Iterator<Item = &'a [f64; D]>,
+) -> [(f64, f64); 2] {
     let mut bounds = [(f64::INFINITY, f64::NEG_INFINITY); 2];
     for p in points {
         for (b, &v) in bounds.iter_mut().zip(p.iter()) {
@@ -356,7 +358,7 @@ fn bounding_box<'a, const D: usize>(points: impl Iterator<Item = &'a [f64; D]>) 
 /// A Z-order (Morton) key of the first two coordinates of `x`, each quantised to 16 bits
 /// over its range in `bounds` (values outside are clamped), for ordering queries by
 /// locality.
-fn morton_key<const D: usize>(x: &[f64; D], bounds: &[(f64, f64); 2]) -> u32 {
+pub(crate) fn morton_key<const D: usize>(x: &[f64; D], bounds: &[(f64, f64); 2]) -> u32 {
     let quantise = |v: f64, (lo, hi): (f64, f64)| {
         let span = hi - lo;
         let t = if span > 0.0 { (v - lo) / span } else { 0.0 };
