@@ -10,16 +10,11 @@ use std::path::Path;
 
 use awfqi_harness::commands::acrobot::run;
 use awfqi_harness::commands::puddle::Args;
-use clap::Parser;
 
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    args: Args,
-}
+mod common;
 
 fn args(out: &Path, update: &str) -> Args {
-    let fixed = [
+    let run = [
         "acrobot",
         "--steps",
         "3",
@@ -29,20 +24,9 @@ fn args(out: &Path, update: &str) -> Args {
         "1",
         "--algorithms",
         "iwfqi",
-        "--iterations",
-        "2",
-        "--trees",
-        "2",
-        "--threads",
-        "1",
-        "--quiet",
-        "--no-plots",
-        "--fixed-gp",
-        update,
-        "--out",
-        out.to_str().unwrap(),
     ];
-    Cli::parse_from(fixed).args
+    let out = ["--fixed-gp", update, "--out", out.to_str().unwrap()];
+    common::parse(&[&run[..], &common::QUICK, &out].concat())
 }
 
 fn steps(dir: &Path) -> (serde_json::Value, Vec<serde_json::Value>) {

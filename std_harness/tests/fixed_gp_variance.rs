@@ -11,16 +11,11 @@ use std::path::Path;
 
 use awfqi_harness::commands::dam::run;
 use awfqi_harness::commands::puddle::Args;
-use clap::Parser;
 
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    args: Args,
-}
+mod common;
 
 fn args(out: &Path, variance: &str) -> Args {
-    let fixed = [
+    let run = [
         "dam",
         "--steps",
         "1",
@@ -30,20 +25,14 @@ fn args(out: &Path, variance: &str) -> Args {
         "iwfqi",
         "--q-function",
         "joint",
-        "--iterations",
-        "2",
-        "--trees",
-        "2",
-        "--threads",
-        "1",
-        "--quiet",
-        "--no-plots",
+    ];
+    let out = [
         "--fixed-gp-variance",
         variance,
         "--out",
         out.to_str().unwrap(),
     ];
-    Cli::parse_from(fixed).args
+    common::parse(&[&run[..], &common::QUICK, &out].concat())
 }
 
 fn first_step(dir: &Path) -> (serde_json::Value, serde_json::Value) {

@@ -5,13 +5,8 @@
 use std::path::Path;
 
 use awfqi_harness::commands::puddle::{Args, run};
-use clap::Parser;
 
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    args: Args,
-}
+mod common;
 
 fn args(out: &Path, runs: &str, algorithms: &str) -> Args {
     args_with(out, runs, algorithms, &[])
@@ -43,7 +38,7 @@ fn args_with(out: &Path, runs: &str, algorithms: &str, extra: &[&str]) -> Args {
         "--out",
         out.to_str().unwrap(),
     ];
-    Cli::parse_from(fixed.iter().chain(extra)).args
+    common::parse(&[&fixed[..], extra].concat())
 }
 
 fn read(dir: &Path, name: &str) -> String {
