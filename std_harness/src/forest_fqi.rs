@@ -314,9 +314,7 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
     // queries walk a tree along similar paths, so the lanes of a batch walk
     // (`Forest::predict_into`) end at similar depths. Each query's value does not depend on
     // the order.
-    let mut live: Vec<usize> = (0..n).filter(|&i| !data.absorbing[i]).collect();
-    let bounds = bounding_box(live.iter().map(|&i| &data.next_states[i]));
-    live.sort_by_key(|&i| morton_key(&data.next_states[i], &bounds));
+    let live = live_in_locality_order(data);
     let live_next: Vec<[f64; D]> = live.iter().map(|&i| data.next_states[i]).collect();
     let mut max_q = vec![0.0; live.len()];
     let mut scratch = vec![0.0; live.len()];
@@ -341,11 +339,18 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
     Ok(FqiOutput { q, model_rewards })
 }
 
+/// The indices of the non-absorbing records, ordered by the Morton key of their next
+/// states ([`morton_key`]), the order in which FQI asks for `max_a′ Q(s′, a′)`.
+pub(crate) fn live_in_locality_order<const D: usize>(data: &Dataset<D>) -> Vec<usize> {
+    let mut live: Vec<usize> = (0..data.len()).filter(|&i| !data.absorbing[i]).collect();
+    let bounds = bounding_box(live.iter().map(|&i| &data.next_states[i]));
+    live.sort_by_key(|&i| morton_key(&data.next_states[i], &bounds));
+    live
+}
+
 /// Per-coordinate `(min, max)` of the first two coordinates of `points` (`(0, 0)` when
 /// there are none), the box [`morton_key`] quantises over.
-pub(crate) fn bounding_box<'a, const D: usize>(
-    points: impl Iterator<Item = &'a [f64; D]>,
-) -> [(f64, f64); 2] {
+fn bounding_box<'a, const D: usize>(points: impl Iterator<Item = &'a [f64; D]>) -> [(f64, f64); 2] {
     let mut bounds = [(f64::INFINITY, f64::NEG_INFINITY); 2];
     for p in points {
         for (b, &v) in bounds.iter_mut().zip(p.iter()) {
@@ -358,7 +363,7 @@ pub(crate) fn bounding_box<'a, const D: usize>(
 /// A Z-order (Morton) key of the first two coordinates of `x`, each quantised to 16 bits
 /// over its range in `bounds` (values outside are clamped), for ordering queries by
 /// locality.
-pub(crate) fn morton_key<const D: usize>(x: &[f64; D], bounds: &[(f64, f64); 2]) -> u32 {
+fn morton_key<const D: usize>(x: &[f64; D], bounds: &[(f64, f64); 2]) -> u32 {
     let quantise = |v: f64, (lo, hi): (f64, f64)| {
         let span = hi - lo;
         let t = if span > 0.0 { (v - lo) / span } else { 0.0 };

@@ -15,7 +15,7 @@
 //! absorbing rule); greedy ties go to the smallest action index, as the reference's
 //! `np.argmax`.
 
-use crate::forest_fqi::{Dataset, FqiOptions, Rewards, bounding_box, morton_key};
+use crate::forest_fqi::{Dataset, FqiOptions, Rewards, live_in_locality_order};
 use crate::trees::{ActionForests, Forest, TreeParams};
 use awfqi::{Error, Result};
 use rand_core::Rng;
@@ -216,13 +216,10 @@ pub fn fqi_joint<const D: usize, R: Rng + ?Sized>(
         }
     };
     let rewards = model_rewards.as_deref().unwrap_or(&data.rewards);
-    // Visited in the per-action FQI's space-filling-curve order of the next states
-    // (`forest_fqi`): neighbouring queries walk a tree along similar paths. Each query's
-    // value does not depend on the order (measured on 65 000 Dam-like next states, 100
-    // trees: 1.25 → 1.14 s per iteration's prediction, the same bits).
-    let mut live: Vec<usize> = (0..n).filter(|&i| !data.absorbing[i]).collect();
-    let bounds = bounding_box(live.iter().map(|&i| &data.next_states[i]));
-    live.sort_by_key(|&i| morton_key(&data.next_states[i], &bounds));
+    // Visited in the per-action FQI's locality order: neighbouring queries walk a tree
+    // along similar paths, and a query's value does not depend on the order (measured on
+    // 65 000 Dam-like next states, 100 trees: 1.25 → 1.14 s per iteration's prediction).
+    let live = live_in_locality_order(data);
     let live_next: Vec<[f64; 2]> = live
         .iter()
         .map(|&i| joint_state(&data.next_states[i]))
