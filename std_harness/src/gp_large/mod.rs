@@ -269,6 +269,27 @@ pub enum FitStrategy {
         /// End points within this distance (log space, infinity norm) share one refinement.
         merge_radius: f64,
     },
+    /// [`FitStrategy::Screened`] with a second, larger subsample between the screening and
+    /// all the data (**not** the spec's procedure either): each distinct screened end point
+    /// is first refined on an evenly spaced subsample of `intermediate` points, end points
+    /// that land within `merge_radius` of an earlier one there share its refinement, and
+    /// the rest are refined on all the data from there. A likelihood value costs `n³/3`,
+    /// so the intermediate stage is cheap (1/27 of a full one at a third of the points),
+    /// and the full-data optimisations start closer to their optimum than
+    /// [`FitStrategy::Screened`]'s: fewer `O(n³)` evaluations at large `n`. With at most
+    /// `intermediate` points it is [`FitStrategy::Screened`].
+    Staged {
+        /// Size of the screening subsample.
+        subsample: usize,
+        /// Size of the intermediate subsample (larger than `subsample`).
+        intermediate: usize,
+        /// End points within this distance (log space, infinity norm) share one refinement,
+        /// after the screening and again after the intermediate stage.
+        merge_radius: f64,
+        /// Start each full-data optimisation with the intermediate one's inverse-Hessian
+        /// model (scaled by the ratio of the sizes) instead of a scaled identity.
+        warm_hessian: bool,
+    },
 }
 
 impl FitStrategy {
@@ -276,6 +297,15 @@ impl FitStrategy {
     pub const SCREENED: Self = Self::Screened {
         subsample: 300,
         merge_radius: 0.5,
+    };
+
+    /// [`FitStrategy::Staged`] with subsamples of 300 and 1 000 points and a merge radius
+    /// of 0.5.
+    pub const STAGED: Self = Self::Staged {
+        subsample: 300,
+        intermediate: 1000,
+        merge_radius: 0.5,
+        warm_hessian: true,
     };
 }
 
@@ -340,6 +370,13 @@ pub struct OptimizationRun {
     /// [`FitStrategy::Screened`]: the end point on the subsample (where the full-data
     /// optimisation started) and the subsample evaluations spent.
     pub screening: Option<([f64; 3], usize)>,
+    /// [`FitStrategy::Staged`]: the end point on the intermediate subsample (where the
+    /// full-data optimisation started) and the evaluations spent there; `None` for a start
+    /// merged after the screening.
+    pub staging: Option<([f64; 3], usize)>,
+    /// The optimiser's inverse-Hessian model at the end (see
+    /// [`optimizer::Minimum::inverse_hessian`]).
+    pub inverse_hessian: [[f64; 3]; 3],
     /// [`FitStrategy::Screened`]: the earlier run whose refinement this start shares
     /// (its `theta`, likelihood and counts are copies of that run's).
     pub merged_into: Option<usize>,
@@ -841,14 +878,17 @@ fn search<const D: usize>(
     options: &FitOptions,
 ) -> Result<Vec<OptimizationRun>> {
     let (lower, upper) = options.bounds.log_bounds();
-    let optimize = |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| {
+    let optimize_warm = |eval: &mut LikelihoodEvaluator<'_, D>,
+                         start: &[f64; 3],
+                         inverse_hessian: Option<&[[f64; 3]; 3]>| {
         let factorizations = eval.factorizations;
-        let m = optimizer::minimize(
+        let m = optimizer::minimize_warm(
             &mut NegativeLml { eval, stale: None },
             start,
             &lower,
             &upper,
             &options.optimizer,
+            inverse_hessian,
         );
         OptimizationRun {
             start: *start,
@@ -859,20 +899,20 @@ fn search<const D: usize>(
             gradients: m.gradients,
             stop: m.stop,
             screening: None,
+            staging: None,
             merged_into: None,
+            inverse_hessian: m.inverse_hessian,
         }
     };
+    let optimize =
+        |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| optimize_warm(eval, start, None);
     let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
     match strategy {
         FitStrategy::Screened {
             subsample,
             merge_radius,
         } if inputs.len() > subsample.max(1) => {
-            let n = inputs.len();
-            let m = subsample.max(1);
-            let picks: Vec<usize> = (0..m).map(|i| i * n / m).collect();
-            let sub_inputs: Vec<[f64; D]> = picks.iter().map(|&i| inputs[i]).collect();
-            let sub_targets: Vec<f64> = picks.iter().map(|&i| targets[i]).collect();
+            let (sub_inputs, sub_targets) = evenly_spaced(inputs, targets, subsample.max(1));
             let mut sub_eval =
                 LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?
                     .with_jitter(options.conditioning.jitter);
@@ -899,6 +939,78 @@ fn search<const D: usize>(
                 runs.push(run);
             }
         }
+        FitStrategy::Staged {
+            subsample,
+            intermediate,
+            merge_radius,
+            warm_hessian: warm,
+        } if inputs.len() > intermediate.max(1) && intermediate > subsample.max(1) => {
+            let (a_inputs, a_targets) = evenly_spaced(inputs, targets, subsample.max(1));
+            let (b_inputs, b_targets) = evenly_spaced(inputs, targets, intermediate);
+            let jitter = options.conditioning.jitter;
+            let mut a_eval = LikelihoodEvaluator::new(&a_inputs, &a_targets, options.parallelism)?
+                .with_jitter(jitter);
+            let mut b_eval = LikelihoodEvaluator::new(&b_inputs, &b_targets, options.parallelism)?
+                .with_jitter(jitter);
+            let close = |a: &[f64; 3], b: &[f64; 3]| {
+                a.iter().zip(b).all(|(x, y)| (x - y).abs() <= merge_radius)
+            };
+            for start in starts {
+                let screened = optimize(&mut a_eval, start);
+                let end = screened.theta;
+                let shared = runs.iter().position(|r| {
+                    r.merged_into.is_none() && r.screening.is_some_and(|(e, _)| close(&e, &end))
+                });
+                let mut run = match shared {
+                    Some(j) => OptimizationRun {
+                        merged_into: Some(j),
+                        staging: None,
+                        ..runs[j]
+                    },
+                    None => {
+                        // The screening's curvature model, scaled like the full one below.
+                        let ratio = a_inputs.len() as f64 / b_inputs.len() as f64;
+                        let h = screened.inverse_hessian.map(|row| row.map(|v| v * ratio));
+                        let staged = optimize_warm(&mut b_eval, &end, warm.then_some(&h));
+                        let mid = staged.theta;
+                        let shared = runs.iter().position(|r| {
+                            r.merged_into.is_none()
+                                && r.staging.is_some_and(|(m, _)| close(&m, &mid))
+                        });
+                        let mut run = match shared {
+                            Some(j) => OptimizationRun {
+                                merged_into: Some(j),
+                                ..runs[j]
+                            },
+                            // The negative log likelihood grows with the data, and its
+                            // curvature with it: the intermediate model, scaled down by
+                            // the ratio of the sizes, is the full data's first guess.
+                            None => {
+                                let ratio = b_inputs.len() as f64 / inputs.len() as f64;
+                                let h = staged.inverse_hessian.map(|row| row.map(|v| v * ratio));
+                                optimize_warm(eval, &mid, warm.then_some(&h))
+                            }
+                        };
+                        run.staging = Some((mid, staged.evaluations));
+                        run
+                    }
+                };
+                run.start = *start;
+                run.screening = Some((end, screened.evaluations));
+                runs.push(run);
+            }
+        }
+        FitStrategy::Staged {
+            subsample,
+            merge_radius,
+            ..
+        } => {
+            let screened = FitStrategy::Screened {
+                subsample,
+                merge_radius,
+            };
+            return search(screened, (inputs, targets), eval, starts, options);
+        }
         _ => {
             for start in starts {
                 let run = optimize(eval, start);
@@ -907,6 +1019,17 @@ fn search<const D: usize>(
         }
     }
     Ok(runs)
+}
+
+/// `m` of the points (`m < inputs.len()`), evenly spaced in the data's order: indices
+/// `⌊i·n/m⌋`.
+fn evenly_spaced<const D: usize>(
+    inputs: &[[f64; D]],
+    targets: &[f64],
+    m: usize,
+) -> (Vec<[f64; D]>, Vec<f64>) {
+    let n = inputs.len();
+    (0..m).map(|i| (inputs[i * n / m], targets[i * n / m])).unzip()
 }
 
 impl<const D: usize> LargeGp<D> {

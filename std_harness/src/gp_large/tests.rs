@@ -316,6 +316,73 @@ fn screened_strategy_finds_the_spec_optimum() {
 }
 
 #[test]
+fn staged_strategy_finds_the_spec_optimum_with_fewer_full_data_evaluations() {
+    let (zs, ys) = data(240, 13);
+    let spec = FitOptions::default();
+    let screened = FitStrategy::Screened {
+        subsample: 40,
+        merge_radius: 0.5,
+    };
+    let staged = |warm_hessian| FitStrategy::Staged {
+        subsample: 40,
+        intermediate: 100,
+        merge_radius: 0.5,
+        warm_hessian,
+    };
+    let fit = |strategy| {
+        LargeGp::fit(
+            &zs,
+            &ys,
+            &FitOptions { strategy, ..spec },
+            &mut rng(14),
+        )
+        .unwrap()
+    };
+    let (a, ra) = fit(FitStrategy::AllStarts);
+    let (b, rb) = fit(screened);
+    let (c, rc) = fit(staged(true));
+    let full = |r: &FitReport| {
+        r.runs
+            .iter()
+            .filter(|run| run.merged_into.is_none())
+            .map(|run| run.factorizations)
+            .sum::<usize>()
+    };
+    // Same starts and screening as the screened search; every refined start went through
+    // the intermediate stage; the same optimum as the spec's; fewer full-data
+    // factorisations than the screened search (which has fewer than the spec's).
+    let starts = |r: &FitReport| r.runs.iter().map(|run| run.start).collect::<Vec<_>>();
+    assert_eq!(starts(&ra), starts(&rc));
+    let screening = |r: &FitReport| r.runs.iter().map(|run| run.screening).collect::<Vec<_>>();
+    assert_eq!(screening(&rb), screening(&rc));
+    assert!(
+        rc.runs
+            .iter()
+            .all(|run| run.merged_into.is_some() || run.staging.is_some())
+    );
+    assert!(full(&rc) < full(&rb), "{} vs {}", full(&rc), full(&rb));
+    for gp in [&b, &c] {
+        assert!(rel(gp.log_marginal_likelihood(), a.log_marginal_likelihood()) < 1e-9);
+        let (ta, tb) = (a.hyperparameters().to_log(), gp.hyperparameters().to_log());
+        for k in 0..3 {
+            assert!((ta[k] - tb[k]).abs() < 1e-3, "{ta:?} vs {tb:?}");
+        }
+    }
+    // Without the warm curvature model the same optimum, in more full-data evaluations.
+    let (d, rd) = fit(staged(false));
+    assert!(rel(d.log_marginal_likelihood(), a.log_marginal_likelihood()) < 1e-9);
+    assert!(full(&rc) < full(&rd), "{} vs {}", full(&rc), full(&rd));
+    // No more points than the intermediate stage: the screened search exactly.
+    let small = FitStrategy::Staged {
+        subsample: 40,
+        intermediate: 240,
+        merge_radius: 0.5,
+        warm_hessian: true,
+    };
+    assert_eq!(fit(small).1, rb);
+}
+
+#[test]
 fn comparison_keeps_the_strategy_gp_and_reports_the_other_optimum() {
     let (zs, ys) = data(120, 13);
     let spec = FitOptions::default();
