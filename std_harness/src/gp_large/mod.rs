@@ -968,9 +968,7 @@ fn search<const D: usize>(
                         ..runs[j]
                     },
                     None => {
-                        // The screening's curvature model, scaled like the full one below.
-                        let ratio = a_inputs.len() as f64 / b_inputs.len() as f64;
-                        let h = screened.inverse_hessian.map(|row| row.map(|v| v * ratio));
+                        let h = carried_model(&screened, a_inputs.len(), b_inputs.len());
                         let staged = optimize_warm(&mut b_eval, &end, warm.then_some(&h));
                         let mid = staged.theta;
                         let shared = runs.iter().position(|r| {
@@ -982,12 +980,8 @@ fn search<const D: usize>(
                                 merged_into: Some(j),
                                 ..runs[j]
                             },
-                            // The negative log likelihood grows with the data, and its
-                            // curvature with it: the intermediate model, scaled down by
-                            // the ratio of the sizes, is the full data's first guess.
                             None => {
-                                let ratio = b_inputs.len() as f64 / inputs.len() as f64;
-                                let h = staged.inverse_hessian.map(|row| row.map(|v| v * ratio));
+                                let h = carried_model(&staged, b_inputs.len(), inputs.len());
                                 optimize_warm(eval, &mid, warm.then_some(&h))
                             }
                         };
@@ -1021,6 +1015,14 @@ fn search<const D: usize>(
     Ok(runs)
 }
 
+/// The inverse-Hessian model an optimisation on `from` points hands to the next stage on
+/// `to` points: the negative log likelihood grows about linearly with the data, and its
+/// curvature with it, so the inverse shrinks by `from / to`.
+fn carried_model(run: &OptimizationRun, from: usize, to: usize) -> [[f64; 3]; 3] {
+    let ratio = from as f64 / to as f64;
+    run.inverse_hessian.map(|row| row.map(|v| v * ratio))
+}
+
 /// `m` of the points (`m < inputs.len()`), evenly spaced in the data's order: indices
 /// `⌊i·n/m⌋`.
 fn evenly_spaced<const D: usize>(
@@ -1029,7 +1031,9 @@ fn evenly_spaced<const D: usize>(
     m: usize,
 ) -> (Vec<[f64; D]>, Vec<f64>) {
     let n = inputs.len();
-    (0..m).map(|i| (inputs[i * n / m], targets[i * n / m])).unzip()
+    (0..m)
+        .map(|i| (inputs[i * n / m], targets[i * n / m]))
+        .unzip()
 }
 
 impl<const D: usize> LargeGp<D> {

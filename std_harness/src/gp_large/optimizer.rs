@@ -394,11 +394,26 @@ mod tests {
             f: quadratic,
             last: [0.0; 2],
         };
-        let b = minimize_warm(&mut warm, &[0.0, 0.0], &lower, &upper, &options, Some(&inverse));
+        let b = minimize_warm(
+            &mut warm,
+            &[0.0, 0.0],
+            &lower,
+            &upper,
+            &options,
+            Some(&inverse),
+        );
         for m in [&a, &b] {
-            assert!((m.x[0] - 3.0).abs() < 1e-6 && (m.x[1] + 1.0).abs() < 1e-5, "{m:?}");
+            assert!(
+                (m.x[0] - 3.0).abs() < 1e-6 && (m.x[1] + 1.0).abs() < 1e-5,
+                "{m:?}"
+            );
         }
-        assert!(b.evaluations < a.evaluations, "{} vs {}", b.evaluations, a.evaluations);
+        assert!(
+            b.evaluations < a.evaluations,
+            "{} vs {}",
+            b.evaluations,
+            a.evaluations
+        );
         assert!(b.evaluations <= 3, "{b:?}");
         // `None` is the cold start, to the bit.
         let mut again = Fun {

@@ -329,15 +329,8 @@ fn staged_strategy_finds_the_spec_optimum_with_fewer_full_data_evaluations() {
         merge_radius: 0.5,
         warm_hessian,
     };
-    let fit = |strategy| {
-        LargeGp::fit(
-            &zs,
-            &ys,
-            &FitOptions { strategy, ..spec },
-            &mut rng(14),
-        )
-        .unwrap()
-    };
+    let fit =
+        |strategy| LargeGp::fit(&zs, &ys, &FitOptions { strategy, ..spec }, &mut rng(14)).unwrap();
     let (a, ra) = fit(FitStrategy::AllStarts);
     let (b, rb) = fit(screened);
     let (c, rc) = fit(staged(true));
