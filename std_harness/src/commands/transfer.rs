@@ -157,14 +157,15 @@ pub struct Args {
     /// GP hyperparameter search: `spec` (§4.2: every start optimised on all data),
     /// `screened` (starts screened on a 300-point subsample, then refined on all data) or
     /// `staged` (screened, then refined on 1 000 points, then on all data from there with
-    /// the curvature model carried over; opt-in, checked on fewer fits). Default: `screened` where it was checked to reach the spec's optimum (README,
-    /// performance): iwfqi on Puddle World (with or without transition weights), iwfqi
+    /// the curvature model carried over; opt-in, checked on fewer fits). Default:
+    /// `screened` where it was checked to reach the spec's optimum (README, performance):
+    /// iwfqi on Puddle World (with or without transition weights), iwfqi
     /// elsewhere, iwfqi-heuristic, awfqi and awfqi-oracle without them; `spec` for the
     /// others. `spec` reproduces the spec's procedure exactly.
     #[arg(long, value_enum)]
     pub gp_search: Option<GpSearch>,
-    /// Also run the other GP search (spec ↔ screened, staged → spec) on every fitted GP, on the same data
-    /// and starts, keep `--gp-search`'s GP (results unchanged) and write both optima to
+    /// Also run the other GP search (spec ↔ screened, staged → spec) on every fitted GP, on
+    /// the same data and starts, keep `--gp-search`'s GP (results unchanged) and write both optima to
     /// `gp_search_check.tsv` in the output directory, with a summary on stderr.
     #[arg(long)]
     pub check_gp_search: bool,

@@ -906,52 +906,44 @@ fn search<const D: usize>(
     };
     let optimize =
         |eval: &mut LikelihoodEvaluator<'_, D>, start: &[f64; 3]| optimize_warm(eval, start, None);
-    let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
-    match strategy {
+    // The screened and staged searches: `(subsample, merge radius, intermediate stage)`,
+    // the stage being its size and whether it carries the curvature model (a staged
+    // search with no more points than its stage is the screened one).
+    let screening = match strategy {
         FitStrategy::Screened {
             subsample,
             merge_radius,
-        } if inputs.len() > subsample.max(1) => {
-            let (sub_inputs, sub_targets) = evenly_spaced(inputs, targets, subsample.max(1));
-            let mut sub_eval =
-                LikelihoodEvaluator::new(&sub_inputs, &sub_targets, options.parallelism)?
-                    .with_jitter(options.conditioning.jitter);
-            for start in starts {
-                let screened = optimize(&mut sub_eval, start);
-                let end = screened.theta;
-                let shared = runs.iter().position(|r| {
-                    r.merged_into.is_none()
-                        && r.screening.is_some_and(|(e, _)| {
-                            e.iter()
-                                .zip(&end)
-                                .all(|(a, b)| (a - b).abs() <= merge_radius)
-                        })
-                });
-                let mut run = match shared {
-                    Some(j) => OptimizationRun {
-                        merged_into: Some(j),
-                        ..runs[j]
-                    },
-                    None => optimize(eval, &end),
-                };
-                run.start = *start;
-                run.screening = Some((end, screened.evaluations));
-                runs.push(run);
-            }
-        }
+        } => Some((subsample.max(1), merge_radius, None)),
         FitStrategy::Staged {
             subsample,
             intermediate,
             merge_radius,
-            warm_hessian: warm,
-        } if inputs.len() > intermediate.max(1) && intermediate > subsample.max(1) => {
-            let (a_inputs, a_targets) = evenly_spaced(inputs, targets, subsample.max(1));
-            let (b_inputs, b_targets) = evenly_spaced(inputs, targets, intermediate);
+            warm_hessian,
+        } => {
+            let stage = (inputs.len() > intermediate && intermediate > subsample.max(1))
+                .then_some((intermediate, warm_hessian));
+            Some((subsample.max(1), merge_radius, stage))
+        }
+        FitStrategy::AllStarts => None,
+    };
+    let mut runs: Vec<OptimizationRun> = Vec::with_capacity(starts.len());
+    match screening {
+        Some((subsample, merge_radius, stage)) if inputs.len() > subsample => {
             let jitter = options.conditioning.jitter;
+            let (a_inputs, a_targets) = evenly_spaced(inputs, targets, subsample);
             let mut a_eval = LikelihoodEvaluator::new(&a_inputs, &a_targets, options.parallelism)?
                 .with_jitter(jitter);
-            let mut b_eval = LikelihoodEvaluator::new(&b_inputs, &b_targets, options.parallelism)?
-                .with_jitter(jitter);
+            let (b_inputs, b_targets) = match stage {
+                Some((intermediate, _)) => evenly_spaced(inputs, targets, intermediate),
+                None => (Vec::new(), Vec::new()),
+            };
+            let mut b_eval = match stage {
+                Some(_) => Some(
+                    LikelihoodEvaluator::new(&b_inputs, &b_targets, options.parallelism)?
+                        .with_jitter(jitter),
+                ),
+                None => None,
+            };
             let close = |a: &[f64; 3], b: &[f64; 3]| {
                 a.iter().zip(b).all(|(x, y)| (x - y).abs() <= merge_radius)
             };
@@ -961,15 +953,15 @@ fn search<const D: usize>(
                 let shared = runs.iter().position(|r| {
                     r.merged_into.is_none() && r.screening.is_some_and(|(e, _)| close(&e, &end))
                 });
-                let mut run = match shared {
-                    Some(j) => OptimizationRun {
+                let mut run = match (shared, stage, b_eval.as_mut()) {
+                    (Some(j), _, _) => OptimizationRun {
                         merged_into: Some(j),
                         staging: None,
                         ..runs[j]
                     },
-                    None => {
+                    (None, Some((_, warm)), Some(b_eval)) => {
                         let h = carried_model(&screened, a_inputs.len(), b_inputs.len());
-                        let staged = optimize_warm(&mut b_eval, &end, warm.then_some(&h));
+                        let staged = optimize_warm(b_eval, &end, warm.then_some(&h));
                         let mid = staged.theta;
                         let shared = runs.iter().position(|r| {
                             r.merged_into.is_none()
@@ -988,22 +980,12 @@ fn search<const D: usize>(
                         run.staging = Some((mid, staged.evaluations));
                         run
                     }
+                    _ => optimize(eval, &end),
                 };
                 run.start = *start;
                 run.screening = Some((end, screened.evaluations));
                 runs.push(run);
             }
-        }
-        FitStrategy::Staged {
-            subsample,
-            merge_radius,
-            ..
-        } => {
-            let screened = FitStrategy::Screened {
-                subsample,
-                merge_radius,
-            };
-            return search(screened, (inputs, targets), eval, starts, options);
         }
         _ => {
             for start in starts {

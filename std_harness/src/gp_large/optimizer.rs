@@ -108,6 +108,16 @@ fn project<const K: usize>(x: &[f64; K], lower: &[f64; K], upper: &[f64; K]) -> 
     p
 }
 
+/// The variables not held at a bound: those the gradient does not push outwards there.
+fn free_variables<const K: usize>(
+    x: &[f64; K],
+    g: &[f64; K],
+    lower: &[f64; K],
+    upper: &[f64; K],
+) -> [bool; K] {
+    std::array::from_fn(|i| !((x[i] <= lower[i] && g[i] > 0.0) || (x[i] >= upper[i] && g[i] < 0.0)))
+}
+
 /// Minimises `objective` over the box `lower ≤ x ≤ upper` from `start` (projected into the
 /// box first). See the [module docs](self) for the method.
 ///
@@ -164,22 +174,18 @@ pub fn minimize_warm<const K: usize, F: Objective<K>>(
     let mut h = inverse_hessian.copied().unwrap_or(identity);
     let mut blind = inverse_hessian.is_none();
     // The binding set at the start is taken as the one the given model was built for.
-    let mut previous_free = [true; K];
-    if inverse_hessian.is_some() {
-        for i in 0..K {
-            previous_free[i] =
-                !((x[i] <= lower[i] && g[i] > 0.0) || (x[i] >= upper[i] && g[i] < 0.0));
-        }
-    }
+    let mut previous_free = match inverse_hessian {
+        Some(_) => free_variables(&x, &g, lower, upper),
+        None => [true; K],
+    };
     loop {
         // Projected gradient P(x − g) − x and the free variables.
         let mut pg_norm = 0.0f64;
-        let mut free = [true; K];
         for i in 0..K {
             let pg = (x[i] - g[i]).max(lower[i]).min(upper[i]) - x[i];
             pg_norm = pg_norm.max(pg.abs());
-            free[i] = !((x[i] <= lower[i] && g[i] > 0.0) || (x[i] >= upper[i] && g[i] < 0.0));
         }
+        let free = free_variables(&x, &g, lower, upper);
         if pg_norm <= options.gradient_tolerance {
             result.stop = Stop::Gradient;
             break;
