@@ -64,15 +64,19 @@
 //! Q-function keeps its previous fit; the step counter does not advance.
 
 pub mod builder;
+pub mod report;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
+pub use report::{COLLAPSED_SHARE, DISCARDED_SHARE, StepReport, Warning, Warnings, Weights};
 
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, FqiConfig, QFunction, SampleSet};
-use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
+use crate::gp::Gp;
+use crate::record_gp::{
+    GpTraining, InputDim, Output, SubsetRule, fit_gp_searched, visit_posteriors,
+};
 use crate::score::{RowSampler, ScoreColumn};
-use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
+use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
@@ -101,12 +105,45 @@ pub struct AwfqiConfig<T, const I: usize> {
 }
 
 impl<T: Real, const I: usize> AwfqiConfig<T, I> {
-    /// The thesis configuration (§12) for a per-step budget: mean estimator with
-    /// `v_r = 0.1`, `w_max = 1000`, reference noise subtraction, the reference GP training
-    /// (10 restarts), γ = 0.99 with 60 iterations, nearest-cell filling, sampling on `V_r`
-    /// — and [`SubsetRule::Spread`] **\[CHOICE\]**: with a target GP far smaller than the
-    /// reference's 4000, "the last N" would forget every earlier step's queries, while an
-    /// even spread keeps them all represented.
+    /// The thesis configuration (§12) for a per-step budget: the **faithful Puddle World
+    /// setting**, not a default for another plant. Its GP scales (every GP starts from
+    /// `c = ℓ = σ²ₙ = 1` and searches `c ∈ [10⁻⁵, 10⁵]`, `ℓ ∈ [10⁻², 10³]`,
+    /// `σ²ₙ ∈ [10⁻², 1]`, isotropic, 10 restarts, 550 evaluations) and its reward-weight
+    /// noise `v_r = 0.1` are in Puddle World's units (states in `[0, 10]²`, rewards of
+    /// about −1 per step); for a plant of your own start from
+    /// [`AwfqiConfig::scaled`], which derives them from your source data.
+    ///
+    /// The values: mean estimator with `v_r = 0.1`, `w_max = 1000`
+    /// ([`WeightParams::reference_reward`]); reference noise subtraction; the reference GP
+    /// training above ([`GpTraining::published`]); FQI with γ = 0.99, 60 iterations and,
+    /// for (cell, action) pairs without data, [`crate::EmptyCells::CappedNearest`] with a
+    /// minimum total weight of 0.5 ([`FqiConfig::published`]); sampling on `V_r`
+    /// ([`ScoreColumn::Reward`]) — and [`SubsetRule::Spread`] **\[CHOICE\]**: with a target
+    /// GP far smaller than the reference's 4000, "the last N" would forget every earlier
+    /// step's queries, while an even spread keeps them all represented.
+    ///
+    /// ```
+    /// use awfqi::{AwfqiConfig, EmptyCells, Estimator, NoiseSubtraction, ScoreColumn, SubsetRule};
+    /// let c = AwfqiConfig::<f64, 3>::thesis(50);
+    /// assert_eq!(c.budget, 50);
+    /// assert_eq!(c.weights.estimator(), Estimator::Mean);
+    /// assert_eq!((c.weights.noise_variance(), c.weights.max_weight()), (0.1, 1000.0));
+    /// assert_eq!(c.noise_subtraction, NoiseSubtraction::Reference);
+    /// assert_eq!(c.subset, SubsetRule::Spread);
+    /// let gp = c.gp_training;
+    /// assert_eq!(gp.initial.signal_variance, 1.0);
+    /// assert_eq!(gp.initial.length_scales, [1.0; 3]);
+    /// assert_eq!(gp.initial.noise_variance, 1.0);
+    /// assert_eq!(gp.bounds.signal_variance, (1e-5, 1e5));
+    /// assert_eq!(gp.bounds.length_scales, [(1e-2, 1e3); 3]);
+    /// assert_eq!(gp.bounds.noise_variance, (1e-2, 1.0));
+    /// assert!(gp.search.isotropic);
+    /// assert_eq!((gp.search.restarts, gp.search.max_evaluations), (10, 550));
+    /// assert_eq!((c.fqi.discount(), c.fqi.iterations()), (0.99, 60));
+    /// assert_eq!(c.fqi.empty_cells(), EmptyCells::CappedNearest);
+    /// assert_eq!(c.fqi.min_weight(), 0.5);
+    /// assert_eq!(c.sampling, ScoreColumn::Reward);
+    /// ```
     pub fn thesis(budget: usize) -> Self {
         Self {
             budget,
@@ -147,6 +184,54 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ValidAwfqiConfig<T, const I: usize>(AwfqiConfig<T, I>);
+
+impl<T: Copy, const I: usize> ValidAwfqiConfig<T, I> {
+    /// The checked settings (also reachable field by field through `Deref`:
+    /// `valid.budget`).
+    pub fn config(&self) -> &AwfqiConfig<T, I> {
+        &self.0
+    }
+
+    /// The checked settings, by value (to change one and validate again).
+    pub fn into_inner(self) -> AwfqiConfig<T, I> {
+        self.0
+    }
+
+    /// Queries per step.
+    pub fn budget(&self) -> usize {
+        self.0.budget
+    }
+
+    /// The reward-weight estimator, `v_r` and `w_max`.
+    pub fn weights(&self) -> WeightParams<T> {
+        self.0.weights
+    }
+
+    /// The noise subtraction of the GPs' predictive stds.
+    pub fn noise_subtraction(&self) -> NoiseSubtraction {
+        self.0.noise_subtraction
+    }
+
+    /// Which records a GP is fitted on when a dataset exceeds its capacity.
+    pub fn subset(&self) -> SubsetRule {
+        self.0.subset
+    }
+
+    /// How every GP is trained.
+    pub fn gp_training(&self) -> &GpTraining<T, I> {
+        &self.0.gp_training
+    }
+
+    /// FQI's discount, iterations and empty-cell rule.
+    pub fn fqi(&self) -> FqiConfig<T> {
+        self.0.fqi
+    }
+
+    /// The score column the queries are drawn on.
+    pub fn sampling(&self) -> ScoreColumn {
+        self.0.sampling
+    }
+}
 
 impl<T, const I: usize> core::ops::Deref for ValidAwfqiConfig<T, I> {
     type Target = AwfqiConfig<T, I>;
@@ -232,32 +317,6 @@ impl<'a, T: Real, const D: usize> SourceData<'a, T, D> {
     }
 }
 
-/// What one step did: the diagnostics of §7.2 step 6 and §12 step 6.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct StepReport<T, const I: usize> {
-    /// Steps completed, this one included (`k`).
-    pub step: usize,
-    /// `|D₀|` after the step (`k·n`).
-    pub n_target_samples: usize,
-    /// Number of source records.
-    pub n_source_samples: usize,
-    /// Records the target GP was fitted on (`min(|D₀|, N)`).
-    pub gp_points: usize,
-    /// The target GP's log marginal likelihood after the search.
-    pub gp_log_likelihood: T,
-    /// The target GP's hyperparameters after the search.
-    pub gp_hyperparameters: Hyperparameters<T, I>,
-    /// Mean reward weight over all records, target ones (weight 1) included (`wr_mean`).
-    pub wr_mean: T,
-    /// Effective sample size of the reward weights over all records (`wr_eff`).
-    pub wr_eff: T,
-    /// Mean transition weight (1: transition weights are off).
-    pub ws_mean: T,
-    /// Effective sample size of the transition weights (all records).
-    pub ws_eff: T,
-}
-
 /// The AWFQI kernel: configuration, borrowed storage and the state of a run.
 ///
 /// Generic over the scalar `T`, the target model `G` (any [`GenerativeModel`] with states
@@ -303,7 +362,10 @@ impl<'a, T: Real, const D: usize, const I: usize> Awfqi<'a, T, (), D, I, 0> {
         approximator: impl Into<Approximator<T, D>>,
         sources: &'a [&'a [Transition<[T; D], T>]],
         candidates: crate::score::RowSet<'a, T, D>,
-    ) -> AwfqiBuilder<'a, T, D, I> {
+    ) -> AwfqiBuilder<'a, T, D, I>
+    where
+        crate::record_gp::Dims<D, I>: crate::record_gp::StatePlusAction,
+    {
         AwfqiBuilder::new(config, approximator, sources, candidates)
     }
 }
@@ -411,18 +473,13 @@ where
 
     /// Runs one step (module docs): `n` queries, target GP, reward weights, weighted FQI.
     ///
-    /// Errors: `D₀` has no room for `n` more records ([`Error::CapacityExceeded`] with the
-    /// buffer's length; checked before anything is drawn); then the first error of a query,
-    /// the GP fit or search, a prediction or a weight, after which the state is as the
-    /// module docs describe.
+    /// Errors: `D₀` has no room for `n` more records ([`Error::BufferTooSmall`] naming
+    /// `samples` and its `Q`; checked before anything is drawn); then the first error of a
+    /// query, the GP fit or search, a prediction or a weight, after which the state is as
+    /// the module docs describe.
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let budget = self.config.budget;
-        self.len
-            .checked_add(budget)
-            .filter(|&e| e <= self.samples.len())
-            .ok_or(Error::CapacityExceeded {
-                capacity: self.samples.len(),
-            })?;
+        builder::room_for(self.len, budget, self.samples.len())?;
         // 1–3: draw rows and query the target.
         for _ in 0..budget {
             let (_, state, action) = self.sampler.draw(rng);
@@ -438,17 +495,22 @@ where
         // the end of the step.
         let mut ws = WeightSummary::new();
         ws.add_ones(target.len());
+        let mut ws_tally = WeightTally::new();
+        let mut refused = 0usize;
         let transitions_on = self.transitions.is_some();
         if let Some(tw) = self.transitions.as_mut() {
             for d in 0..D {
-                fit_gp(
+                let output = Output::NextState(d);
+                output.of(target.first().ok_or(Error::EmptyData)?)?;
+                let fit = fit_gp_searched(
                     self.gp,
                     target,
-                    Output::NextState(d),
+                    |r| output.of(r),
                     self.config.subset,
                     &self.config.gp_training,
                     rng,
                 )?;
+                refused += usize::from(fit.refused);
                 let mut start = 0usize;
                 for records in self.sources.records {
                     let end = start + records.len();
@@ -468,20 +530,30 @@ where
                     start = end;
                 }
             }
-            ws.add(tw.weights.get(..self.sources.len()).unwrap_or(&[]))?;
+            let weights = tw.weights.get(..self.sources.len()).unwrap_or(&[]);
+            ws.add(weights)?;
+            let params = tw.params;
+            let discarded = tw
+                .posteriors
+                .chunks_exact(D)
+                .map(|p| p.iter().any(|&s| params.discards(s)));
+            ws_tally.add(weights, params.max_weight(), discarded)?;
         }
         // 4: target reward GP on a bounded subset of D₀.
-        let lml = fit_gp(
+        let fit = fit_gp_searched(
             self.gp,
             target,
-            Output::Reward,
+            |r| Ok(r.reward),
             self.config.subset,
             &self.config.gp_training,
             rng,
         )?;
+        refused += usize::from(fit.refused);
+        let lml = fit.lml;
         // Reward weights, one noise-subtraction batch per source.
         let mut wr = WeightSummary::new();
         wr.add_ones(target.len());
+        let mut wr_tally = WeightTally::new();
         reward_weights(
             self.gp,
             &self.sources,
@@ -489,6 +561,7 @@ where
             self.config.noise_subtraction,
             self.weights,
             &mut wr,
+            &mut wr_tally,
         )?;
         // 5: weighted FQI on D₀ then the sources.
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
@@ -503,15 +576,23 @@ where
             rng,
         )?;
         self.steps += 1;
+        let sources = T::from_usize(self.sources.len());
         Ok(StepReport {
             step: self.steps,
+            queries: budget,
             n_target_samples: self.len,
             n_source_samples: self.sources.len(),
             gp_points: self.gp.len(),
             gp_log_likelihood: lml,
             gp_hyperparameters: *self.gp.hyperparameters(),
+            gp_jitter: self.gp.jitter(),
+            gp_condition: self.gp.condition_estimate(),
+            gp_refused_fits: refused,
             wr_mean: wr.mean(),
             wr_eff: wr.effective_sample_size(),
+            wr_source_eff: wr_tally.sources.effective_sample_size(),
+            wr_discarded: wr_tally.discarded,
+            wr_capped: wr_tally.capped,
             // Off: exactly 1 and the record count, as before transition weights existed.
             ws_mean: if transitions_on { ws.mean() } else { T::ONE },
             ws_eff: if transitions_on {
@@ -519,13 +600,21 @@ where
             } else {
                 wr.count()
             },
+            ws_source_eff: if transitions_on {
+                ws_tally.sources.effective_sample_size()
+            } else {
+                sources
+            },
+            ws_discarded: ws_tally.discarded,
+            ws_capped: ws_tally.capped,
         })
     }
 }
 
 /// The reward weights of every source record under the target GP `gp` (§7.2 steps 2–3),
 /// one noise-subtraction batch per source, into `weights` (source after source, record
-/// after record), each source's weights also added to `summary`.
+/// after record), each source's weights also added to `summary` and to `tally` (with the
+/// records the variance rule discarded and those at the cap).
 ///
 /// Errors: `weights` shorter than the source records ([`Error::CapacityExceeded`] with its
 /// length); those of the predictions and of [`WeightParams::weight`].
@@ -536,10 +625,13 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     noise: NoiseSubtraction,
     weights: &mut [T],
     summary: &mut WeightSummary<T>,
+    tally: &mut WeightTally<T>,
 ) -> Result<()> {
     for_each_source(sources, weights, |records, posteriors, mine| {
         source_weights(gp, records, posteriors, params, noise, mine)?;
-        summary.add(mine)
+        summary.add(mine)?;
+        let discarded = posteriors.iter().map(|&p| params.discards(p));
+        tally.add(mine, params.max_weight(), discarded)
     })
 }
 

@@ -30,6 +30,11 @@ pub mod weights;
 
 pub use error::{Error, Result};
 pub use float::Real;
+/// The `rand_core` (0.10) whose [`Rng`](rand_core::Rng) every randomised call takes:
+/// depend on this one (`awfqi::rand_core::Rng`, `awfqi::rand_core::SeedableRng`) and the
+/// versions cannot drift apart. Generators of `rand_core` 0.6 and 0.9 go through
+/// [`rng::compat`].
+pub use rand_core;
 
 // The types a user of the transfer path meets, at the crate root (as heapless does).
 pub use adaptive::{
@@ -39,10 +44,13 @@ pub use adaptive::{
 pub use alias::AliasEntry;
 pub use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
-    ValidAwfqiConfig,
+    ValidAwfqiConfig, Warning, Warnings,
 };
 pub use env::{GenerativeModel, Transition};
-pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
+pub use evaluation::{
+    Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
+    evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+};
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, Kernel, KnnFqi,
     KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
@@ -50,7 +58,7 @@ pub use fqi::{
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-pub use record_gp::{GpTraining, Output, SubsetRule};
+pub use record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
 pub use score::{
     GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
     SourceModel,

@@ -402,6 +402,10 @@ impl<T: Real, const D: usize> Scores<T, D> {
         next_state: [T::ZERO; D],
     };
 
+    /// [`Scores::ZERO`] under the name every buffer element type of the crate shares
+    /// (`Transition::EMPTY`, `Posterior::EMPTY`, `FqiEntry::EMPTY`, …).
+    pub const EMPTY: Self = Self::ZERO;
+
     /// `V_r + Σ_k V_k`, the table's last column.
     pub fn total(&self) -> T {
         self.next_state.iter().fold(self.reward, |sum, &v| sum + v)

@@ -288,7 +288,11 @@ fn bad_transition_set_ups_are_refused() {
     assert_eq!(try_build(&s.transition, n), Ok(()));
     assert_eq!(
         try_build(&s.transition, n - 1),
-        Err(Error::CapacityExceeded { capacity: n - 1 })
+        Err(Error::BufferTooSmall {
+            buffer: "transition weights (one per source record)",
+            capacity: n - 1,
+            needed: n,
+        })
     );
     assert_eq!(
         try_build(&s.transition[1..], n),
@@ -324,8 +328,14 @@ fn bad_transition_set_ups_are_refused() {
     .scores_from(&s.models, &mut scores)
     .unwrap()
     .build(Shift { shift: 1.0 }, &mut *storage, &mut rng);
+    // 41 offset tiles per axis (one more than the 40 covering the box) × 8 tilings × 2
+    // actions, named with the storage's `E`.
     assert_eq!(
         result.err(),
-        Some(Error::CapacityExceeded { capacity: 256 })
+        Some(Error::BufferTooSmall {
+            buffer: "fqi (`E`: the approximator's entries, cells × actions)",
+            capacity: 256,
+            needed: 41 * 8 * 2,
+        })
     );
 }

@@ -9,7 +9,7 @@
 
 use crate::env::Transition;
 use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{GpTraining, Output, SubsetRule, fit_gp};
+use crate::record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule, fit_gp};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
@@ -64,7 +64,10 @@ impl<T: Real, const N: usize, const I: usize> MeanFunction<T, N, I> {
         training: &GpTraining<T, I>,
         subset: SubsetRule,
         rng: &mut R,
-    ) -> Result<()> {
+    ) -> Result<()>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         fit_gp(gp, records, Output::Reward, subset, training, rng)?;
         self.copy_from(gp)
     }

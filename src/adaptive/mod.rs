@@ -59,16 +59,16 @@ pub use plausibility::SourceBelief;
 pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
 use crate::alias::AliasTable;
-use crate::awfqi::builder::short;
+use crate::awfqi::builder::{buffer, short};
 use crate::awfqi::{
     AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, for_each_source, reward_weights,
 };
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, QFunction};
 use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{InputDim, fit_gp_on, input, visit_posteriors};
+use crate::record_gp::{Dims, InputDim, StatePlusAction, fit_gp_searched, input, visit_posteriors};
 use crate::score::RowSet;
-use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
+use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary, WeightTally};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 
@@ -129,7 +129,10 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
         horizon: usize,
         epsilon: T,
         bounds: [(T, T); D],
-    ) -> Self {
+    ) -> Self
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         Self {
             awfqi: AwfqiConfig::thesis(budget),
             sub_batches: 3,
@@ -201,6 +204,64 @@ pub struct ValidAdaptiveConfig<T, const D: usize, const I: usize> {
     config: AdaptiveConfig<T, D, I>,
 }
 
+impl<T: Copy, const D: usize, const I: usize> ValidAdaptiveConfig<T, D, I> {
+    /// The checked settings (also reachable field by field through `Deref`:
+    /// `valid.sub_batches`).
+    pub fn config(&self) -> &AdaptiveConfig<T, D, I> {
+        &self.config
+    }
+
+    /// The checked settings, by value (to change one and validate again).
+    pub fn into_inner(self) -> AdaptiveConfig<T, D, I> {
+        self.config
+    }
+
+    /// The AWFQI settings it shares (budget, weights, GP training, subset rule, FQI).
+    pub fn awfqi(&self) -> &AwfqiConfig<T, I> {
+        &self.config.awfqi
+    }
+
+    /// Queries per step.
+    pub fn budget(&self) -> usize {
+        self.config.awfqi.budget
+    }
+
+    /// Sub-batches per step.
+    pub fn sub_batches(&self) -> usize {
+        self.config.sub_batches
+    }
+
+    /// Share of each sub-batch spent on verification rollouts.
+    pub fn verify(&self) -> T {
+        self.config.verify
+    }
+
+    /// Candidate rows scored per sub-batch.
+    pub fn candidates(&self) -> usize {
+        self.config.candidates
+    }
+
+    /// The state every verification rollout starts in.
+    pub fn start(&self) -> [T; D] {
+        self.config.start
+    }
+
+    /// Most steps of a verification rollout.
+    pub fn horizon(&self) -> usize {
+        self.config.horizon
+    }
+
+    /// Exploration rate of the verification rollouts.
+    pub fn epsilon(&self) -> T {
+        self.config.epsilon
+    }
+
+    /// `(lower, upper)` of every state coordinate.
+    pub fn bounds(&self) -> [(T, T); D] {
+        self.config.bounds
+    }
+}
+
 impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig<T, D, I> {
     type Target = AdaptiveConfig<T, D, I>;
 
@@ -237,6 +298,8 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     path_len: usize,
     /// The Q-function has been fitted in this run.
     planned: bool,
+    /// GP fits of the current step whose optimum the conditioning policy refused.
+    refused_fits: usize,
     steps: usize,
     last: Option<StepReport<T, I>>,
 }
@@ -255,7 +318,8 @@ where
     /// ([`Error::InvalidParameter`] `actions`), a row whose action the model lacks
     /// ([`Error::OutOfRange`] `actions`); no sources ([`Error::EmptyData`]), a mean-function
     /// count other than the source count ([`Error::InvalidParameter`] `means`); a buffer
-    /// too short ([`Error::CapacityExceeded`] with its length): `samples` for one budget,
+    /// too short ([`Error::BufferTooSmall`] naming it and its const parameter): `samples`
+    /// for one budget,
     /// `weights` for the source records, `candidates` or `alias` for
     /// `min(candidates, rows)`, `path` for the budget, `beliefs` for the sources, `fqi`
     /// for the approximator.
@@ -267,7 +331,10 @@ where
         rows: RowSet<'a, T, D>,
         target: G,
         buffers: impl Into<AdaptiveBuffers<'a, T, D, I, N>>,
-    ) -> Result<Self> {
+    ) -> Result<Self>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         let () = InputDim::<D, I>::CHECK;
         let AdaptiveBuffers {
             gp,
@@ -299,13 +366,17 @@ where
         }
         let slots = config.candidates.min(rows.len());
         let budget = config.awfqi.budget;
-        short(samples.len(), budget)?;
-        short(weights.len(), sources.len())?;
-        short(candidates.len(), slots)?;
-        short(alias.len(), slots)?;
-        short(path.len(), budget)?;
-        short(beliefs.len(), m)?;
-        let fqi = approximator.into().build(actions, fqi)?;
+        short(samples.len(), budget, buffer::SAMPLES)?;
+        short(weights.len(), sources.len(), buffer::WEIGHTS)?;
+        short(candidates.len(), slots, buffer::CANDIDATES)?;
+        short(alias.len(), slots, buffer::ADAPTIVE_ALIAS)?;
+        short(path.len(), budget, buffer::PATH)?;
+        short(beliefs.len(), m, buffer::BELIEFS)?;
+        let approximator = approximator.into();
+        if let Some(entries) = approximator.required_entries(actions) {
+            short(fqi.entries.len(), entries, buffer::FQI)?;
+        }
+        let fqi = approximator.build(actions, fqi)?;
         let beliefs = beliefs
             .get_mut(..m)
             .ok_or(Error::CapacityExceeded { capacity: m })?;
@@ -328,6 +399,7 @@ where
             path,
             path_len: 0,
             planned: false,
+            refused_fits: 0,
             steps: 0,
             last: None,
         };
@@ -413,18 +485,14 @@ where
     /// re-plan). The report's GP fields describe the weights' reward GP of the last
     /// re-plan.
     ///
-    /// Errors: `D₀` has no room for `n` more records ([`Error::CapacityExceeded`] with the
-    /// buffer's length; checked before anything is drawn); then the first error of a
+    /// Errors: `D₀` has no room for `n` more records ([`Error::BufferTooSmall`] naming
+    /// `samples` and its `Q`; checked before anything is drawn); then the first error of a
     /// greedy action, a query, a GP fit, a prediction, a weight or FQI (module docs).
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let n = self.config.awfqi.budget;
-        self.len
-            .checked_add(n)
-            .filter(|&e| e <= self.samples.len())
-            .ok_or(Error::CapacityExceeded {
-                capacity: self.samples.len(),
-            })?;
+        crate::awfqi::builder::room_for(self.len, n, self.samples.len())?;
         self.path_len = 0;
+        self.refused_fits = 0;
         if !self.planned {
             self.replan(rng)?;
         }
@@ -447,6 +515,7 @@ where
             parameter: "sub_batches",
         })?;
         report.step = self.steps;
+        report.queries = n;
         self.last = Some(report);
         Ok(report)
     }
@@ -598,6 +667,7 @@ where
         let target = self.samples.get(..self.len).unwrap_or(&[]);
         let mut wr = WeightSummary::new();
         wr.add_ones(target.len());
+        let mut tally = WeightTally::new();
         if target.is_empty() {
             fit_weighted_fqi(
                 &mut self.fqi,
@@ -610,17 +680,25 @@ where
                 rng,
             )?;
             wr.add_ones(self.sources.len());
+            tally.sources.add_ones(self.sources.len());
             self.planned = true;
             self.residual = false;
             self.relabelled = false;
-            return Ok(self.report(&wr, T::ZERO, *self.gp.hyperparameters(), 0));
+            let fit = ReplanGp {
+                lml: T::ZERO,
+                hyper: *self.gp.hyperparameters(),
+                points: 0,
+                jitter: T::ZERO,
+                condition: T::ONE,
+            };
+            return Ok(self.report(&wr, &tally, fit));
         }
         let relabel = self.config.relabel;
         // Relabelling reads the GP far from the target data too, so its prior mean is the
         // target rewards' median there (a zero prior would relabel towards an optimistic 0).
         let centre = if relabel { median(target) } else { T::ZERO };
         // `r − 0` is `r` exactly: without relabelling this is the thesis's zero-mean GP.
-        let lml = fit_gp_on(
+        let fit = fit_gp_searched(
             self.gp,
             target,
             |r| Ok(r.reward - centre),
@@ -628,7 +706,14 @@ where
             &config.gp_training,
             rng,
         )?;
-        let (hyper, points) = (*self.gp.hyperparameters(), self.gp.len());
+        self.refused_fits += usize::from(fit.refused);
+        let fit = ReplanGp {
+            lml: fit.lml,
+            hyper: *self.gp.hyperparameters(),
+            points: self.gp.len(),
+            jitter: self.gp.jitter(),
+            condition: self.gp.condition_estimate(),
+        };
         self.relabelled = false;
         if relabel {
             // `weights` holds the relabelled rewards; every weight is 1.
@@ -641,6 +726,7 @@ where
                 self.weights,
             )?;
             wr.add_ones(self.sources.len());
+            tally.sources.add_ones(self.sources.len());
         } else {
             reward_weights(
                 self.gp,
@@ -649,6 +735,7 @@ where
                 config.noise_subtraction,
                 self.weights,
                 &mut wr,
+                &mut tally,
             )?;
         }
         let source_values = self.weights.get(..self.sources.len());
@@ -673,7 +760,7 @@ where
         self.residual = false;
         plausibility::update(self.beliefs, config.weights.noise_variance())?;
         let (means, beliefs) = (self.means, &*self.beliefs);
-        fit_gp_on(
+        let residual = fit_gp_searched(
             self.gp,
             target,
             |r| {
@@ -684,30 +771,51 @@ where
             &config.gp_training,
             rng,
         )?;
+        self.refused_fits += usize::from(residual.refused);
         self.residual = true;
-        Ok(self.report(&wr, lml, hyper, points))
+        Ok(self.report(&wr, &tally, fit))
     }
 
+    /// The report of a re-plan (the step fills in its number and queries).
     fn report(
         &self,
         wr: &WeightSummary<T>,
-        lml: T,
-        hyper: Hyperparameters<T, I>,
-        points: usize,
+        tally: &WeightTally<T>,
+        fit: ReplanGp<T, I>,
     ) -> StepReport<T, I> {
         StepReport {
             step: self.steps,
+            queries: 0,
             n_target_samples: self.len,
             n_source_samples: self.sources.len(),
-            gp_points: points,
-            gp_log_likelihood: lml,
-            gp_hyperparameters: hyper,
+            gp_points: fit.points,
+            gp_log_likelihood: fit.lml,
+            gp_hyperparameters: fit.hyper,
+            gp_jitter: fit.jitter,
+            gp_condition: fit.condition,
+            gp_refused_fits: self.refused_fits,
             wr_mean: wr.mean(),
             wr_eff: wr.effective_sample_size(),
+            wr_source_eff: tally.sources.effective_sample_size(),
+            wr_discarded: tally.discarded,
+            wr_capped: tally.capped,
             ws_mean: T::ONE,
             ws_eff: wr.count(),
+            ws_source_eff: T::from_usize(self.sources.len()),
+            ws_discarded: 0,
+            ws_capped: 0,
         }
     }
+}
+
+/// The weights' reward GP of a re-plan, as its report describes it.
+#[derive(Debug, Clone, Copy)]
+struct ReplanGp<T, const I: usize> {
+    lml: T,
+    hyper: Hyperparameters<T, I>,
+    points: usize,
+    jitter: T,
+    condition: T,
 }
 
 /// What a query changes: `D₀` and the sources' running errors.

@@ -532,6 +532,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
     let actions = plant.num_actions();
     let mode = [
@@ -952,6 +953,7 @@ fn adaptive<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + Copy,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
     let mut config = AdaptiveConfig::<T, D, I>::recommended(
         index(6),
@@ -1115,6 +1117,7 @@ fn kernel<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
     let mut config = AwfqiConfig::<T, I>::thesis(index(4));
     config.gp_training.search.max_evaluations = index(10);
