@@ -65,9 +65,11 @@
 
 pub mod builder;
 pub mod report;
+pub mod scaled;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 pub use report::{COLLAPSED_SHARE, DISCARDED_SHARE, StepReport, Warning, Warnings, Weights};
+pub use scaled::SourceScales;
 
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, FqiConfig, QFunction, SampleSet};

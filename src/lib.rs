@@ -43,8 +43,8 @@ pub use adaptive::{
 };
 pub use alias::AliasEntry;
 pub use awfqi::{
-    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
-    ValidAwfqiConfig, Warning, Warnings,
+    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
+    StepReport, ValidAwfqiConfig, Warning, Warnings,
 };
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{

@@ -239,3 +239,100 @@ impl<T: Copy> Iterator for Warnings<T> {
         None
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::string::ToString;
+    use std::vec::Vec;
+
+    fn healthy() -> StepReport<f32, 3> {
+        StepReport {
+            step: 2,
+            queries: 50,
+            n_target_samples: 100,
+            n_source_samples: 700,
+            gp_points: 64,
+            gp_log_likelihood: -12.0,
+            gp_hyperparameters: Hyperparameters::isotropic(1.0, 1.0, 0.1),
+            gp_jitter: 1e-10,
+            gp_condition: 40.0,
+            gp_refused_fits: 0,
+            wr_mean: 0.8,
+            wr_eff: 500.0,
+            wr_source_eff: 400.0,
+            wr_discarded: 3,
+            wr_capped: 0,
+            ws_mean: 1.0,
+            ws_eff: 800.0,
+            ws_source_eff: 700.0,
+            ws_discarded: 0,
+            ws_capped: 0,
+        }
+    }
+
+    #[test]
+    fn a_healthy_step_has_no_warning() {
+        assert_eq!(healthy().warnings().count(), 0);
+    }
+
+    #[test]
+    fn each_threshold_is_named_once_crossed() {
+        // 15 of 700 source records (2 %) is below the 5 % of a collapse; 35 (5 %) is not.
+        let mut r = healthy();
+        r.wr_source_eff = 15.0;
+        r.wr_capped = 4;
+        let w: Vec<_> = r.warnings().collect();
+        assert_eq!(
+            w,
+            [Warning::WeightsCollapsed {
+                weights: Weights::Reward,
+                effective: 15.0,
+                records: 700,
+                capped: 4
+            }]
+        );
+        let text = w[0].to_string();
+        assert!(text.starts_with("reward weights collapsed"), "{text}");
+        assert!(text.contains("700") && text.contains("1.5e1") && text.contains("4 at the cap"));
+        r.wr_source_eff = 35.0;
+        assert_eq!(r.warnings().count(), 0);
+        // 71 of 700 discarded (10.1 %) is more than 10 %; 70 is not.
+        let mut r = healthy();
+        r.ws_discarded = 71;
+        r.ws_source_eff = 20.0;
+        r.gp_refused_fits = 2;
+        let w: Vec<_> = r.warnings().collect();
+        assert_eq!(
+            w,
+            [
+                Warning::WeightsCollapsed {
+                    weights: Weights::Transition,
+                    effective: 20.0,
+                    records: 700,
+                    capped: 0
+                },
+                Warning::RecordsDiscarded {
+                    weights: Weights::Transition,
+                    discarded: 71,
+                    records: 700
+                },
+                Warning::GpOptimumRefused { fits: 2 },
+            ]
+        );
+        assert!(w[1].to_string().contains("71 of 700"));
+        assert!(w[2].to_string().starts_with("2 GP fit(s)"));
+        r.ws_discarded = 70;
+        assert_eq!(r.warnings().count(), 2);
+    }
+
+    #[test]
+    fn no_source_records_no_weight_warnings() {
+        let mut r = healthy();
+        r.n_source_samples = 0;
+        r.wr_source_eff = 0.0;
+        r.ws_source_eff = 0.0;
+        assert_eq!(r.warnings().count(), 0);
+    }
+}
