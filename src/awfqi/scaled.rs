@@ -573,11 +573,11 @@ mod tests {
         let training = scales.gp_training::<3>().unwrap();
         let spans = [scales.span(0), scales.span(1), 3.0];
         assert_eq!(scales.span(2), 3.0);
-        for i in 0..3 {
-            assert_eq!(training.initial.length_scales[i], spans[i] / 2.0);
+        for (i, span) in spans.into_iter().enumerate() {
+            assert_eq!(training.initial.length_scales[i], span / 2.0);
             assert_eq!(
                 training.bounds.length_scales[i],
-                (spans[i] / 100.0, spans[i] * 10.0)
+                (span / 100.0, span * 10.0)
             );
         }
         assert_eq!(training.initial.signal_variance, m2);
