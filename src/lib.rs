@@ -1,5 +1,6 @@
-#![doc = include_str!("../README.md")]
+#![doc = include_str!("../docs/embedding.md")]
 #![no_std]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![cfg_attr(
     not(test),
     deny(
@@ -27,6 +28,12 @@ pub mod record_gp;
 pub mod rng;
 pub mod score;
 pub mod weights;
+
+/// The README's examples, compiled and run as doctests (the crate docs are the embedding
+/// guide, `docs/embedding.md`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 
 pub use error::{Error, Result};
 pub use float::Real;

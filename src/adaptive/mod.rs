@@ -61,7 +61,8 @@ pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 use crate::alias::AliasTable;
 use crate::awfqi::builder::{buffer, short};
 use crate::awfqi::{
-    AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, for_each_source, reward_weights,
+    AwfqiConfig, SourceData, SourceScales, StepReport, fit_weighted_fqi, for_each_source,
+    reward_weights,
 };
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, QFunction};
@@ -149,6 +150,27 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
             epsilon,
             bounds,
         }
+    }
+
+    /// [`AdaptiveConfig::recommended`] on settings derived from the source data
+    /// ([`AwfqiConfig::scaled`], the state bounds from [`SourceScales::bounds`]): the start
+    /// for a plant of your own. Set `awfqi.fqi` to its discount.
+    ///
+    /// Errors: those of [`AwfqiConfig::scaled`].
+    pub fn scaled(
+        budget: usize,
+        scales: &SourceScales<T, D>,
+        start: [T; D],
+        horizon: usize,
+        epsilon: T,
+    ) -> Result<Self>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
+        Ok(Self {
+            awfqi: AwfqiConfig::scaled(budget, scales)?,
+            ..Self::recommended(budget, start, horizon, epsilon, scales.bounds())
+        })
     }
 
     /// Checks every setting.

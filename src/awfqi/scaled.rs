@@ -294,7 +294,7 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
     /// let scales = SourceScales::measure(&[&a, &b])?;
     /// let config = AwfqiConfig::<f32, 2>::scaled(50, &scales)?;
     /// let gp = config.gp_training;
-    /// assert_eq!(gp.initial.length_scales[0], 505.0 / 2.0); // states and next states
+    /// assert_eq!(gp.initial.length_scales[0], 492.5 / 2.0); // states 0–487.5, next to 492.5
     /// assert_eq!(gp.initial.length_scales[1], 1.0); // 3 actions: span 2
     /// assert!(gp.bounds.signal_variance.0 > 500.0); // rewards near −300: m₂ ≈ 9·10⁴
     /// assert!(config.weights.noise_variance() > 1.0); // v_r from the local noise

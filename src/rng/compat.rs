@@ -3,7 +3,7 @@
 //! The core's generator trait is [`rand_core::Rng`] of `rand_core` 0.10 (re-exported as
 //! [`crate::rand_core`]). A HAL's hardware generator or a PRNG crate built on an older
 //! `rand_core` implements that version's `RngCore` instead, which the compiler treats as
-//! another trait; wrap it in [`Rng06`] (feature `rand_core_06`) or [`Rng09`] (feature
+//! another trait; wrap it in `Rng06` (feature `rand_core_06`) or `Rng09` (feature
 //! `rand_core_09`) and pass `&mut` the wrapper. A wrapper forwards every call unchanged,
 //! so the same generator state gives the same draws.
 //!
