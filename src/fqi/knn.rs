@@ -37,7 +37,8 @@
 //! 47 988 + 42 656 bytes. Fit cost: `O(records² · actions)` for the links (once), then
 //! `O(records · actions · k)` per iteration; a prediction scans the records, `O(records)`.
 
-use super::{FqiConfig, SampleSet, check_magnitudes};
+use super::samples::check_magnitudes;
+use super::{FqiConfig, SampleSet};
 use crate::error::{ensure_all_finite, ensure_finite};
 use crate::{Error, Real, Result};
 

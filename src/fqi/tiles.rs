@@ -28,9 +28,9 @@
 //! actions: 1 152 entries = 23 040 bytes in `f32`. Fit cost per iteration:
 //! `O(samples · k · actions)`.
 
-use super::{
-    EmptyCells, FqiConfig, FqiEntry, SampleSet, check_magnitudes, fill_empty, nearest_donors,
-};
+use super::fill::{NIL, fill_empty, nearest_donors};
+use super::samples::check_magnitudes;
+use super::{EmptyCells, FqiConfig, FqiEntry, SampleSet};
 use crate::error::ensure_finite;
 use crate::fqi::CellGrid;
 use crate::{Error, Real, Result};
@@ -170,7 +170,7 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
                 parameter: "actions",
             });
         }
-        let limit = super::NIL as usize - 1;
+        let limit = NIL as usize - 1;
         tilings
             .tiles_per_tiling()
             .checked_mul(actions)
@@ -240,11 +240,11 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
         for e in self.entries.iter_mut() {
             e.q = e.reward;
         }
-        if config.iterations > 1 {
+        if config.iterations() > 1 {
             self.for_each_tiling(|grid, actions, entries| {
                 nearest_donors(grid, actions, entries, |e| e.weight > T::ZERO);
             });
-            for _ in 1..config.iterations {
+            for _ in 1..config.iterations() {
                 self.bellman_iteration(sets.clone(), config);
             }
         }
@@ -291,17 +291,17 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
             }
         }
         for e in self.entries.iter_mut() {
-            if e.next < config.min_weight {
+            if e.next < config.min_weight() {
                 e.next = T::ZERO;
             }
-            if e.weight < config.min_weight {
+            if e.weight < config.min_weight() {
                 e.weight = T::ZERO;
             }
             if e.next > T::ZERO {
                 e.reward /= e.next;
             }
         }
-        let empty = config.empty_cells;
+        let empty = config.empty_cells();
         self.for_each_tiling(|grid, actions, entries| {
             nearest_donors(grid, actions, entries, |e| e.next > T::ZERO);
             fill_empty(
@@ -325,7 +325,7 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
         for e in self.entries.iter_mut() {
             e.next = T::ZERO;
         }
-        let gamma = config.discount;
+        let gamma = config.discount();
         for set in sets {
             for (s, _, _, w_s) in set.iter() {
                 if w_s <= T::ZERO {
@@ -348,7 +348,7 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
                 e.q = e.next / e.weight;
             }
         }
-        let empty: EmptyCells<T> = config.empty_cells;
+        let empty: EmptyCells<T> = config.empty_cells();
         self.for_each_tiling(|_, actions, entries| {
             fill_empty(
                 entries,

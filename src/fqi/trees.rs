@@ -60,7 +60,8 @@
 //! records, 60 iterations, `examples/core_tree_timing.rs`): 50 streamed trees fit in about
 //! 2.5 s and decide in about 6 ms; 10 stored trees fit in 0.6 s and decide in 2 µs.
 
-use super::{FqiConfig, SampleSet, check_magnitudes};
+use super::samples::check_magnitudes;
+use super::{FqiConfig, SampleSet};
 use crate::error::ensure_all_finite;
 use crate::{Error, Real, Result};
 use rand_core::Rng;
