@@ -33,7 +33,7 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
     }
 
     /// Samples with reward weights (iteration 1) and transition weights (iterations ≥ 2);
-    /// `None` means all 1. Lengths are checked by [`TabularFqi::fit`].
+    /// `None` means all 1. Lengths are checked by the fit.
     pub fn weighted(
         samples: &'a [Transition<[T; D], T>],
         reward_weights: Option<&'a [T]>,
@@ -103,8 +103,8 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
     }
 
     /// `(sample, reward, w_r, w_s)`: the reward is the replacement when there is one.
-    pub(super) fn iter(&self) -> impl Iterator<Item = (&'a Transition<[T; D], T>, T, T, T)> + '_ {
-        self.samples.iter().enumerate().map(|(i, s)| {
+    pub(super) fn iter(self) -> impl Iterator<Item = Weighted<'a, T, D>> {
+        self.samples.iter().enumerate().map(move |(i, s)| {
             let pick = |w: Option<&[T]>| w.and_then(|w| w.get(i).copied()).unwrap_or(T::ONE);
             let reward = self
                 .rewards
@@ -117,6 +117,28 @@ impl<'a, T: Real, const D: usize> SampleSet<'a, T, D> {
                 pick(self.transition_weights),
             )
         })
+    }
+}
+
+/// One sample of a fit as `(sample, reward, w_r, w_s)`.
+pub(super) type Weighted<'a, T, const D: usize> = (&'a Transition<[T; D], T>, T, T, T);
+
+/// Every sample of `sets`, set after set, as [`SampleSet::iter`] gives them.
+pub(super) fn each<'s, T: Real + 's, const D: usize>(
+    sets: impl Iterator<Item = SampleSet<'s, T, D>>,
+) -> impl Iterator<Item = Weighted<'s, T, D>> {
+    sets.flat_map(SampleSet::iter)
+}
+
+/// Writes every sample of `sets` into `slots` as `record` makes it, in order (the records
+/// of the approximators that keep them; the fit has checked that they fit).
+pub(super) fn load<'s, X, T: Real + 's, const D: usize>(
+    slots: &mut [X],
+    sets: impl Iterator<Item = SampleSet<'s, T, D>>,
+    record: impl Fn(Weighted<'s, T, D>) -> X,
+) {
+    for (slot, sample) in slots.iter_mut().zip(each(sets)) {
+        *slot = record(sample);
     }
 }
 
@@ -134,12 +156,10 @@ pub(super) fn check_magnitudes<'s, T: Real + 's, const D: usize>(
         EmptyCells::Value(v) => v.abs(),
         _ => T::ZERO,
     };
-    for set in sets {
-        for (_, reward, w_r, w_s) in set.iter() {
-            reward_mass += w_r * reward.abs();
-            weight_mass += w_r + w_s;
-            largest = largest.max(reward.abs());
-        }
+    for (_, reward, w_r, w_s) in each(sets) {
+        reward_mass += w_r * reward.abs();
+        weight_mass += w_r + w_s;
+        largest = largest.max(reward.abs());
     }
     let bound =
         largest * T::from_usize(config.iterations()) * (T::ONE + weight_mass) * T::from_f64(4.0);

@@ -5,13 +5,7 @@
 //! [`CellGrid`], and the fitted value of a (cell, action) pair is the weighted mean of the
 //! regression targets of the samples that start in that cell with that action. This
 //! replaces the reference's Extra-Trees (§4.1), which cannot live in fixed memory; the
-//! IWFQI structure is kept exactly:
-//!
-//! 1. **Iteration 1** fits the reward with the **reward weights** `w_r`; the result is the
-//!    reward model `R̂` (and `Q₁ = R̂`).
-//! 2. Every sample's reward is replaced by the model's value `r̂ᵢ = R̂(sᵢ, aᵢ)`.
-//! 3. **Iterations 2..N** fit `yᵢ = r̂ᵢ + γ (1 − ωᵢ) maxₐ′ Q_{k−1}(s′ᵢ, a′)` with the
-//!    **transition weights** `w_s`; an absorbing sample (`ω = 1`) does not bootstrap.
+//! IWFQI structure ([module docs](super)) is kept exactly.
 //!
 //! Because `r̂` is constant in a cell, iteration k gives
 //! `Q_k(c, a) = R̂(c, a) + γ · Σ w_s (1−ω) V_{k−1}(s′) / Σ w_s` over the pair's samples, which
@@ -52,9 +46,11 @@
 //! `f64`. A 21 × 21 grid with 4 actions needs 1 764 entries = 35 280 bytes in `f32`.
 
 use super::fill::{NIL, fill_empty, nearest_donors};
-use super::samples::check_magnitudes;
+use super::iteration::{self, NoDraws, Regressor};
+use super::samples::each;
 use super::{CellGrid, FqiConfig, SampleSet};
 use crate::{Error, Real, Result};
+use rand_core::Rng;
 
 /// One (cell, action) pair of the table: the Q-value and the working values of a fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,111 +196,7 @@ impl<'a, T: Real, const D: usize> TabularFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let mut total = 0usize;
-        for set in sets.clone() {
-            set.validate(self.actions)?;
-            total += set.len();
-        }
-        if total == 0 {
-            return Err(Error::EmptyData);
-        }
-        check_magnitudes(sets.clone(), config)?;
-        self.fit_reward_model(sets.clone(), config);
-        for e in self.entries.iter_mut() {
-            e.q = e.reward;
-        }
-        if config.iterations() > 1 {
-            // Transition donors replace the reward donors (no longer needed).
-            nearest_donors(&self.grid, self.actions, self.entries, |e| {
-                e.weight > T::ZERO
-            });
-            for _ in 1..config.iterations() {
-                self.bellman_iteration(sets.clone(), config);
-            }
-        }
-        Ok(())
-    }
-
-    /// Iteration 1: `R̂` into `reward`, `Σ w_s` into `weight`.
-    fn fit_reward_model<'s>(
-        &mut self,
-        sets: impl Iterator<Item = SampleSet<'s, T, D>>,
-        config: &FqiConfig<T>,
-    ) where
-        T: 's,
-    {
-        for e in self.entries.iter_mut() {
-            *e = FqiEntry::default();
-        }
-        for set in sets {
-            for (s, reward, w_r, w_s) in set.iter() {
-                let i = self.index(s.state, s.action);
-                if let Some(e) = self.entries.get_mut(i) {
-                    // `next` holds Σ w_r while the reward model is being fitted.
-                    e.reward += w_r * reward;
-                    e.next += w_r;
-                    e.weight += w_s;
-                }
-            }
-        }
-        for e in self.entries.iter_mut() {
-            // Totals below the minimum weight count as no data.
-            if e.next < config.min_weight() {
-                e.next = T::ZERO;
-            }
-            if e.weight < config.min_weight() {
-                e.weight = T::ZERO;
-            }
-            if e.next > T::ZERO {
-                e.reward /= e.next;
-            }
-        }
-        nearest_donors(&self.grid, self.actions, self.entries, |e| e.next > T::ZERO);
-        fill_empty(
-            self.entries,
-            self.actions,
-            config.empty_cells(),
-            |e| e.next > T::ZERO,
-            |e| &mut e.reward,
-        );
-    }
-
-    /// One iteration k ≥ 2: Q ← R̂ + γ·(weighted mean of (1−ω)·V_{k−1}(s′)).
-    fn bellman_iteration<'s>(
-        &mut self,
-        sets: impl Iterator<Item = SampleSet<'s, T, D>>,
-        config: &FqiConfig<T>,
-    ) where
-        T: 's,
-    {
-        for e in self.entries.iter_mut() {
-            e.next = T::ZERO;
-        }
-        for set in sets {
-            for (s, _, _, w_s) in set.iter() {
-                if w_s <= T::ZERO || s.absorbing {
-                    continue;
-                }
-                let v = self.max_value_finite(s.next_state);
-                let i = self.index(s.state, s.action);
-                if let Some(e) = self.entries.get_mut(i) {
-                    e.next += w_s * v;
-                }
-            }
-        }
-        let gamma = config.discount();
-        for e in self.entries.iter_mut() {
-            if e.weight > T::ZERO {
-                e.q = e.reward + gamma * (e.next / e.weight);
-            }
-        }
-        fill_empty(
-            self.entries,
-            self.actions,
-            config.empty_cells(),
-            |e| e.weight > T::ZERO,
-            |e| &mut e.q,
-        );
+        iteration::fit(self, sets, config, &mut NoDraws)
     }
 
     fn index(&self, state: [T; D], action: usize) -> usize {
@@ -369,6 +261,97 @@ impl<'a, T: Real, const D: usize> TabularFqi<'a, T, D> {
             }
         }
         Ok(best)
+    }
+}
+
+impl<T: Real, const D: usize> Regressor<T, D> for TabularFqi<'_, T, D> {
+    fn actions(&self) -> usize {
+        self.actions
+    }
+
+    /// `R̂` into `reward` and `q`, `Σ w_s` into `weight`.
+    fn fit_reward_model<'s, I, R>(&mut self, sets: I, _: usize, config: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        for e in self.entries.iter_mut() {
+            *e = FqiEntry::default();
+        }
+        for (s, reward, w_r, w_s) in each(sets) {
+            let i = self.index(s.state, s.action);
+            if let Some(e) = self.entries.get_mut(i) {
+                // `next` holds Σ w_r while the reward model is being fitted.
+                e.reward += w_r * reward;
+                e.next += w_r;
+                e.weight += w_s;
+            }
+        }
+        for e in self.entries.iter_mut() {
+            // Totals below the minimum weight count as no data.
+            if e.next < config.min_weight() {
+                e.next = T::ZERO;
+            }
+            if e.weight < config.min_weight() {
+                e.weight = T::ZERO;
+            }
+            if e.next > T::ZERO {
+                e.reward /= e.next;
+            }
+        }
+        nearest_donors(&self.grid, self.actions, self.entries, |e| e.next > T::ZERO);
+        fill_empty(
+            self.entries,
+            self.actions,
+            config.empty_cells(),
+            |e| e.next > T::ZERO,
+            |e| &mut e.reward,
+        );
+        for e in self.entries.iter_mut() {
+            e.q = e.reward;
+        }
+    }
+
+    /// Q ← R̂ + γ·(weighted mean of (1−ω)·V_{k−1}(s′)).
+    fn bellman_iteration<'s, I, R>(&mut self, sets: I, k: usize, config: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        if k == 2 {
+            // Transition donors replace the reward donors (no longer needed).
+            nearest_donors(&self.grid, self.actions, self.entries, |e| {
+                e.weight > T::ZERO
+            });
+        }
+        for e in self.entries.iter_mut() {
+            e.next = T::ZERO;
+        }
+        for (s, _, _, w_s) in each(sets) {
+            if w_s <= T::ZERO || s.absorbing {
+                continue;
+            }
+            let v = self.max_value_finite(s.next_state);
+            let i = self.index(s.state, s.action);
+            if let Some(e) = self.entries.get_mut(i) {
+                e.next += w_s * v;
+            }
+        }
+        let gamma = config.discount();
+        for e in self.entries.iter_mut() {
+            if e.weight > T::ZERO {
+                e.q = e.reward + gamma * (e.next / e.weight);
+            }
+        }
+        fill_empty(
+            self.entries,
+            self.actions,
+            config.empty_cells(),
+            |e| e.weight > T::ZERO,
+            |e| &mut e.q,
+        );
     }
 }
 
