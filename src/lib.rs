@@ -59,8 +59,8 @@ pub use evaluation::{
     evaluate_greedy_multi_start, evaluate_multi_start, rollout,
 };
 pub use fqi::{
-    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, Kernel, KnnFqi,
-    KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
+    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
+    KnnFqi, KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
     Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
