@@ -136,8 +136,9 @@ impl<T: Real> fmt::Display for Warning<T> {
             } => write!(
                 f,
                 "{} weights collapsed: the {records} source records are worth {} equally \
-                 weighted ones ({capped} at the cap); a larger noise variance v (or \
-                 AwfqiConfig::scaled) helps unless the sources disagree with the target",
+                 weighted ones ({capped} at the cap): the target contradicts the sources \
+                 almost everywhere, or the weights' noise variance v is small for these \
+                 outputs (AwfqiConfig::scaled derives it from the logs)",
                 name(weights),
                 crate::error::Number(effective.to_f64()),
             ),
@@ -148,7 +149,8 @@ impl<T: Real> fmt::Display for Warning<T> {
             } => write!(
                 f,
                 "{} weights: {discarded} of {records} source records discarded by the \
-                 variance rule (source posterior variance ≥ v); a larger v keeps them",
+                 variance rule (source posterior variance ≥ v); a larger v, or the \
+                 heuristic estimator, keeps them",
                 name(weights),
             ),
             Warning::GpOptimumRefused { fits } => write!(
