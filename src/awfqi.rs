@@ -534,12 +534,16 @@ where
             }
             let weights = tw.weights.get(..self.sources.len()).unwrap_or(&[]);
             ws.add(weights)?;
-            let params = tw.params;
-            let discarded = tw
-                .posteriors
-                .chunks_exact(D)
-                .map(|p| p.iter().any(|&s| params.discards(s)));
-            ws_tally.add(weights, params.max_weight(), discarded)?;
+            // A record is discarded when any of its `D` coordinates is.
+            let (mut discarded, mut last) = (0usize, None);
+            for (k, &p) in tw.posteriors.iter().enumerate() {
+                let record = k.checked_div(D);
+                if tw.params.discards(p) && record != last {
+                    discarded += 1;
+                    last = record;
+                }
+            }
+            ws_tally.add(weights, tw.params.max_weight(), discarded)?;
         }
         // 4: target reward GP on a bounded subset of D₀.
         let fit = fit_gp_searched(
@@ -632,7 +636,7 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     for_each_source(sources, weights, |records, posteriors, mine| {
         source_weights(gp, records, posteriors, params, noise, mine)?;
         summary.add(mine)?;
-        let discarded = posteriors.iter().map(|&p| params.discards(p));
+        let discarded = posteriors.iter().filter(|&&p| params.discards(p)).count();
         tally.add(mine, params.max_weight(), discarded)
     })
 }

@@ -478,19 +478,15 @@ impl<T: Real> WeightTally<T> {
         }
     }
 
-    /// Adds one source's `weights` and, from `discarded`, whether each record was
-    /// discarded; counts those at `cap`.
+    /// Adds one source's `weights`, of which `discarded` were discarded by the variance
+    /// rule; counts those at `cap`.
     ///
     /// Errors: those of [`WeightSummary::add`].
-    pub(crate) fn add(
-        &mut self,
-        weights: &[T],
-        cap: T,
-        discarded: impl Iterator<Item = bool>,
-    ) -> Result<()> {
+    pub(crate) fn add(&mut self, weights: &[T], cap: T, discarded: usize) -> Result<()> {
         self.sources.add(weights)?;
-        self.capped += weights.iter().filter(|&&w| w >= cap).count();
-        self.discarded += discarded.filter(|&d| d).count();
+        let capped = weights.iter().filter(|&&w| w >= cap).count();
+        self.capped = self.capped.saturating_add(capped);
+        self.discarded = self.discarded.saturating_add(discarded);
         Ok(())
     }
 }
