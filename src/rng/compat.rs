@@ -16,8 +16,29 @@
 //! kernel.step(&mut rng)?;
 //! ```
 
+/// The core's `TryRng` (infallible) for a wrapper of another version's `RngCore`, each call
+/// forwarded unchanged.
 #[cfg(any(feature = "rand_core_06", feature = "rand_core_09"))]
-use core::convert::Infallible;
+macro_rules! forward_rng {
+    ($wrapper:ident, $trait:path) => {
+        impl<R: $trait> rand_core::TryRng for $wrapper<R> {
+            type Error = core::convert::Infallible;
+
+            fn try_next_u32(&mut self) -> Result<u32, Self::Error> {
+                Ok(self.0.next_u32())
+            }
+
+            fn try_next_u64(&mut self) -> Result<u64, Self::Error> {
+                Ok(self.0.next_u64())
+            }
+
+            fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Self::Error> {
+                self.0.fill_bytes(dst);
+                Ok(())
+            }
+        }
+    };
+}
 
 /// A `rand_core` 0.6 generator as the core's [`rand_core::Rng`] (feature `rand_core_06`).
 /// Its fallible `try_fill_bytes` is not used: `fill_bytes` is, as the 0.6 trait's
@@ -28,22 +49,7 @@ use core::convert::Infallible;
 pub struct Rng06<R>(pub R);
 
 #[cfg(feature = "rand_core_06")]
-impl<R: rand_core_06::RngCore> rand_core::TryRng for Rng06<R> {
-    type Error = Infallible;
-
-    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
-        Ok(self.0.next_u32())
-    }
-
-    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
-        Ok(self.0.next_u64())
-    }
-
-    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
-        self.0.fill_bytes(dst);
-        Ok(())
-    }
-}
+forward_rng!(Rng06, rand_core_06::RngCore);
 
 /// A `rand_core` 0.9 generator as the core's [`rand_core::Rng`] (feature `rand_core_09`).
 #[cfg(feature = "rand_core_09")]
@@ -52,22 +58,7 @@ impl<R: rand_core_06::RngCore> rand_core::TryRng for Rng06<R> {
 pub struct Rng09<R>(pub R);
 
 #[cfg(feature = "rand_core_09")]
-impl<R: rand_core_09::RngCore> rand_core::TryRng for Rng09<R> {
-    type Error = Infallible;
-
-    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
-        Ok(self.0.next_u32())
-    }
-
-    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
-        Ok(self.0.next_u64())
-    }
-
-    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
-        self.0.fill_bytes(dst);
-        Ok(())
-    }
-}
+forward_rng!(Rng09, rand_core_09::RngCore);
 
 #[cfg(test)]
 mod tests {
