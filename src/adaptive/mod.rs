@@ -121,9 +121,10 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// candidates, relevance width 0.1, relabelling off (on the tuning runs it helped the
     /// harness's Extra-Trees FQI but neither the core's tile coding nor, measured again
     /// with them, the core's streamed trees), on the thesis's AWFQI
-    /// settings for `budget` ([`AwfqiConfig::thesis`]), for a plant that starts in
-    /// `start`, with episodes of `horizon` steps, exploration `epsilon` (the protocol's
-    /// 0.3) and state `bounds`.
+    /// settings for `budget` ([`AwfqiConfig::thesis`]: Puddle World's scales; for a plant of
+    /// your own, [`AdaptiveConfig::scaled`]), for a plant that starts in `start`, with
+    /// episodes of `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state
+    /// `bounds`.
     pub fn recommended(
         budget: usize,
         start: [T; D],
