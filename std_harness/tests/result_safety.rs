@@ -18,10 +18,26 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// `head`, then `--runs RUNS --out OUT`, then `extra`, as words.
+fn words(head: &[&str], out: &Path, runs: &str, extra: &[&str]) -> Vec<String> {
+    let out = out.display().to_string();
+    let tail = ["--runs", runs, "--out", &out];
+    head.iter()
+        .chain(&tail)
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect()
+}
+
 /// `puddle` with FQI on a budget that runs in a debug build (one step unless `extra` says
 /// otherwise), into `out`.
 fn puddle(out: &Path, runs: &str, extra: &[&str]) -> Vec<String> {
-    let mut words: Vec<String> = [
+    let steps: &[&str] = if extra.contains(&"--steps") {
+        &[]
+    } else {
+        &["--steps", "1"]
+    };
+    let head = [
         "puddle",
         "--algorithms",
         "fqi",
@@ -32,19 +48,8 @@ fn puddle(out: &Path, runs: &str, extra: &[&str]) -> Vec<String> {
         "--threads",
         "1",
         "--quiet",
-        "--runs",
-        runs,
-        "--out",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    words.push(out.display().to_string());
-    if !extra.contains(&"--steps") {
-        words.push("--steps=1".into());
-    }
-    words.extend(extra.iter().map(|s| s.to_string()));
-    words
+    ];
+    words(&[&head[..], steps].concat(), out, runs, extra)
 }
 
 fn run(words: &[String]) -> Output {
@@ -254,7 +259,7 @@ fn concurrent_writers_into_one_directory_keep_every_run() {
 }
 
 fn identify_words(out: &Path, runs: &str, extra: &[&str]) -> Vec<String> {
-    let mut words: Vec<String> = [
+    let head = [
         "identify",
         "--budgets",
         "1,4",
@@ -262,16 +267,8 @@ fn identify_words(out: &Path, runs: &str, extra: &[&str]) -> Vec<String> {
         "uniform,variance",
         "--mi-samples",
         "10",
-        "--runs",
-        runs,
-        "--out",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    words.push(out.display().to_string());
-    words.extend(extra.iter().map(|s| s.to_string()));
-    words
+    ];
+    words(&head, out, runs, extra)
 }
 
 #[test]
@@ -284,9 +281,9 @@ fn merge_equals_one_invocation_and_refuses_overlap_and_mismatch() {
     ok(&puddle(&b, "1..3", &["--no-plots"]));
     let merged = dir.join("merged");
     let merge = |out: &Path, shards: &[&Path]| -> Vec<String> {
-        let mut words = vec!["merge".to_string(), out.display().to_string()];
-        words.extend(shards.iter().map(|s| s.display().to_string()));
-        words
+        let mut merge = vec!["merge".to_string(), out.display().to_string()];
+        merge.extend(shards.iter().map(|s| s.display().to_string()));
+        merge
     };
     ok(&merge(&merged, &[&a, &b]));
     assert_same_outputs(&single, &merged, &OUTPUTS);

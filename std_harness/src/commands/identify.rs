@@ -10,7 +10,7 @@ use anyhow::Context;
 
 pub use crate::identification::Args;
 use crate::identification::{assemble, config, run_records, stored, table, write_outputs};
-use crate::store::{self, DirLock, conflict_error, writer_remedy};
+use crate::store::{self, DirLock, refusal};
 
 /// Runs the subcommand.
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -40,12 +40,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 BTreeSet::new()
             }
             Err(conflict) => {
-                return Err(conflict_error(
-                    &path,
-                    conflict,
-                    "this invocation",
-                    &writer_remedy(&path),
-                ));
+                return Err(refusal(&path, conflict));
             }
         }
     };
@@ -60,13 +55,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Ok(None) => Vec::new(),
         Ok(Some(old)) => old.records,
         Err(conflict) => {
-            return Err(conflict_error(
-                &path,
-                conflict,
-                "this invocation",
-                &writer_remedy(&path),
-            ))
-            .context("another writer changed the file since this invocation began");
+            return Err(refusal(&path, conflict))
+                .context("another writer changed the file since this invocation began");
         }
     };
     for record in records {

@@ -28,6 +28,11 @@ pub fn writer_remedy(path: &Path) -> String {
     )
 }
 
+/// The error that refuses this invocation's writes into the file at `path`.
+pub fn refusal(path: &Path, conflict: Conflict) -> anyhow::Error {
+    conflict_error(path, conflict, "this invocation", &writer_remedy(path))
+}
+
 /// The error for a [`Conflict`] at `path`: `what` names what was compared with it ("this
 /// invocation", "shard b/fqi.json"), `remedy` ends the message.
 pub fn conflict_error(path: &Path, conflict: Conflict, what: &str, remedy: &str) -> anyhow::Error {

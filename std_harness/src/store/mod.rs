@@ -10,6 +10,6 @@ mod diff;
 mod lock;
 
 pub use atomic::{backup, copy_backup, write_atomic, write_csv};
-pub use conflict::{Conflict, conflict_error, writer_remedy};
+pub use conflict::{Conflict, conflict_error, refusal, writer_remedy};
 pub use diff::{Difference, describe, differences};
 pub use lock::DirLock;

@@ -12,7 +12,7 @@ use serde_json::Value;
 
 use super::algorithms::Algorithm;
 use super::results::{ResultFile, RunRecord};
-use crate::store::{self, Conflict, DirLock, conflict_error, writer_remedy};
+use crate::store::{self, Conflict, DirLock, refusal};
 
 /// The options of a command line that say where and how to compute, not what: they are
 /// left out of the command a result file records.
@@ -152,13 +152,8 @@ impl ResultDir {
             Ok(Some(file)) => file,
             Ok(None) => ResultFile::new(self.experiment.clone(), Vec::new()),
             Err(conflict) => {
-                return Err(conflict_error(
-                    &path,
-                    conflict,
-                    "this invocation",
-                    &writer_remedy(&path),
-                ))
-                .context("another writer changed the file since this invocation began");
+                return Err(refusal(&path, conflict))
+                    .context("another writer changed the file since this invocation began");
             }
         };
         match file.runs.iter().position(|r| r.run == record.run) {
@@ -183,12 +178,7 @@ impl ResultDir {
                 }
                 Ok(None) => {}
                 Err(conflict) => {
-                    return Err(conflict_error(
-                        &path,
-                        conflict,
-                        "this invocation",
-                        &writer_remedy(&path),
-                    ));
+                    return Err(refusal(&path, conflict));
                 }
             }
         }
@@ -245,12 +235,7 @@ pub fn inspect(
                 ));
             }
             Err(conflict) => {
-                return Err(conflict_error(
-                    &path,
-                    conflict,
-                    "this invocation",
-                    &writer_remedy(&path),
-                ));
+                return Err(refusal(&path, conflict));
             }
         }
     }
