@@ -170,8 +170,8 @@ fn merge_transfer(
                 }
             }
         }
-        let mut file = ResultFile::new(experiment.clone(), all.into_values().collect());
-        file.command = command.clone();
+        let file =
+            ResultFile::new(experiment.clone(), all.into_values().collect()).with_command(&command);
         file.write(&path)?;
         written.push(format!("{} ({} runs)", path.display(), file.n_runs));
     }

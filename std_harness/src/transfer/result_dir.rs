@@ -158,11 +158,14 @@ impl ResultDir {
         };
         match file.runs.iter().position(|r| r.run == record.run) {
             Some(i) if self.replace => file.runs[i] = record,
-            Some(_) => {}
+            // Another writer saved this run meanwhile (the same run: same seed, index).
+            Some(_) => return Ok(()),
             None => file.runs.push(record),
         }
-        file = ResultFile::new(file.experiment, file.runs);
-        file.command = self.command.clone();
+        let command = std::mem::take(&mut file.command);
+        file = ResultFile::new(file.experiment, file.runs)
+            .with_command(&command)
+            .with_command(&self.command);
         file.write(&path)
     }
 

@@ -60,6 +60,14 @@ impl ResultFile {
         }
     }
 
+    /// The file recording `command` (kept as it was when `command` is empty).
+    pub fn with_command(mut self, command: &[String]) -> Self {
+        if !command.is_empty() {
+            self.command = command.to_vec();
+        }
+        self
+    }
+
     /// Merges `other`'s runs into this file: a run index present in both takes `other`'s.
     ///
     /// Errors: different experiment configurations.
