@@ -36,6 +36,10 @@ pub fn differences(prefix: &str, old: &Value, new: &Value) -> Vec<Difference> {
 }
 
 fn walk(path: &str, old: Option<&Value>, new: Option<&Value>, out: &mut Vec<Difference>) {
+    // Equal subtrees (the usual case) cost one comparison and no path strings.
+    if old == new {
+        return;
+    }
     let join = |key: &str| {
         if path.is_empty() {
             key.to_string()
@@ -57,7 +61,6 @@ fn walk(path: &str, old: Option<&Value>, new: Option<&Value>, out: &mut Vec<Diff
                 walk(&format!("{path}[{i}]"), a.get(i), b.get(i), out);
             }
         }
-        (a, b) if a == b => {}
         (a, b) => out.push(Difference {
             path: path.to_string(),
             old: a.cloned(),
