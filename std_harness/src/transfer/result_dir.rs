@@ -27,7 +27,8 @@ const PLACEMENT_OPTIONS: [(&str, bool); 8] = [
     ("--check-gp-search", false),
 ];
 
-/// `words` (a subcommand and its options) without [`PLACEMENT_OPTIONS`], in either the
+/// `words` (a subcommand and its options) without the placement options (`--runs`, `--out`,
+/// `--threads`, `--quiet`, `--no-plots`, `--no-run`, `--replace`, `--check-gp-search`), in either the
 /// `--option value` or the `--option=value` form.
 pub fn recorded_command(words: &[String]) -> Vec<String> {
     let mut kept = Vec::new();
