@@ -44,8 +44,8 @@ pub use awfqi::{
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
 pub use fqi::{
-    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, Kernel, KnnFqi,
-    KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
+    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
+    KnnFqi, KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
     Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
