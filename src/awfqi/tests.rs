@@ -3,6 +3,7 @@ use super::*;
 use crate::TabularFqi;
 use crate::alias::AliasEntry;
 use crate::env::{Dynamics, PuddleWorld};
+use crate::fqi::SampleSet;
 use crate::fqi::{CellGrid, FqiEntry};
 use crate::gp::SearchOptions;
 use crate::record_gp::{SubsetRule, predict_posteriors};
