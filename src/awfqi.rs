@@ -68,9 +68,9 @@ pub(crate) mod transfer;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 
-use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, FqiConfig, QFunction};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};

@@ -10,8 +10,8 @@
 //! `max_gp` records; with the small capacities of a microcontroller, **spread** (every
 //! `len/N`-th record) keeps every part of the dataset represented instead.
 
-use crate::env::Transition;
 use crate::gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use crate::model::Transition;
 use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
 use crate::{Error, Real, Result};
 use rand_core::Rng;

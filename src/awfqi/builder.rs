@@ -12,9 +12,9 @@
 
 use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
-use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
 use crate::weights::{Posterior, WeightParams};

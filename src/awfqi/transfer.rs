@@ -6,9 +6,9 @@
 //! and transition weights, [`crate::AdaptiveAwfqi`] its adaptive query rule.
 
 use super::{Records, SourceData, StepReport};
-use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{FqiConfig, QFunction, SampleSet};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::visit_posteriors;
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
 use crate::{Error, Real, Result};

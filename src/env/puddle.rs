@@ -22,7 +22,8 @@ pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use episode::EpisodeRecord;
 
 use super::{GenerativeModel, Transition};
-use crate::score::{PointGrid, SourceMeans, SourceModel};
+use crate::model::{SourceMeans, SourceModel};
+use crate::score::PointGrid;
 use crate::{Error, Real, Result, rng};
 use rand_core::Rng;
 

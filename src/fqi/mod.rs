@@ -48,6 +48,7 @@
 //! - its public entry points in the no-panic image (`tests/on_target/src/bin/no_panic.rs`).
 
 mod config;
+mod entry;
 mod fill;
 mod grid;
 mod hybrid;
@@ -60,11 +61,12 @@ mod tiles;
 pub mod trees;
 
 pub use config::{EmptyCells, FqiConfig};
+pub use entry::FqiEntry;
 pub use grid::CellGrid;
 pub use hybrid::HybridFqi;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
-pub use table::{FqiEntry, TabularFqi};
+pub use table::TabularFqi;
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};

@@ -3,8 +3,8 @@
 
 use super::FqiConfig;
 use super::config::EmptyCells;
-use crate::env::Transition;
 use crate::error::ensure_finite;
+use crate::model::Transition;
 use crate::{Error, Real, Result};
 
 /// A slice of samples with optional per-sample weights (absent = all 1) and optional

@@ -28,7 +28,8 @@
 //! actions: 1 152 entries = 23 040 bytes in `f32`. Fit cost per iteration:
 //! `O(samples · k · actions)`.
 
-use super::fill::{NIL, fill_empty, nearest_donors};
+use super::entry::NIL;
+use super::fill::{fill_empty, nearest_donors};
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::each;
 use super::{EmptyCells, FqiConfig, FqiEntry, SampleSet};

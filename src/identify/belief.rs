@@ -1,7 +1,7 @@
 //! The Bayesian belief over K known candidate MDPs (spec §10.2 step 4), kept in log space.
 
-use crate::env::{FiniteMdp, Transition};
 use crate::float::log_sum_exp;
+use crate::model::{FiniteMdp, Transition};
 use crate::{Error, Real, Result};
 
 /// ln of one observation's likelihood under `mdp`:

@@ -57,7 +57,7 @@ pub use policy::{belief_weighted_policy, belief_weighted_q};
 pub use procedure::{Scoring, run_queries};
 pub use query_score::{Criterion, MAX_BINS, MiConfig, RewardEntropy, compute_score};
 
-use crate::env::FiniteMdp;
+use crate::model::FiniteMdp;
 use crate::{Error, Real, Result};
 
 /// |𝒮|, |𝒜| and |𝒮|·|𝒜| shared by all `candidates`.

@@ -1,7 +1,7 @@
 //! The query loop of spec §10.2 steps 1–4, fixed or adaptive.
 
 use super::{Belief, Criterion, compute_score, draw_pair};
-use crate::env::{FiniteMdp, GenerativeModel};
+use crate::model::{FiniteMdp, GenerativeModel};
 use crate::{Error, Real, Result};
 use rand_core::Rng;
 

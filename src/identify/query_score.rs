@@ -13,7 +13,7 @@
 
 use super::belief::positive_variance;
 use super::{belief_total, dimensions};
-use crate::env::FiniteMdp;
+use crate::model::FiniteMdp;
 use crate::{Error, Real, Result, rng};
 use rand_core::Rng;
 
