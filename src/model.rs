@@ -4,7 +4,9 @@
 //! fully known [`FiniteMdp`] (identification, planning). The plants of [`crate::env`]
 //! implement them; a plant of your own does the same and gets the whole transfer path.
 
-use crate::{Real, Result};
+use crate::error::Result;
+
+use crate::float::Real;
 use rand_core::Rng;
 
 /// One sampled transition `(s, a, r, s′, ω)`: spec §1's record without its time index.

@@ -3,8 +3,8 @@
 
 use super::candidates::Candidate;
 use super::plausibility::SourceBelief;
-use crate::Real;
 use crate::alias::AliasEntry;
+use crate::float::Real;
 use crate::fqi::{FqiEntry, QStorage};
 use crate::gp::Gp;
 use crate::model::Transition;

@@ -1,7 +1,7 @@
 //! One (cell, action) pair of a table or of one tiling: the storage unit of
 //! [`TabularFqi`](super::TabularFqi) and [`TileFqi`](super::TileFqi).
 
-use crate::Real;
+use crate::float::Real;
 
 /// "No donor" marker in [`FqiEntry`].
 pub(super) const NIL: u32 = u32::MAX;

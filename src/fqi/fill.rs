@@ -4,7 +4,7 @@
 use super::CellGrid;
 use super::config::EmptyCells;
 use super::entry::{FqiEntry, NIL};
-use crate::Real;
+use crate::float::Real;
 
 /// Sets every entry's `donor` to the entry index of the nearest entry with the same action
 /// for which `has_data` holds (itself if it holds), or [`NIL`] when the action has none.

@@ -5,7 +5,8 @@
 
 use super::iteration::{self, NoDraws, Regressor};
 use super::{FqiConfig, KnnFqi, SampleSet, TileFqi};
-use crate::{Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The mean of a tile-coding and a kernel-averaging Q-function, each fitted by weighted FQI
@@ -19,10 +20,10 @@ pub struct HybridFqi<'a, T, const D: usize> {
 impl<'a, T: Real, const D: usize> HybridFqi<'a, T, D> {
     /// The ensemble of `tiles` and `knn`, which must have the same action count.
     ///
-    /// Errors: different action counts ([`crate::Error::InvalidParameter`] `actions`).
+    /// Errors: different action counts ([`Error::InvalidParameter`] `actions`).
     pub fn new(tiles: TileFqi<'a, T, D>, knn: KnnFqi<'a, T, D>) -> Result<Self> {
         if tiles.actions() != knn.actions() {
-            return Err(crate::Error::InvalidParameter {
+            return Err(Error::InvalidParameter {
                 parameter: "actions",
             });
         }

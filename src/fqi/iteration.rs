@@ -4,7 +4,8 @@
 
 use super::samples::check_magnitudes;
 use super::{FqiConfig, SampleSet};
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// What differs between approximators in weighted FQI: how one iteration's regression is

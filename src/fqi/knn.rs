@@ -40,8 +40,9 @@
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::load;
 use super::{FqiConfig, SampleSet};
+use crate::error::{Error, Result};
 use crate::error::{ensure_all_finite, ensure_finite};
-use crate::{Error, Real, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The largest `k` (the neighbour lists of a prediction live on the stack).

@@ -4,8 +4,9 @@
 use super::FqiConfig;
 use super::config::EmptyCells;
 use crate::error::ensure_finite;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::model::Transition;
-use crate::{Error, Real, Result};
 
 /// A slice of samples with optional per-sample weights (absent = all 1) and optional
 /// rewards that replace the samples' own (absent = their own).

@@ -50,7 +50,8 @@ use super::fill::{fill_empty, nearest_donors};
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::each;
 use super::{CellGrid, FqiConfig, SampleSet};
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// A tabular Q-function on a [`CellGrid`] with `actions` actions, fitted by weighted FQI,

@@ -34,8 +34,9 @@ use super::iteration::{self, NoDraws, Regressor};
 use super::samples::each;
 use super::{EmptyCells, FqiConfig, FqiEntry, SampleSet};
 use crate::error::ensure_finite;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::CellGrid;
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// The geometry of `k` offset tilings of the box `[lower, upper]`, `n` tiles per axis each
@@ -425,8 +426,8 @@ impl<T: Real, const D: usize> Regressor<T, D> for TileFqi<'_, T, D> {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::Transition;
     use crate::fqi::TabularFqi;
+    use crate::model::Transition;
     use rand_chacha::ChaCha8Rng;
     use rand_core::{Rng, SeedableRng};
     use std::vec;

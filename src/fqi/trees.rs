@@ -64,7 +64,8 @@ use super::iteration::{self, Regressor};
 use super::samples::load;
 use super::{FqiConfig, SampleSet};
 use crate::error::ensure_all_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// A node whose weighted impurity is at most this is a leaf (spec §4.1).

@@ -1,7 +1,8 @@
 //! Grids of points, the grid mode of a candidate set (§11.1).
 
+use crate::error::{Error, Result};
 use crate::error::{ensure_all_finite, ensure_finite};
-use crate::{Error, Real, Result};
+use crate::float::Real;
 
 /// A grid of points `lower + (i₀·spacing₀, i₁·spacing₁, …)` for `i_k < points[k]` (§11.1),
 /// the first axis fastest.

@@ -3,8 +3,9 @@
 
 use super::PointGrid;
 use crate::error::ensure_all_finite;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::model::Transition;
-use crate::{Error, Real, Result};
 
 /// The rows of a score table (§11.1): the candidate state-action pairs.
 ///

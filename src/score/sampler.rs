@@ -1,8 +1,8 @@
 //! Drawing rows of a score table with replacement (§11.3, §12 step 1).
 
 use super::RowSet;
-use crate::Real;
 use crate::alias::AliasTable;
+use crate::float::Real;
 use rand_core::Rng;
 
 /// Draws rows of a score table with replacement, O(1) per draw (§12 step 1).

@@ -1,10 +1,11 @@
 //! The realistic source model (§11.2): a source's mean functions estimated by GPs fitted on
 //! its records alone.
 
+use crate::error::Result;
+use crate::float::Real;
 use crate::gp::Gp;
 use crate::model::{SourceMeans, SourceModel};
 use crate::record_gp::{InputDim, input};
-use crate::{Real, Result};
 
 /// The realistic model of one source (§11.2): the posterior means of GPs fitted on that
 /// source's records only, at `z = (s, a)` (`I = D + 1`).

@@ -3,11 +3,12 @@
 
 use super::{RowSampler, RowSet};
 use crate::alias::{AliasEntry, AliasTable};
+use crate::error::{Error, Result};
 use crate::error::{ensure_all_finite, ensure_finite};
+use crate::float::Real;
 use crate::gp::Gp;
 use crate::model::{SourceModel, Transition};
 use crate::record_gp::{GpTraining, Output, SubsetRule, fit_gp, input};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// The scores of one row: population variances over the sources of the mean reward and of

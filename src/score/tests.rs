@@ -1,8 +1,8 @@
 extern crate std;
 use super::*;
-use crate::Error;
 use crate::alias::AliasEntry;
 use crate::env::{Dynamics, PuddleWorld};
+use crate::error::Error;
 use crate::gp::Gp;
 use crate::model::Transition;
 use rand_chacha::ChaCha8Rng;
