@@ -56,4 +56,26 @@ impl<T: Real> FqiEntry<T> {
     pub fn has_data(&self) -> bool {
         self.weight > T::ZERO
     }
+
+    /// Iteration 1: adds a sample's weighted reward and weights to the pair's sums (`next`
+    /// holds `Σ w_r` while the reward model is being fitted).
+    pub(super) fn add_reward(&mut self, reward: T, w_r: T, w_s: T) {
+        self.reward += w_r * reward;
+        self.next += w_r;
+        self.weight += w_s;
+    }
+
+    /// Ends iteration 1's sums: a total below `min_weight` counts as no data (0), and the
+    /// reward sum becomes the weighted mean `R̂` where there is reward weight.
+    pub(super) fn close_reward_model(&mut self, min_weight: T) {
+        if self.next < min_weight {
+            self.next = T::ZERO;
+        }
+        if self.weight < min_weight {
+            self.weight = T::ZERO;
+        }
+        if self.next > T::ZERO {
+            self.reward /= self.next;
+        }
+    }
 }

@@ -3,6 +3,7 @@
 //! records are sparse and the records' local ones where they are dense. Memory: that of
 //! both ([`TileFqi`]'s entries, [`KnnFqi`]'s records and links).
 
+use super::argmax::ArgMax;
 use super::iteration::{self, NoDraws, Regressor};
 use super::{FqiConfig, KnnFqi, SampleSet, TileFqi};
 use crate::error::{Error, Result};
@@ -92,16 +93,11 @@ impl<'a, T: Real, const D: usize> HybridFqi<'a, T, D> {
     ///
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
+        let mut best = ArgMax::new();
         for a in 0..self.actions() {
-            let q = self.value(state, a)?;
-            if a == 0 || q > best_q {
-                best = a;
-                best_q = q;
-            }
+            best.offer(a, self.value(state, a)?, true);
         }
-        Ok(best)
+        Ok(best.action())
     }
 }
 
