@@ -72,15 +72,16 @@ pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 pub use report::{COLLAPSED_SHARE, DISCARDED_SHARE, StepReport, Warning, Warnings, Weights};
 pub use scaled::SourceScales;
 
-use crate::env::{GenerativeModel, Transition};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::{Approximator, FqiConfig, QFunction};
 use crate::gp::Gp;
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{
     GpTraining, InputDim, Output, SubsetRule, fit_gp_searched, visit_posteriors,
 };
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 use transfer::{ReplanGp, SourceValues, Transfer};
 

@@ -22,6 +22,7 @@ pub mod float;
 pub mod fqi;
 pub mod gp;
 pub mod identify;
+pub mod model;
 pub mod planning;
 pub mod policy;
 pub mod record_gp;
@@ -53,7 +54,6 @@ pub use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
     StepReport, ValidAwfqiConfig, Warning, Warnings,
 };
-pub use env::{GenerativeModel, Transition};
 pub use evaluation::{
     Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
     evaluate_greedy_multi_start, evaluate_multi_start, rollout,
@@ -64,6 +64,7 @@ pub use fqi::{
     Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+pub use model::{GenerativeModel, Transition};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
 pub use score::{

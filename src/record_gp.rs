@@ -10,12 +10,13 @@
 //! `max_gp` records; with the small capacities of a microcontroller, **spread** (every
 //! `len/N`-th record) keeps every part of the dataset represented instead.
 
-use crate::env::Transition;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::gp::{
     Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, Searched, WhenFull,
 };
+use crate::model::Transition;
 use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// A state dimension `D` paired with a GP input dimension `I`: it implements

@@ -11,7 +11,9 @@
 
 pub mod compat;
 
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+
+use crate::float::Real;
 use rand_core::Rng;
 
 /// 2⁻⁵³: the spacing of the 53-bit uniform grid on [0, 1).

@@ -6,7 +6,7 @@
 //! and [`StepReport::warnings`] names what is wrong with them, without allocating, so
 //! firmware can log it with `defmt` or `core::fmt` and a host can print it.
 
-use crate::Real;
+use crate::float::Real;
 use crate::gp::Hyperparameters;
 use core::fmt;
 

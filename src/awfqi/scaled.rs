@@ -46,13 +46,14 @@
 //!   your plant's discount).
 
 use super::AwfqiConfig;
-use crate::env::Transition;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::gp::{
     Conditioning, HyperparameterBounds, Hyperparameters, MAX_SEARCH_PARAMETERS, SearchOptions,
 };
+use crate::model::Transition;
 use crate::record_gp::{Dims, GpTraining, StatePlusAction};
 use crate::weights::{Estimator, WeightParams};
-use crate::{Error, Real, Result};
 
 /// `v = K·ν`: the weights' noise variance as a multiple of the measured local noise.
 ///

@@ -1,6 +1,10 @@
 extern crate std;
 use super::*;
+use crate::alias::AliasEntry;
 use crate::env::{Dynamics, PuddleWorld};
+use crate::error::Error;
+use crate::gp::Gp;
+use crate::model::Transition;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::vec;
@@ -258,7 +262,7 @@ fn realistic_table_one_gp_at_a_time_equals_the_table_of_all_gps_bit_for_bit() {
                         crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
                         crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
                     ];
-                    crate::env::GenerativeModel::query(w, s, i % 4, &mut rng).unwrap()
+                    crate::model::GenerativeModel::query(w, s, i % 4, &mut rng).unwrap()
                 })
                 .collect()
         })
