@@ -78,7 +78,8 @@ use crate::fqi::{Approximator, FqiConfig, QFunction};
 use crate::gp::Gp;
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{
-    GpTraining, InputDim, Output, SubsetRule, fit_gp_searched, visit_posteriors,
+    Dims, GpTraining, InputDim, Output, StatePlusAction, SubsetRule, fit_gp_searched,
+    visit_posteriors,
 };
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
@@ -372,6 +373,7 @@ impl<'a, T, G, const D: usize, const I: usize, const N: usize> Awfqi<'a, T, G, D
 where
     T: Real,
     G: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
 {
     /// Assembles a kernel for a fresh run (`D₀` empty, Q = 0) from parts the builder has
     /// checked: `samples` holds at least one step, `weights` one weight per source record,
@@ -583,7 +585,10 @@ fn transition_weights_of<T: Real, const N: usize, const D: usize, const I: usize
     params: &WeightParams<T>,
     noise: NoiseSubtraction,
     out: &mut [T],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if records.is_empty() {
         return Ok(());
     }

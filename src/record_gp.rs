@@ -34,6 +34,17 @@ use rand_core::Rng;
 /// type Right = awfqi::AwfqiStorage<f32, 2, 3, 16, 20, 40, 42, 20>;
 /// let storage = Right::new();
 /// ```
+///
+/// The free functions that pair records with GP inputs carry the same bound:
+///
+/// ```compile_fail,E0277
+/// let z: [f32; 4] = awfqi::record_gp::input([0.5, 0.5], 1);
+/// ```
+///
+/// ```
+/// let z: [f32; 3] = awfqi::record_gp::input([0.5, 0.5], 1);
+/// assert_eq!(z, [0.5, 0.5, 1.0]);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Dims<const D: usize, const I: usize>;
 
@@ -79,7 +90,10 @@ impl<const D: usize, const I: usize> InputDim<D, I> {
 
 /// The GP input `z = (s₀, …, s_{D−1}, a)` of a state-action pair (`I = D + 1`, checked at
 /// compile time).
-pub fn input<T: Real, const D: usize, const I: usize>(state: [T; D], action: usize) -> [T; I] {
+pub fn input<T: Real, const D: usize, const I: usize>(state: [T; D], action: usize) -> [T; I]
+where
+    Dims<D, I>: StatePlusAction,
+{
     let () = InputDim::<D, I>::CHECK;
     let mut z = [T::from_usize(action); I];
     for (zi, &si) in z.iter_mut().zip(&state) {
@@ -196,7 +210,10 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I:
     subset: SubsetRule,
     training: &GpTraining<T, I>,
     rng: &mut R,
-) -> Result<T> {
+) -> Result<T>
+where
+    Dims<D, I>: StatePlusAction,
+{
     let () = InputDim::<D, I>::CHECK;
     let Some(first) = records.first() else {
         return Err(Error::EmptyData);
@@ -224,6 +241,7 @@ where
     T: Real,
     R: Rng + ?Sized,
     F: FnMut(&Transition<[T; D], T>) -> Result<T>,
+    Dims<D, I>: StatePlusAction,
 {
     fit_gp_searched(gp, records, target, subset, training, rng).map(|s| s.lml)
 }
@@ -242,6 +260,7 @@ where
     T: Real,
     R: Rng + ?Sized,
     F: FnMut(&Transition<[T; D], T>) -> Result<T>,
+    Dims<D, I>: StatePlusAction,
 {
     let () = InputDim::<D, I>::CHECK;
     if records.is_empty() {
@@ -273,7 +292,10 @@ pub fn predict_posteriors<T: Real, const N: usize, const D: usize, const I: usiz
     records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
     out: &mut [Posterior<T>],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if out.len() != records.len() {
         return Err(Error::InvalidParameter { parameter: "out" });
     }
@@ -298,7 +320,10 @@ pub fn visit_posteriors<T: Real, const N: usize, const D: usize, const I: usize>
     records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
     mut visit: impl FnMut(&Transition<[T; D], T>, Posterior<T>) -> Result<()>,
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     let transform = batch_transform(gp, records, noise)?;
     for r in records {
         let p = gp.predict(&input(r.state, r.action))?;
@@ -315,7 +340,10 @@ pub fn batch_transform<T: Real, const N: usize, const D: usize, const I: usize>(
     gp: &Gp<T, N, I>,
     records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
-) -> Result<StdTransform<T>> {
+) -> Result<StdTransform<T>>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if records.is_empty() {
         return Err(Error::EmptyData);
     }

@@ -324,6 +324,7 @@ impl<'a, T, G, const D: usize, const I: usize, const N: usize> AdaptiveAwfqi<'a,
 where
     T: Real,
     G: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
 {
     /// A kernel for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
     /// stored reward posteriors, one mean function per source (`means`, e.g.
@@ -750,7 +751,10 @@ struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {
     beliefs: &'k mut [SourceBelief<T>],
 }
 
-impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N> {
+impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N>
+where
+    Dims<D, I>: StatePlusAction,
+{
     /// Adds `record`'s clipped errors to the beliefs and appends it to `run`'s `D₀`.
     ///
     /// Errors: `D₀` full ([`Error::CapacityExceeded`], checked first), those of a mean
@@ -802,7 +806,10 @@ fn relabel_rewards<T: Real, const N: usize, const D: usize, const I: usize>(
     v: T,
     noise: NoiseSubtraction,
     out: &mut [T],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     for_each_source(sources, out, |records, _, mine| {
         if records.is_empty() {
             return Ok(());

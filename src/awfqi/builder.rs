@@ -186,7 +186,10 @@ pub struct AwfqiBuilder<'a, T, const D: usize, const I: usize> {
     transitions: Option<TransitionWeighting<'a, T>>,
 }
 
-impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
+impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
     /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
     /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.

@@ -11,7 +11,7 @@ use crate::float::Real;
 use crate::fqi::{FqiConfig, QFunction, SampleSet};
 use crate::gp::{Gp, Hyperparameters};
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::visit_posteriors;
+use crate::record_gp::{Dims, StatePlusAction, visit_posteriors};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
 use rand_core::Rng;
 
@@ -119,7 +119,10 @@ where
         noise: NoiseSubtraction,
         summary: &mut WeightSummary<T>,
         tally: &mut WeightTally<T>,
-    ) -> Result<()> {
+    ) -> Result<()>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         reward_weights(
             self.gp,
             &self.sources,
@@ -248,7 +251,10 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     weights: &mut [T],
     summary: &mut WeightSummary<T>,
     tally: &mut WeightTally<T>,
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     for_each_source(sources, weights, |records, posteriors, mine| {
         source_weights(gp, records, posteriors, params, noise, mine)?;
         summary.add(mine)?;
@@ -318,7 +324,10 @@ fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     params: &WeightParams<T>,
     noise: NoiseSubtraction,
     out: &mut [T],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if records.is_empty() {
         return Ok(());
     }
