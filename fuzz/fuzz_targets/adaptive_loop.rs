@@ -310,6 +310,7 @@ fn run<T: Real>(b: &mut Bytes) {
             links: &mut links,
             tree_records: &mut tree_records,
             nodes: &mut nodes,
+            ..QStorage::default()
         },
         path: &mut path,
         beliefs: &mut beliefs,

@@ -65,8 +65,8 @@ use crate::awfqi::{
 };
 use crate::env::{GenerativeModel, Transition};
 use crate::fqi::{Approximator, QFunction};
-use crate::gp::{Gp, Hyperparameters};
-use crate::record_gp::{InputDim, fit_gp_on, input, visit_posteriors};
+use crate::gp::{Gp, Hyperparameters, SearchOptions};
+use crate::record_gp::{GpTraining, InputDim, fit_gp_on, input, visit_posteriors};
 use crate::score::RowSet;
 use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
 use crate::{Error, Real, Result};
@@ -112,6 +112,22 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     /// `(lower, upper)` of every state coordinate (`lower < upper`): the relevance kernel's
     /// and the nearest-record distances' units.
     pub bounds: [(T, T); D],
+    /// How the target GPs' hyperparameters are searched after their first fit of a run.
+    pub refit: Refit,
+}
+
+/// How a re-plan searches the hyperparameters of the weights' reward GP and of the residual
+/// GP once each has been fitted in the run: the search is most of a step's cost, and the
+/// data change by a few records between two fits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refit {
+    /// Every fit searches from [`AwfqiConfig::gp_training`]'s initial values with its
+    /// search options (the thesis's training).
+    Search,
+    /// Every fit after the first of its GP starts from that GP's last hyperparameters and
+    /// searches with these options (the first fit of each is the thesis's).
+    Warm(SearchOptions),
 }
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
@@ -145,6 +161,7 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
             horizon,
             epsilon,
             bounds,
+            refit: Refit::Search,
         }
     }
 
@@ -156,6 +173,9 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// `lower ≥ upper` ([`Error::OutOfRange`] / [`Error::NonFinite`] naming it).
     pub fn validate(self) -> Result<ValidAdaptiveConfig<T, D, I>> {
         self.awfqi.validate()?;
+        if let Refit::Warm(options) = self.refit {
+            options.validate()?;
+        }
         for (value, parameter) in [
             (self.sub_batches, "sub_batches"),
             (self.candidates, "candidates"),
@@ -230,6 +250,9 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     residual: bool,
     /// `weights` holds the relabelled rewards the Q-function was last fitted on.
     relabelled: bool,
+    /// The last hyperparameters of the weights' reward GP and of the residual GP in this
+    /// run (the warm starts of [`Refit::Warm`]).
+    last_hyper: [Option<Hyperparameters<T, I>>; 2],
     fqi: QFunction<'a, T, D>,
     slots: &'a mut [Candidate<T>],
     alias: &'a mut [crate::AliasEntry<T>],
@@ -322,6 +345,7 @@ where
             gp,
             residual: false,
             relabelled: false,
+            last_hyper: [None; 2],
             fqi,
             slots: candidates,
             alias,
@@ -344,6 +368,7 @@ where
         self.planned = false;
         self.residual = false;
         self.relabelled = false;
+        self.last_hyper = [None; 2];
         self.last = None;
         self.fqi.clear();
         self.gp.clear();
@@ -409,6 +434,23 @@ where
         &self.target
     }
 
+    /// The sources' reward mean functions.
+    pub fn means(&self) -> &'a [MeanFunction<T, N, I>] {
+        self.means
+    }
+
+    /// Plans on the sources alone (the plan the first step starts from), if no plan exists
+    /// yet; [`AdaptiveAwfqi::step`] does it otherwise. It depends on the set-up only, so a
+    /// firmware can run it at boot and keep it out of the first step's time.
+    ///
+    /// Errors: those of FQI; the kernel is unchanged then.
+    pub fn plan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<()> {
+        if !self.planned {
+            self.replan(rng)?;
+        }
+        Ok(())
+    }
+
     /// Runs one step (module docs): `sub_batches` × (verification, drawn queries,
     /// re-plan). The report's GP fields describe the weights' reward GP of the last
     /// re-plan.
@@ -425,9 +467,7 @@ where
                 capacity: self.samples.len(),
             })?;
         self.path_len = 0;
-        if !self.planned {
-            self.replan(rng)?;
-        }
+        self.plan(rng)?;
         let s = self.config.sub_batches;
         let mut report = None;
         for b in 0..s {
@@ -625,9 +665,10 @@ where
             target,
             |r| Ok(r.reward - centre),
             config.subset,
-            &config.gp_training,
+            &self.training(REWARD_GP),
             rng,
         )?;
+        self.last_hyper[REWARD_GP] = Some(*self.gp.hyperparameters());
         let (hyper, points) = (*self.gp.hyperparameters(), self.gp.len());
         self.relabelled = false;
         if relabel {
@@ -673,6 +714,7 @@ where
         self.residual = false;
         plausibility::update(self.beliefs, config.weights.noise_variance())?;
         let (means, beliefs) = (self.means, &*self.beliefs);
+        let training = self.training(RESIDUAL_GP);
         fit_gp_on(
             self.gp,
             target,
@@ -681,11 +723,28 @@ where
                 Ok(r.reward - prior)
             },
             config.subset,
-            &config.gp_training,
+            &training,
             rng,
         )?;
+        self.last_hyper[RESIDUAL_GP] = Some(*self.gp.hyperparameters());
         self.residual = true;
         Ok(self.report(&wr, lml, hyper, points))
+    }
+
+    /// The training of GP `which` ([`REWARD_GP`], [`RESIDUAL_GP`]) by [`Refit`].
+    fn training(&self, which: usize) -> GpTraining<T, I> {
+        let thesis = self.config.awfqi.gp_training;
+        match (
+            self.config.refit,
+            self.last_hyper.get(which).copied().flatten(),
+        ) {
+            (Refit::Warm(search), Some(initial)) => GpTraining {
+                initial,
+                search,
+                ..thesis
+            },
+            _ => thesis,
+        }
     }
 
     fn report(
@@ -709,6 +768,11 @@ where
         }
     }
 }
+
+/// Index of the weights' reward GP in [`AdaptiveAwfqi`]'s warm starts.
+const REWARD_GP: usize = 0;
+/// Index of the residual GP.
+const RESIDUAL_GP: usize = 1;
 
 /// What a query changes: `D₀` and the sources' running errors.
 struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {

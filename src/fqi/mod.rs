@@ -54,12 +54,14 @@
 mod grid;
 pub mod knn;
 mod q_function;
+pub mod sweep;
 mod tiles;
 pub mod trees;
 
 pub use grid::CellGrid;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
+pub use sweep::{ModelSweep, SweepEntry, SweepFqi, SweepNode, SweepStorage};
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};
 

@@ -6,8 +6,9 @@
 //! lends any of them). Only the trees draw random numbers, from the caller's generator.
 
 use super::{
-    CellGrid, ExtraTrees, FqiConfig, FqiEntry, KnnFqi, KnnRecord, Neighbours, SampleSet,
-    TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord,
+    CellGrid, ExtraTrees, FqiConfig, FqiEntry, KnnFqi, KnnRecord, ModelSweep, Neighbours,
+    SampleSet, SweepEntry, SweepFqi, SweepNode, TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode,
+    TreeRecord,
 };
 use crate::{Real, Result};
 use rand_core::Rng;
@@ -27,16 +28,32 @@ pub struct QStorage<'a, T, const D: usize> {
     pub tree_records: &'a mut [TreeRecord<T, D>],
     /// The trees' nodes ([`ExtraTrees::required_nodes`]).
     pub nodes: &'a mut [TreeNode<T>],
+    /// A model sweep's entries ([`ModelSweep::required_entries`]).
+    pub sweep_entries: &'a mut [SweepEntry<T, D>],
+    /// A model sweep's nodes ([`ModelSweep::nodes`]).
+    pub sweep_nodes: &'a mut [SweepNode<T>],
+}
+
+impl<T, const D: usize> Default for QStorage<'_, T, D> {
+    /// No memory at all (fill in what the approximator uses).
+    fn default() -> Self {
+        Self {
+            entries: &mut [],
+            records: &mut [],
+            links: &mut [],
+            tree_records: &mut [],
+            nodes: &mut [],
+            sweep_entries: &mut [],
+            sweep_nodes: &mut [],
+        }
+    }
 }
 
 impl<'a, T, const D: usize> From<&'a mut [FqiEntry<T>]> for QStorage<'a, T, D> {
     fn from(entries: &'a mut [FqiEntry<T>]) -> Self {
         Self {
             entries,
-            records: &mut [],
-            links: &mut [],
-            tree_records: &mut [],
-            nodes: &mut [],
+            ..Self::default()
         }
     }
 }
@@ -57,6 +74,14 @@ pub enum Approximator<T, const D: usize> {
     Hybrid(Tilings<T, D>, Neighbours<T, D>),
     /// Per-action Extra-Trees forests ([`TreeFqi`]).
     Trees(ExtraTrees),
+    /// Value iteration on a grid model of the records ([`SweepFqi`]).
+    Sweep(ModelSweep<T, D>),
+}
+
+impl<T: Real, const D: usize> From<ModelSweep<T, D>> for Approximator<T, D> {
+    fn from(sweep: ModelSweep<T, D>) -> Self {
+        Approximator::Sweep(sweep)
+    }
 }
 
 impl<T: Real, const D: usize> From<ExtraTrees> for Approximator<T, D> {
@@ -92,7 +117,7 @@ impl<T: Real, const D: usize> Approximator<T, D> {
             Approximator::Tiles(tilings) => TileFqi::required_entries(tilings, actions),
             Approximator::Knn(_) => Some(0),
             Approximator::Hybrid(tilings, _) => TileFqi::required_entries(tilings, actions),
-            Approximator::Trees(_) => Some(0),
+            Approximator::Trees(_) | Approximator::Sweep(_) => Some(0),
         }
     }
 
@@ -130,6 +155,12 @@ impl<T: Real, const D: usize> Approximator<T, D> {
                 storage.tree_records,
                 storage.nodes,
             )?),
+            Approximator::Sweep(sweep) => QFunction::Sweep(SweepFqi::new(
+                sweep,
+                actions,
+                storage.sweep_entries,
+                storage.sweep_nodes,
+            )?),
         })
     }
 }
@@ -147,6 +178,8 @@ pub enum QFunction<'a, T, const D: usize> {
     Hybrid(TileFqi<'a, T, D>, KnnFqi<'a, T, D>),
     /// Per-action Extra-Trees forests.
     Trees(TreeFqi<'a, T, D>),
+    /// A model sweep.
+    Sweep(SweepFqi<'a, T, D>),
 }
 
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
@@ -158,6 +191,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Knn(q) => q.actions(),
             QFunction::Hybrid(q, _) => q.actions(),
             QFunction::Trees(q) => q.actions(),
+            QFunction::Sweep(q) => q.actions(),
         }
     }
 
@@ -168,7 +202,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
         match self {
             QFunction::Tabular(q) => q.entries(),
             QFunction::Tiles(q) | QFunction::Hybrid(q, _) => q.entries(),
-            QFunction::Knn(_) | QFunction::Trees(_) => &[],
+            QFunction::Knn(_) | QFunction::Trees(_) | QFunction::Sweep(_) => &[],
         }
     }
 
@@ -179,7 +213,8 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tiles(_)
             | QFunction::Knn(_)
             | QFunction::Hybrid(..)
-            | QFunction::Trees(_) => None,
+            | QFunction::Trees(_)
+            | QFunction::Sweep(_) => None,
         }
     }
 
@@ -194,6 +229,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
                 k.clear();
             }
             QFunction::Trees(q) => q.clear(),
+            QFunction::Sweep(q) => q.clear(),
         }
     }
 
@@ -218,6 +254,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
                 t.fit_sets(sets, config)
             }
             QFunction::Trees(q) => q.fit_sets(sets, config, rng),
+            QFunction::Sweep(q) => q.fit_sets(sets, config),
         }
     }
 
@@ -243,6 +280,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tiles(q) => q.value(state, action),
             QFunction::Knn(q) => q.value(state, action),
             QFunction::Trees(q) => q.value(state, action),
+            QFunction::Sweep(q) => q.value(state, action),
             QFunction::Hybrid(t, k) => {
                 Ok((t.value(state, action)? + k.value(state, action)?) / T::from_f64(2.0))
             }
@@ -258,6 +296,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tiles(q) => q.max_value(state),
             QFunction::Knn(q) => q.max_value(state),
             QFunction::Trees(q) => q.max_value(state),
+            QFunction::Sweep(q) => q.max_value(state),
             QFunction::Hybrid(..) => {
                 let mut best = T::NEG_INFINITY;
                 for a in 0..self.actions() {
@@ -277,6 +316,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tiles(q) => q.greedy_action(state),
             QFunction::Knn(q) => q.greedy_action(state),
             QFunction::Trees(q) => q.greedy_action(state),
+            QFunction::Sweep(q) => q.greedy_action(state),
             QFunction::Hybrid(..) => {
                 // The largest mean value, ties to the smallest index.
                 let mut best = 0;
@@ -322,6 +362,12 @@ impl<T: Real, const D: usize> Greedy<T, D> for KnnFqi<'_, T, D> {
 }
 
 impl<T: Real, const D: usize> Greedy<T, D> for TreeFqi<'_, T, D> {
+    fn greedy(&self, state: [T; D]) -> Result<usize> {
+        self.greedy_action(state)
+    }
+}
+
+impl<T: Real, const D: usize> Greedy<T, D> for SweepFqi<'_, T, D> {
     fn greedy(&self, state: [T; D]) -> Result<usize> {
         self.greedy_action(state)
     }

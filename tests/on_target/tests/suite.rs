@@ -624,7 +624,7 @@ mod tests {
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
         use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12, 0, 0> = AdaptiveMemory::new();
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
         // SAFETY: the only reference.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let run = AdaptiveRun {
@@ -634,9 +634,11 @@ mod tests {
             q: AdaptiveQ::Tiles(6, 2),
             search: Some((40, 1)),
             relabel: true,
+            refit: None,
         };
         let mut checked = false;
-        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+        let fqi = awfqi::QStorage::default();
+        let (report, evaluation) = adaptive_puddle(memory, fqi, run, 4, |kernel| {
             let d0 = kernel.target_samples();
             let starts = d0.chunks(4).all(|b| b[0].state == [0.0, 0.0]);
             let finite = d0.iter().all(|t| {
@@ -672,9 +674,11 @@ mod tests {
     #[test]
     fn adaptive_awfqi_with_streamed_trees() {
         use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12, 1057, 511> = AdaptiveMemory::new();
-        // SAFETY: the only reference.
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
+        static mut TREES: awfqi::TreeStorage<f32, 2, 1057, 511> = awfqi::TreeStorage::new();
+        // SAFETY: the only references.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+        let trees = unsafe { &mut *core::ptr::addr_of_mut!(TREES) };
         let run = AdaptiveRun {
             budget: 12,
             steps: 2,
@@ -682,9 +686,10 @@ mod tests {
             q: AdaptiveQ::Trees(4, 511),
             search: Some((40, 1)),
             relabel: false,
+            refit: None,
         };
         let mut checked = false;
-        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+        let (report, evaluation) = adaptive_puddle(memory, trees.storage(), run, 4, |kernel| {
             let weights = kernel.reward_weights();
             let action = kernel.q().greedy_action([0.0, 0.0]);
             checked = kernel.target_samples().len() == 24

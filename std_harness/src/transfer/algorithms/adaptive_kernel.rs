@@ -104,14 +104,21 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
     c.candidates = o.candidates;
     c.relevance_width = o.relevance_width as T;
     c.relabel = o.kernel_relabel;
+    if let Some((max_evaluations, restarts)) = o.kernel_refit {
+        c.refit = awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+            max_evaluations,
+            restarts,
+            isotropic: c.awfqi.gp_training.search.isotropic,
+        });
+    }
     Ok(c)
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
 /// an [`awfqi::AdaptiveStorage`].
 #[derive(Debug)]
-struct Memory {
-    gp: Box<Gp<T, GP_POINTS, 3>>,
+struct Memory<const N: usize> {
+    gp: Box<Gp<T, N, 3>>,
     samples: Vec<Record32>,
     weights: Vec<T>,
     candidates: Vec<awfqi::adaptive::Candidate<T>>,
@@ -121,12 +128,14 @@ struct Memory {
     links: Vec<u16>,
     tree_records: Vec<TreeRecord<T, 2>>,
     nodes: Vec<TreeNode<T>>,
+    sweep_entries: Vec<awfqi::SweepEntry<T, 2>>,
+    sweep_nodes: Vec<awfqi::SweepNode<T>>,
     path: Vec<[T; 2]>,
     beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
 }
 
-impl Memory {
-    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, 2, 3, GP_POINTS> {
+impl<const N: usize> Memory<N> {
+    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, 2, 3, N> {
         AdaptiveBuffers {
             gp: &mut self.gp,
             samples: &mut self.samples,
@@ -139,6 +148,8 @@ impl Memory {
                 links: &mut self.links,
                 tree_records: &mut self.tree_records,
                 nodes: &mut self.nodes,
+                sweep_entries: &mut self.sweep_entries,
+                sweep_nodes: &mut self.sweep_nodes,
             },
             path: &mut self.path,
             beliefs: &mut self.beliefs,
@@ -149,12 +160,12 @@ impl Memory {
 /// `awfqi-adaptive-kernel` as a [`Learner`]: each protocol step is one
 /// [`AdaptiveAwfqi::step`]; the greedy action is the `f32` Q-function's, and `D₀` is kept in
 /// `f64` for the result files.
-struct AdaptiveKernelLearner<'a> {
-    kernel: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, GP_POINTS>,
+struct AdaptiveKernelLearner<'a, const N: usize> {
+    kernel: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
     collected: Vec<Record>,
 }
 
-impl Learner for AdaptiveKernelLearner<'_> {
+impl<const N: usize> Learner for AdaptiveKernelLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.kernel.step(rng)?;
         let new = &self.kernel.target_samples()[self.collected.len()..];
@@ -181,6 +192,59 @@ impl Learner for AdaptiveKernelLearner<'_> {
 /// Hands a fresh learner for one run of `experiment` to `f` (the kernel borrows its memory
 /// and the set-up for the whole run, so they live in this frame).
 pub fn with_learner(
+    experiment: &Experiment,
+    rng: &mut ChaCha8Rng,
+    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    match experiment.adaptive_options.kernel_gp_points {
+        GP_POINTS => with_learner_of::<GP_POINTS>(experiment, rng, f),
+        16 => with_learner_of::<16>(experiment, rng, f),
+        24 => with_learner_of::<24>(experiment, rng, f),
+        32 => with_learner_of::<32>(experiment, rng, f),
+        48 => with_learner_of::<48>(experiment, rng, f),
+        n => anyhow::bail!("--adaptive-kernel-gp-points {n}: 16, 24, 32, 48 or 64"),
+    }
+}
+
+/// The sources' reward mean functions of capacity `N`: the set-up's when `N` is its GP
+/// capacity, else fitted here as the set-up fits its own (the published training, an even
+/// spread), from a stream of their own so every run has the same.
+fn means_of<const N: usize>(
+    setup: &KernelSetup,
+    sources: &[&[Record32]],
+) -> anyhow::Result<Vec<MeanFunction<T, N, 3>>> {
+    use rand_core::SeedableRng;
+    if N == GP_POINTS {
+        let means: Vec<MeanFunction<T, N, 3>> = setup
+            .means()
+            .iter()
+            .map(|m| {
+                // N == GP_POINTS: the same type.
+                let m: &dyn std::any::Any = m;
+                m.downcast_ref::<MeanFunction<T, N, 3>>()
+                    .cloned()
+                    .ok_or_else(|| anyhow::anyhow!("mean function capacity"))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        return Ok(means);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(N as u64);
+    let mut gp = Box::new(Gp::<T, N, 3>::empty());
+    let mut means = vec![MeanFunction::EMPTY; sources.len()];
+    for (mean, source) in means.iter_mut().zip(sources) {
+        mean.fit_rewards(
+            &mut gp,
+            source,
+            &awfqi::GpTraining::published(),
+            awfqi::SubsetRule::Spread,
+            &mut rng,
+        )?;
+    }
+    Ok(means)
+}
+
+/// [`with_learner`] with target GPs and mean functions of `N` points.
+fn with_learner_of<const N: usize>(
     experiment: &Experiment,
     rng: &mut ChaCha8Rng,
     f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
@@ -222,7 +286,16 @@ pub fn with_learner(
         }
         _ => (0, 0),
     };
-    let mut memory = Memory {
+    let (sweep_entries, sweep_nodes) = match approximator {
+        awfqi::Approximator::Sweep(sweep) => (
+            sweep
+                .required_entries(awfqi::env::PUDDLE_ACTIONS)
+                .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
+            sweep.nodes(),
+        ),
+        _ => (0, 0),
+    };
+    let mut memory = Memory::<N> {
         gp: Box::new(Gp::empty()),
         samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
         weights: vec![0.0; setup.posteriors().len()],
@@ -233,10 +306,13 @@ pub fn with_learner(
         links: vec![0; links],
         tree_records: vec![TreeRecord::EMPTY; tree_records],
         nodes: vec![TreeNode::EMPTY; nodes],
+        sweep_entries: vec![awfqi::SweepEntry::EMPTY; sweep_entries],
+        sweep_nodes: vec![awfqi::SweepNode::EMPTY; sweep_nodes],
         path: vec![[0.0; 2]; budget],
         beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
     };
-    let means: &[MeanFunction<T, GP_POINTS, 3>] = setup.means();
+    let means = means_of::<N>(setup, &sources)?;
+    let means: &[MeanFunction<T, N, 3>] = &means;
     let kernel = AdaptiveAwfqi::new(
         config,
         approximator,

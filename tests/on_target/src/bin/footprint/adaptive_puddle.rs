@@ -15,25 +15,32 @@
 use awfqi::AdaptiveAwfqi;
 use awfqi::env::PuddleWorld;
 use awfqi_on_target::workloads::{
-    ADAPTIVE_RECOMMENDED, AdaptiveRecommended, AdaptiveRun, adaptive_puddle,
+    ADAPTIVE_TREES, AdaptiveRun, AdaptiveTreeMemory, AdaptiveTrees, adaptive_puddle,
 };
 
-static mut MEMORY: AdaptiveRecommended = AdaptiveRecommended::new();
+static mut MEMORY: AdaptiveTrees = AdaptiveTrees::new();
+static mut TREES: AdaptiveTreeMemory = AdaptiveTreeMemory::new();
 
 awfqi_on_target::footprint_image!({
     // SAFETY: the only reference to MEMORY.
     let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+    // SAFETY: the only reference to TREES.
+    let trees = unsafe { &mut *core::ptr::addr_of_mut!(TREES) };
     let report = awfqi_on_target::probe::report;
-    report("memory bytes", core::mem::size_of::<AdaptiveRecommended>());
+    report(
+        "memory bytes",
+        core::mem::size_of::<AdaptiveTrees>() + core::mem::size_of::<AdaptiveTreeMemory>(),
+    );
     report(
         "kernel bytes",
         core::mem::size_of::<AdaptiveAwfqi<'static, f32, PuddleWorld<f32>, 2, 3, 64>>(),
     );
     adaptive_puddle(
         memory,
+        trees.storage(),
         AdaptiveRun {
             steps: 1,
-            ..ADAPTIVE_RECOMMENDED
+            ..ADAPTIVE_TREES
         },
         core::hint::black_box(1),
         |_| {},
