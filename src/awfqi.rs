@@ -489,6 +489,7 @@ where
             self.config.noise_subtraction,
             self.weights,
             &mut wr,
+            false,
         )?;
         // 5: weighted FQI on D₀ then the sources.
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
@@ -529,6 +530,8 @@ where
 ///
 /// Errors: `weights` shorter than the source records ([`Error::CapacityExceeded`] with its
 /// length); those of the predictions and of [`WeightParams::weight`].
+/// With `once`, each record is predicted once ([`crate::record_gp::map_posteriors`]: the
+/// same weights up to rounding, at about half the cost) instead of twice (the thesis path).
 pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     gp: &Gp<T, N, I>,
     sources: &SourceData<'_, T, D>,
@@ -536,9 +539,21 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     noise: NoiseSubtraction,
     weights: &mut [T],
     summary: &mut WeightSummary<T>,
+    once: bool,
 ) -> Result<()> {
     for_each_source(sources, weights, |records, posteriors, mine| {
-        source_weights(gp, records, posteriors, params, noise, mine)?;
+        if once {
+            if !records.is_empty() {
+                crate::record_gp::map_posteriors(gp, records, noise, mine, |i, r, target| {
+                    let source = posteriors.get(i).copied().ok_or(Error::InvalidParameter {
+                        parameter: "posteriors",
+                    })?;
+                    params.weight(r.reward, target, source)
+                })?;
+            }
+        } else {
+            source_weights(gp, records, posteriors, params, noise, mine)?;
+        }
         summary.add(mine)
     })
 }

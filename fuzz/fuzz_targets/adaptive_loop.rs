@@ -17,7 +17,7 @@ use awfqi::adaptive::{Candidate, SourceBelief};
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::record_gp::GpTraining;
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, CellGrid, EmptyCells, Error,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, CellGrid, EmptyCells, Error,
     ExtraTrees, FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, Neighbours, PointGrid,
     Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition, TreeNode,
     TreeRecord,
@@ -270,7 +270,6 @@ fn run<T: Real>(b: &mut Bytes) {
     let mut samples = vec![Transition::EMPTY; size(b, steps * budget)];
     let mut weights = vec![T::ZERO; size(b, total)];
     let mut candidates = vec![Candidate::EMPTY; size(b, slots)];
-    let mut alias = vec![AliasEntry::EMPTY; size(b, slots)];
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
     // Kernel averaging: one record slot per target and source record, and their links;
     // trees: as many record slots, and their nodes.
@@ -303,7 +302,6 @@ fn run<T: Real>(b: &mut Bytes) {
         samples: &mut samples,
         weights: &mut weights,
         candidates: &mut candidates,
-        alias: &mut alias,
         fqi: QStorage {
             entries: &mut fqi,
             records: &mut records,

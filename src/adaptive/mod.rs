@@ -58,7 +58,6 @@ pub use mean_function::MeanFunction;
 pub use plausibility::SourceBelief;
 pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
-use crate::alias::AliasTable;
 use crate::awfqi::builder::short;
 use crate::awfqi::{
     AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, for_each_source, reward_weights,
@@ -255,7 +254,6 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     last_hyper: [Option<Hyperparameters<T, I>>; 2],
     fqi: QFunction<'a, T, D>,
     slots: &'a mut [Candidate<T>],
-    alias: &'a mut [crate::AliasEntry<T>],
     path: &'a mut [[T; D]],
     path_len: usize,
     /// The Q-function has been fitted in this run.
@@ -279,7 +277,7 @@ where
     /// ([`Error::OutOfRange`] `actions`); no sources ([`Error::EmptyData`]), a mean-function
     /// count other than the source count ([`Error::InvalidParameter`] `means`); a buffer
     /// too short ([`Error::CapacityExceeded`] with its length): `samples` for one budget,
-    /// `weights` for the source records, `candidates` or `alias` for
+    /// `weights` for the source records, `candidates` for
     /// `min(candidates, rows)`, `path` for the budget, `beliefs` for the sources, `fqi`
     /// for the approximator.
     pub fn new(
@@ -297,7 +295,6 @@ where
             samples,
             weights,
             candidates,
-            alias,
             fqi,
             path,
             beliefs,
@@ -325,7 +322,6 @@ where
         short(samples.len(), budget)?;
         short(weights.len(), sources.len())?;
         short(candidates.len(), slots)?;
-        short(alias.len(), slots)?;
         short(path.len(), budget)?;
         short(beliefs.len(), m)?;
         let fqi = approximator.into().build(actions, fqi)?;
@@ -348,7 +344,6 @@ where
             last_hyper: [None; 2],
             fqi,
             slots: candidates,
-            alias,
             path,
             path_len: 0,
             planned: false,
@@ -602,14 +597,11 @@ where
             }
             _ => candidates::finish_scores(slots, None),
         };
-        // Pass 3: the alias table, then the queries.
+        // Pass 3: the queries, each drawn by a scan of the slots' probabilities (a few
+        // queries per sub-batch: cheaper in memory than a table, and as fast).
         let floor = config.floor;
-        let table = AliasTable::build(
-            slots
-                .iter()
-                .map(|s| candidates::probability(s, totals, floor, c)),
-            &mut *self.alias,
-        )?;
+        let probability = |s: &Candidate<T>| candidates::probability(s, totals, floor, c);
+        let total = slots.iter().map(probability).fold(T::ZERO, |a, p| a + p);
         let mut evidence = Evidence {
             config: &self.config,
             means: self.means,
@@ -619,8 +611,16 @@ where
             len: &mut self.len,
         };
         for _ in 0..n {
-            let j = table.sample(rng);
-            let row = self.slots.get(j).map_or(0, |s| s.row);
+            let u = crate::rng::uniform::<T, R>(rng) * total;
+            let mut row = slots.last().map_or(0, |s| s.row);
+            let mut sum = T::ZERO;
+            for s in slots.iter() {
+                sum += probability(s);
+                if u < sum {
+                    row = s.row;
+                    break;
+                }
+            }
             let (state, action) = self
                 .rows
                 .row(row)
@@ -690,6 +690,7 @@ where
                 config.noise_subtraction,
                 self.weights,
                 &mut wr,
+                true,
             )?;
         }
         let source_values = self.weights.get(..self.sources.len());

@@ -61,7 +61,7 @@ pub mod trees;
 pub use grid::CellGrid;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
-pub use sweep::{ModelSweep, SweepEntry, SweepFqi, SweepNode, SweepStorage};
+pub use sweep::{ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};
 

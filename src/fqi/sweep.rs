@@ -8,10 +8,9 @@
 //! of multilinear ("hat") averages of the records around `x` — each record spreads its
 //! value over the `2^D` corners of its cell with the interpolation weights `φ`:
 //!
-//! - **reward** `R̂(x, a) = Σ φ w_r r / Σ φ w_r` over the action's records (or, with
-//!   [`ModelSweep::with_pooled_rewards`], over every action's records: for plants whose
-//!   reward depends on the state only, so an action never tried at `x` still meets the
-//!   penalty the others found there);
+//! - **reward** `R̂(x, a) = Σ φ w_r r / Σ φ w_r` over the action's records, or over every
+//!   action's ([`RewardModel`]: for plants whose reward depends on the state only, so an
+//!   action never tried at `x` still meets the penalty the others found there);
 //! - **step** `d̂(x, a) = Σ φ w_s (s′ − s) / Σ φ w_s`: the mean displacement, so an action
 //!   tried elsewhere moves the same way at `x` (a locally translation-invariant plant);
 //! - **absorption** `Ω(y) = Σ φ(s′) w_s ω / Σ φ(s′) w_s`, spread at the records' *next*
@@ -49,7 +48,7 @@ pub struct ModelSweep<T, const D: usize> {
     cells: CellGrid<T, D>,
     /// The nodes as a grid of `cells + 1` per axis (index arithmetic and donor search).
     nodes: CellGrid<T, D>,
-    pooled_rewards: bool,
+    rewards: RewardModel,
     min_mass: T,
     lookahead: bool,
 }
@@ -64,7 +63,7 @@ impl<T: Real, const D: usize> ModelSweep<T, D> {
         Ok(Self {
             cells,
             nodes,
-            pooled_rewards: false,
+            rewards: RewardModel::PerAction,
             min_mass: T::ZERO,
             lookahead: false,
         })
@@ -77,13 +76,9 @@ impl<T: Real, const D: usize> ModelSweep<T, D> {
         Self::new(CellGrid::cube(lower, upper, n)?)
     }
 
-    /// The same sweep with the reward model fitted on every action's records at once
-    /// (`R̂(x, a)` the same for all `a`): for rewards that depend on the state only.
-    pub fn with_pooled_rewards(self, pooled: bool) -> Self {
-        Self {
-            pooled_rewards: pooled,
-            ..self
-        }
+    /// The same sweep with another reward model ([`RewardModel`]).
+    pub fn with_rewards(self, rewards: RewardModel) -> Self {
+        Self { rewards, ..self }
     }
 
     /// The same sweep with a node's reward counted as data only when its total weight
@@ -122,9 +117,9 @@ impl<T: Real, const D: usize> ModelSweep<T, D> {
         self.nodes.len().checked_mul(actions)
     }
 
-    /// `true` when the reward model pools every action's records.
-    pub fn pooled_rewards(&self) -> bool {
-        self.pooled_rewards
+    /// The reward model.
+    pub fn rewards(&self) -> RewardModel {
+        self.rewards
     }
 
     /// The least reward mass of a node with data.
@@ -141,6 +136,21 @@ impl<T: Real, const D: usize> ModelSweep<T, D> {
 /// Fixed-point scale of a [`SweepEntry`]'s position within a cell: `2¹⁵` steps, so 0, ½
 /// and 1 are exact.
 const FRAC_ONE: u16 = 1 << 15;
+
+/// Which records a node's reward `R̂(x, a)` averages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RewardModel {
+    /// The action's own records; a node without them takes its neighbours' value.
+    PerAction,
+    /// Every action's records: `R̂(x, a)` is the same for all `a`, for rewards that depend
+    /// on the state only (Puddle World's, a set-point's cost), so an action never tried at
+    /// `x` still meets the penalty the others found there.
+    Pooled,
+    /// The action's own records where it has some at the node, every action's elsewhere:
+    /// no assumption where the action was tried, the pooled guess where it was not.
+    Backfilled,
+}
 
 /// The model of one node and action: the reward and where the mean step lands, as the
 /// interpolation corner of the landing point (its cell's lowest node) and its position in
@@ -220,6 +230,7 @@ impl<T: Real, const D: usize> Corners<T, D> {
 
     /// Corner `k` (bit `d` set: the upper node on axis `d`): its node index in a grid of
     /// `dims` nodes per axis, and its weight.
+    #[inline]
     fn corner(&self, k: usize, dims: &[usize; D]) -> (usize, T) {
         let mut index = 0;
         let mut stride = 1;
@@ -413,6 +424,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
     }
 
     /// The interpolation corners of `state` (clamped into the box).
+    #[inline]
     fn corners(&self, state: &[T; D]) -> Corners<T, D> {
         let mut base = [0usize; D];
         let mut frac = [T::ZERO; D];
@@ -491,49 +503,77 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         }
     }
 
-    /// `R̂` into every entry: per action, or pooled.
+    /// `R̂` into every entry, by [`RewardModel`].
     fn fit_rewards<'s, I>(&mut self, sets: I)
     where
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let passes = if self.sweep.pooled_rewards {
-            1
-        } else {
-            self.actions
-        };
-        let dims = self.sweep.nodes.cells();
-        let pooled = self.sweep.pooled_rewards;
-        for pass in 0..passes {
-            self.reset_scratch();
-            self.spread(
-                sets.clone(),
-                |a| pooled || a == pass,
-                |q, s, reward, w_r, _| {
-                    if w_r <= T::ZERO {
-                        return;
-                    }
-                    let c = q.corners(&s.state);
-                    for k in 0..Corners::<T, D>::COUNT {
-                        let (i, phi) = c.corner(k, &dims);
-                        if let Some(n) = q.nodes.get_mut(i) {
-                            n.value += phi * w_r;
-                            n.previous += phi * w_r * reward;
-                        }
-                    }
-                },
-            );
-            self.fill(self.sweep.min_mass);
-            let range = if pooled {
-                0..self.actions
+        let model = self.sweep.rewards;
+        if model != RewardModel::PerAction {
+            self.spread_rewards(sets.clone(), None);
+            self.fill(self.sweep.min_mass, false);
+            self.write_rewards(None, |_| true);
+        }
+        if model == RewardModel::Pooled {
+            return;
+        }
+        for action in 0..self.actions {
+            self.spread_rewards(sets.clone(), Some(action));
+            if model == RewardModel::PerAction {
+                self.fill(self.sweep.min_mass, false);
+                self.write_rewards(Some(action), |_| true);
             } else {
-                pass..pass + 1
-            };
-            for (row, n) in self
-                .entries
-                .chunks_exact_mut(self.actions)
-                .zip(&*self.nodes)
-            {
+                // Only where the action has data of its own; the pooled value stays elsewhere.
+                let min = self.sweep.min_mass;
+                let has = |n: &SweepNode<T>| n.value > T::ZERO && n.value >= min;
+                for n in self.nodes.iter_mut() {
+                    if has(n) {
+                        n.previous /= n.value;
+                    }
+                }
+                self.write_rewards(Some(action), has);
+            }
+        }
+    }
+
+    /// The reward sums of `action`'s records (every action's for `None`) into the scratch.
+    fn spread_rewards<'s, I>(&mut self, sets: I, action: Option<usize>)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>>,
+        T: 's,
+    {
+        let dims = self.sweep.nodes.cells();
+        self.reset_scratch();
+        self.spread(
+            sets,
+            |a| action.is_none_or(|b| a == b),
+            |q, s, reward, w_r, _| {
+                if w_r <= T::ZERO {
+                    return;
+                }
+                let c = q.corners(&s.state);
+                for k in 0..Corners::<T, D>::COUNT {
+                    let (i, phi) = c.corner(k, &dims);
+                    if let Some(n) = q.nodes.get_mut(i) {
+                        n.value += phi * w_r;
+                        n.previous += phi * w_r * reward;
+                    }
+                }
+            },
+        );
+    }
+
+    /// The nodes' `previous` as the reward of `action` (every action for `None`) at every
+    /// node that `take` accepts.
+    fn write_rewards(&mut self, action: Option<usize>, take: impl Fn(&SweepNode<T>) -> bool) {
+        let range = action.map_or(0..self.actions, |a| a..a + 1);
+        for (row, n) in self
+            .entries
+            .chunks_exact_mut(self.actions)
+            .zip(&*self.nodes)
+        {
+            if take(n) {
                 for e in row.get_mut(range.clone()).unwrap_or_default() {
                     e.reward = n.previous;
                 }
@@ -541,25 +581,26 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         }
     }
 
-    /// Zeroes the scratch sums `value` (mass) and `previous` (weighted sum).
+    /// Zeroes the scratch sums `value` (mass), `previous` and `absorbing` (weighted sums).
     fn reset_scratch(&mut self) {
-        for n in self.nodes.iter_mut() {
-            n.value = T::ZERO;
-            n.previous = T::ZERO;
-        }
+        self.nodes.fill(SweepNode::EMPTY);
     }
 
-    /// Turns the scratch sums into means: `previous ← previous / value` at every node whose
-    /// mass `value` is positive and at least `min_mass` (it has data); every other node
-    /// takes the mean of its axis neighbours that have data, then of those filled in the
-    /// round before, round after round (a dilation: the nearest data in grid steps, ties
-    /// averaged). No data anywhere: 0 everywhere. `value` is left 1 at every node.
-    fn fill(&mut self, min_mass: T) {
+    /// Turns the scratch sums into means: `previous ← previous / value` (and `absorbing`
+    /// alike when `pair`) at every node whose mass `value` is positive and at least
+    /// `min_mass` (it has data); every other node takes the mean of its axis neighbours
+    /// that have data, then of those filled in the round before, round after round (a
+    /// dilation: the nearest data in grid steps, ties averaged). No data anywhere: 0
+    /// everywhere. `value` is left 1 at every node.
+    fn fill(&mut self, min_mass: T, pair: bool) {
         let half = T::from_f64(0.5);
         let mut any = false;
         for n in self.nodes.iter_mut() {
             if n.value > T::ZERO && n.value >= min_mass {
                 n.previous /= n.value;
+                if pair {
+                    n.absorbing /= n.value;
+                }
                 n.value = T::ONE;
                 any = true;
             } else {
@@ -569,6 +610,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         if !any {
             for n in self.nodes.iter_mut() {
                 n.previous = T::ZERO;
+                n.absorbing = T::ZERO;
                 n.value = T::ONE;
             }
             return;
@@ -580,13 +622,14 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
             let mut at = [0usize; D];
             for i in 0..self.nodes.len() {
                 if self.nodes.get(i).is_some_and(|n| n.value == T::ZERO) {
-                    let (mut sum, mut count) = (T::ZERO, T::ZERO);
+                    let (mut sum, mut other, mut count) = (T::ZERO, T::ZERO, T::ZERO);
                     for ((&c, &n), &stride) in at.iter().zip(&dims).zip(&strides) {
                         let below = (c > 0).then(|| i - stride);
                         let above = (c + 1 < n).then(|| i + stride);
                         for j in [below, above].into_iter().flatten() {
                             if let Some(m) = self.nodes.get(j).filter(|m| m.value == T::ONE) {
                                 sum += m.previous;
+                                other += m.absorbing;
                                 count += T::ONE;
                             }
                         }
@@ -594,6 +637,9 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                     if count > T::ZERO {
                         if let Some(node) = self.nodes.get_mut(i) {
                             node.previous = sum / count;
+                            if pair {
+                                node.absorbing = other / count;
+                            }
                             node.value = half;
                             changed = true;
                         }
@@ -619,22 +665,28 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         }
     }
 
-    /// Where `action`'s mean step lands from every node, axis by axis: on axis `d`, the
-    /// mean displacement `Σφw_s(s′_d − s_d)/Σφw_s` ([`SweepFqi::fill`]ed where a node has
-    /// no data), added to the node's coordinate and clamped into the box, gives the landing
-    /// cell's coordinate (into `base`) and the position in it (into `frac[d]`).
+    /// Where `action`'s mean step lands from every node, two axes at a time: on axis `d`,
+    /// the mean displacement `Σφw_s(s′_d − s_d)/Σφw_s` ([`SweepFqi::fill`]ed where a node
+    /// has no data), added to the node's coordinate and clamped into the box, gives the
+    /// landing cell's coordinate (into `base`) and the position in it (into `frac[d]`).
     fn fit_steps<'s, I>(&mut self, sets: I, action: usize)
     where
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
         let dims = self.sweep.nodes.cells();
-        let cells = self.sweep.cells.cells();
-        let (lower, upper) = (self.sweep.cells.lower(), self.sweep.cells.upper());
         let actions = self.actions;
-        let scale = T::from_usize(usize::from(FRAC_ONE));
-        let mut stride = 1usize;
-        for axis in 0..D {
+        for (e, _) in self
+            .entries
+            .iter_mut()
+            .skip(action)
+            .step_by(actions)
+            .zip(0..self.nodes.len())
+        {
+            e.base = 0;
+        }
+        for first in (0..D).step_by(2) {
+            let second = first + 1;
             self.reset_scratch();
             self.spread(
                 sets.clone(),
@@ -644,56 +696,80 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                         return;
                     }
                     let (from, to) = (q.clamp(s.state), q.clamp(s.next_state));
-                    let delta = to.get(axis).copied().unwrap_or(T::ZERO)
-                        - from.get(axis).copied().unwrap_or(T::ZERO);
+                    let delta = |axis: usize| {
+                        to.get(axis).copied().unwrap_or(T::ZERO)
+                            - from.get(axis).copied().unwrap_or(T::ZERO)
+                    };
+                    let (d0, d1) = (delta(first), delta(second));
                     let c = q.corners(&s.state);
                     for k in 0..Corners::<T, D>::COUNT {
                         let (i, phi) = c.corner(k, &dims);
                         if let Some(n) = q.nodes.get_mut(i) {
-                            n.value += phi * w_s;
-                            n.previous += phi * w_s * delta;
+                            let w = phi * w_s;
+                            n.value += w;
+                            n.previous += w * d0;
+                            n.absorbing += w * d1;
                         }
                     }
                 },
             );
-            self.fill(T::ZERO);
-            let (lo, hi, n_cells) = (
-                lower.get(axis).copied().unwrap_or(T::ZERO),
-                upper.get(axis).copied().unwrap_or(T::ONE),
-                cells.get(axis).copied().unwrap_or(1),
-            );
-            let width = (hi - lo) / T::from_usize(n_cells);
-            let mut at = [0usize; D];
-            for i in 0..self.nodes.len() {
-                let step = self.nodes.get(i).map_or(T::ZERO, |n| n.previous);
-                let k = at.get(axis).copied().unwrap_or(0);
-                let x = lo + width * T::from_usize(k);
-                let y = (x + step).clamp_to(lo, hi);
-                let t = (y - lo) / (hi - lo) * T::from_usize(n_cells);
-                let cell = t.to_usize_saturating().min(n_cells.saturating_sub(1));
-                let f = (t - T::from_usize(cell)).clamp_to(T::ZERO, T::ONE);
-                // Rounded to the nearest step of the fixed point, within [0, 1].
-                let fixed = (f * scale + T::from_f64(0.5))
-                    .to_usize_saturating()
-                    .min(usize::from(FRAC_ONE));
-                if let Some(e) = self.entries.get_mut(i * actions + action) {
-                    if axis == 0 {
-                        e.base = 0;
-                    }
-                    e.base += (cell * stride) as u32;
-                    if let Some(slot) = e.frac.get_mut(axis) {
-                        *slot = fixed as u16;
-                    }
-                }
-                for (c, &n) in at.iter_mut().zip(&dims) {
-                    *c += 1;
-                    if *c < n {
-                        break;
-                    }
-                    *c = 0;
+            self.fill(T::ZERO, second < D);
+            self.land(action, first, |n| n.previous);
+            if second < D {
+                self.land(action, second, |n| n.absorbing);
+            }
+        }
+    }
+
+    /// Axis `axis` of `action`'s landing points from the filled mean displacements
+    /// `step(node)` (module docs): the cell coordinate into `base`, the position into
+    /// `frac[axis]`.
+    fn land(&mut self, action: usize, axis: usize, step: impl Fn(&SweepNode<T>) -> T) {
+        let dims = self.sweep.nodes.cells();
+        let strides = self.strides();
+        let stride = strides.get(axis).copied().unwrap_or(0);
+        let (lo, hi, n_cells) = (
+            self.sweep
+                .cells
+                .lower()
+                .get(axis)
+                .copied()
+                .unwrap_or(T::ZERO),
+            self.sweep
+                .cells
+                .upper()
+                .get(axis)
+                .copied()
+                .unwrap_or(T::ONE),
+            self.sweep.cells.cells().get(axis).copied().unwrap_or(1),
+        );
+        let scale = T::from_usize(usize::from(FRAC_ONE));
+        let width = (hi - lo) / T::from_usize(n_cells);
+        let mut at = [0usize; D];
+        let rows = self.entries.chunks_exact_mut(self.actions);
+        for (row, n) in rows.zip(&*self.nodes) {
+            let k = at.get(axis).copied().unwrap_or(0);
+            let y = (lo + width * T::from_usize(k) + step(n)).clamp_to(lo, hi);
+            let t = (y - lo) / (hi - lo) * T::from_usize(n_cells);
+            let cell = t.to_usize_saturating().min(n_cells.saturating_sub(1));
+            let f = (t - T::from_usize(cell)).clamp_to(T::ZERO, T::ONE);
+            // Rounded to the nearest step of the fixed point, within [0, 1].
+            let fixed = (f * scale + T::from_f64(0.5))
+                .to_usize_saturating()
+                .min(usize::from(FRAC_ONE));
+            if let Some(e) = row.get_mut(action) {
+                e.base += (cell * stride) as u32;
+                if let Some(slot) = e.frac.get_mut(axis) {
+                    *slot = fixed as u16;
                 }
             }
-            stride *= dims.get(axis).copied().unwrap_or(1);
+            for (c, &n) in at.iter_mut().zip(&dims) {
+                *c += 1;
+                if *c < n {
+                    break;
+                }
+                *c = 0;
+            }
         }
     }
 
@@ -723,7 +799,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                 }
             },
         );
-        self.fill(T::ZERO);
+        self.fill(T::ZERO, false);
         for n in self.nodes.iter_mut() {
             n.absorbing = n.previous;
             n.value = T::ZERO;

@@ -161,27 +161,65 @@ fn a_node_below_the_minimum_mass_takes_its_nearest_trusted_neighbours_reward() {
 }
 
 #[test]
-fn pooled_rewards_reach_actions_never_tried() {
-    // Only action 0 was tried at node 1, with reward −3; action 1 never anywhere.
-    let data = [at(1.0, 0, -3.0, 2.0, false)];
-    for (pooled, expected) in [(false, 0.0), (true, -3.0)] {
-        let sweep = ModelSweep::cube(0.0, 4.0, 4)
-            .unwrap()
-            .with_pooled_rewards(pooled);
-        let mut entries = vec![SweepEntry::EMPTY; sweep.required_entries(2).unwrap()];
+fn the_reward_models_pool_the_actions_where_they_say() {
+    // Action 0 was tried at node 1 (reward −3), action 1 at node 3 (−7), action 2 nowhere.
+    let data = [at(1.0, 0, -3.0, 2.0, false), at(3.0, 1, -7.0, 2.0, false)];
+    // R̂ at nodes 1, 2, 3 for actions 0, 1, 2.
+    let cases = [
+        (
+            RewardModel::PerAction,
+            [[-3.0, -7.0, 0.0], [-3.0, -7.0, 0.0], [-3.0, -7.0, 0.0]],
+        ),
+        (
+            RewardModel::Pooled,
+            [[-3.0, -3.0, -3.0], [-5.0, -5.0, -5.0], [-7.0, -7.0, -7.0]],
+        ),
+        (
+            RewardModel::Backfilled,
+            [[-3.0, -3.0, -3.0], [-5.0, -5.0, -5.0], [-7.0, -7.0, -7.0]],
+        ),
+    ];
+    for (model, expected) in cases {
+        let sweep = ModelSweep::cube(0.0, 4.0, 4).unwrap().with_rewards(model);
+        assert_eq!(sweep.rewards(), model);
+        let mut entries = vec![SweepEntry::EMPTY; sweep.required_entries(3).unwrap()];
         let mut nodes = vec![SweepNode::EMPTY; sweep.nodes()];
-        let mut q = SweepFqi::new(sweep, 2, &mut entries, &mut nodes).unwrap();
+        let mut q = SweepFqi::new(sweep, 3, &mut entries, &mut nodes).unwrap();
         q.fit(&[SampleSet::unweighted(&data)], &config(1)).unwrap();
-        assert_eq!(q.value([1.0], 1).unwrap(), expected);
-        assert_eq!(q.value([1.0], 0).unwrap(), -3.0);
-        // Action 1 has no step data anywhere: it stays in place.
-        assert_eq!(q.next_state(2, 1), Some([2.0]));
+        for (node, row) in (1..4).zip(expected) {
+            for (a, r) in row.into_iter().enumerate() {
+                assert_eq!(
+                    q.value([node as f64], a).unwrap(),
+                    r,
+                    "{model:?} {node} {a}"
+                );
+            }
+        }
+        // Action 2 has no step data anywhere: it stays in place.
+        assert_eq!(q.next_state(2, 2), Some([2.0]));
         // Action 0's step is +1 everywhere (filled from node 1), clamped at the border.
         assert_eq!(q.next_state(0, 0), Some([1.0]));
         assert_eq!(q.next_state(3, 0), Some([4.0]));
         assert_eq!(q.next_state(4, 0), Some([4.0]));
         assert_eq!(q.next_state(5, 0), None);
     }
+    // Backfilled keeps an action's own reward where it has one: action 1 at node 1 too.
+    let data = [
+        at(1.0, 0, -3.0, 2.0, false),
+        at(1.0, 1, -9.0, 2.0, false),
+        at(3.0, 1, -7.0, 2.0, false),
+    ];
+    let sweep = ModelSweep::cube(0.0, 4.0, 4)
+        .unwrap()
+        .with_rewards(RewardModel::Backfilled);
+    let mut entries = vec![SweepEntry::EMPTY; sweep.required_entries(3).unwrap()];
+    let mut nodes = vec![SweepNode::EMPTY; sweep.nodes()];
+    let mut q = SweepFqi::new(sweep, 3, &mut entries, &mut nodes).unwrap();
+    q.fit(&[SampleSet::unweighted(&data)], &config(1)).unwrap();
+    assert_eq!(q.value([1.0], 0).unwrap(), -3.0);
+    assert_eq!(q.value([1.0], 1).unwrap(), -9.0);
+    assert_eq!(q.value([1.0], 2).unwrap(), -6.0);
+    assert_eq!(q.value([3.0], 0).unwrap(), -7.0);
 }
 
 #[test]
@@ -298,4 +336,79 @@ fn a_fresh_or_cleared_q_is_zero() {
     assert!(q.max_value([2.2]).unwrap() < 0.0);
     q.clear();
     assert_eq!(q.max_value([2.2]).unwrap(), 0.0);
+}
+
+type S2 = Transition<[f64; 2], f64>;
+
+/// The 3 × 3 grid world on `[0, 2]²`: actions right, left, up, down move one node (walls
+/// stop them), reward −1, arriving at (2, 2) ends the episode; one record per action at
+/// every other node.
+fn grid_world() -> Vec<S2> {
+    let moves = [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]];
+    let mut out = Vec::new();
+    for y in 0..3 {
+        for x in 0..3 {
+            let state = [x as f64, y as f64];
+            if state == [2.0, 2.0] {
+                continue;
+            }
+            for (action, m) in moves.iter().enumerate() {
+                let next = [
+                    (state[0] + m[0]).clamp(0.0, 2.0),
+                    (state[1] + m[1]).clamp(0.0, 2.0),
+                ];
+                out.push(Transition {
+                    state,
+                    action,
+                    reward: -1.0,
+                    next_state: next,
+                    absorbing: next == [2.0, 2.0],
+                });
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_grid_world_is_value_iteration_in_two_dimensions() {
+    let sweep = ModelSweep::cube(0.0, 2.0, 2).unwrap();
+    let mut entries = vec![SweepEntry::EMPTY; sweep.required_entries(4).unwrap()];
+    let mut nodes = vec![SweepNode::EMPTY; sweep.nodes()];
+    let mut q = SweepFqi::new(sweep, 4, &mut entries, &mut nodes).unwrap();
+    let data = grid_world();
+    q.fit(&[SampleSet::unweighted(&data)], &config(60)).unwrap();
+    // V*(s) is the cost of the Manhattan distance to the goal.
+    let v = |s: [f64; 2]| steps_cost((4.0 - s[0] - s[1]) as usize, 0.9);
+    let moves = [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]];
+    for y in 0..3 {
+        for x in 0..3 {
+            let s = [x as f64, y as f64];
+            if s == [2.0, 2.0] {
+                continue;
+            }
+            let mut best = (0, f64::NEG_INFINITY);
+            for (a, m) in moves.iter().enumerate() {
+                let next = [(s[0] + m[0]).clamp(0.0, 2.0), (s[1] + m[1]).clamp(0.0, 2.0)];
+                let ahead = if next == [2.0, 2.0] { 0.0 } else { v(next) };
+                let expected = -1.0 + 0.9 * ahead;
+                let got = q.value(s, a).unwrap();
+                assert!(
+                    (got - expected).abs() < 1e-12,
+                    "{s:?} {a}: {got} vs {expected}"
+                );
+                assert_eq!(q.next_state(y * 3 + x, a), Some(next));
+                if expected > best.1 {
+                    best = (a, expected);
+                }
+            }
+            assert_eq!(q.greedy_action(s).unwrap(), best.0, "{s:?}");
+        }
+    }
+    // Between nodes the Q-values are interpolated bilinearly.
+    let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
+    let mean = corners.iter().map(|&c| q.value(c, 2).unwrap()).sum::<f64>() / 4.0;
+    assert!((q.value([0.5, 0.5], 2).unwrap() - mean).abs() < 1e-12);
+    let left = 0.75 * q.value([1.0, 1.0], 0).unwrap() + 0.25 * q.value([2.0, 1.0], 0).unwrap();
+    assert!((q.value([1.25, 1.0], 0).unwrap() - left).abs() < 1e-12);
 }

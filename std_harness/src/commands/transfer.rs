@@ -103,6 +103,27 @@ pub enum AdaptiveKernelQ {
     Sweep,
 }
 
+/// `--kernel-sweep-rewards`: the core's `RewardModel`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepRewards {
+    /// The action's own records.
+    PerAction,
+    /// Every action's records.
+    Pooled,
+    /// The action's own where it has some, every action's elsewhere.
+    Backfilled,
+}
+
+impl From<SweepRewards> for awfqi::RewardModel {
+    fn from(r: SweepRewards) -> Self {
+        match r {
+            SweepRewards::PerAction => Self::PerAction,
+            SweepRewards::Pooled => Self::Pooled,
+            SweepRewards::Backfilled => Self::Backfilled,
+        }
+    }
+}
+
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
 /// the domain's default (see each command's help).
 #[derive(Debug, Clone, ClapArgs)]
@@ -285,10 +306,11 @@ pub struct Args {
     /// Cells per axis of `--adaptive-kernel-q sweep` (its nodes: one more per axis).
     #[arg(long, default_value_t = 20)]
     pub kernel_sweep_cells: usize,
-    /// `--adaptive-kernel-q sweep`: one reward model for every action (rewards that depend
-    /// on the state only).
-    #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
-    pub kernel_sweep_pooled: bool,
+    /// `--adaptive-kernel-q sweep`: which records a node's reward averages (`pooled`: every
+    /// action's, for rewards that depend on the state only; `backfilled`: the action's own
+    /// where it has some, every action's elsewhere).
+    #[arg(long, value_enum, default_value = "per-action")]
+    pub kernel_sweep_rewards: SweepRewards,
     /// `--adaptive-kernel-q sweep`: the least reward weight of a node with data (a record
     /// at the node weighs 1).
     #[arg(long, default_value_t = 0.0)]
@@ -809,7 +831,7 @@ pub fn build_experiment<const D: usize>(
                 (AdaptiveKernelQ::Sweep, _, _) => {
                     kernel = kernel.with_adaptive_q(KernelQFunction::sweep(SweepKnobs {
                         cells: args.kernel_sweep_cells,
-                        pooled: args.kernel_sweep_pooled,
+                        rewards: args.kernel_sweep_rewards.into(),
                         min_mass: args.kernel_sweep_min_mass,
                         lookahead: args.kernel_sweep_lookahead,
                     })?);

@@ -505,9 +505,9 @@ pub enum AdaptiveQ {
     /// Streamed Extra-Trees: trees per action and the scratch tree's nodes (the lent
     /// storage must hold the target and source records and the nodes).
     Trees(usize, usize),
-    /// A model sweep: cells per axis, pooled rewards, least reward mass (the lent storage
+    /// A model sweep: cells per axis, reward model, least reward mass (the lent storage
     /// must hold its entries and nodes).
-    Sweep(usize, bool, f32),
+    Sweep(usize, awfqi::RewardModel, f32),
 }
 
 /// What a run of [`adaptive_puddle`] changes from the recommended configuration.
@@ -542,8 +542,8 @@ pub fn adaptive_approximator(q: AdaptiveQ) -> Result<Approximator<f32, 2>> {
     Ok(match q {
         AdaptiveQ::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
         AdaptiveQ::Trees(count, nodes) => ExtraTrees::streamed(count, nodes)?.into(),
-        AdaptiveQ::Sweep(cells, pooled, min_mass) => ModelSweep::cube(0.0, 10.0, cells)?
-            .with_pooled_rewards(pooled)
+        AdaptiveQ::Sweep(cells, rewards, min_mass) => ModelSweep::cube(0.0, 10.0, cells)?
+            .with_rewards(rewards)
             .with_min_mass(min_mass)?
             .into(),
     })
@@ -679,16 +679,22 @@ pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
     ..ADAPTIVE_TREES
 };
 
-/// The configuration the instruction-count image `m4_adaptive` measures.
-pub type AdaptiveM4 = AdaptiveMemory<32, 300, 500, 0, 50>;
-/// Its FQI memory: a model sweep of 20 × 20 cells (21² nodes), 4 actions.
-pub type AdaptiveM4Fqi = awfqi::SweepStorage<f32, 2, { 441 * 4 }, 441>;
-/// Its run.
-pub const ADAPTIVE_M4: AdaptiveRun = AdaptiveRun {
+/// The recommended configuration of adaptive AWFQI on Puddle World (what the harness's
+/// `awfqi-adaptive-kernel` runs by default, the footprint image `adaptive_puddle` and the
+/// instruction-count image `m4_adaptive`): the sources' 32-point mean functions and the
+/// kernel's memory — a 32-point target GP, 6 steps × 50 target records, one weight per
+/// published source record, 500 candidate slots, 50 verified states, 3 beliefs — with
+/// [`AdaptiveRecommendedFqi`] lent beside it.
+pub type AdaptiveRecommended = AdaptiveMemory<32, 300, 500, 0, 50>;
+/// Its FQI memory: a model sweep of 16 × 16 cells (17² nodes), 4 actions.
+pub type AdaptiveRecommendedFqi = awfqi::SweepStorage<f32, 2, { 289 * 4 }, 289>;
+/// Its run: 6 steps of 50 queries, 500 candidates, the sweep with pooled rewards, warm
+/// refits of 30 evaluations.
+pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
     candidates: 500,
-    q: AdaptiveQ::Sweep(20, true, 0.0),
+    q: AdaptiveQ::Sweep(16, awfqi::RewardModel::Pooled, 0.0),
     search: None,
     relabel: false,
     refit: Some((30, 0)),

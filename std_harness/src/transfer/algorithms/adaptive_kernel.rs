@@ -16,8 +16,8 @@
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, KnnRecord,
-    MeanFunction, QStorage, SourceData, Transition, TreeNode, TreeRecord,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, KnnRecord, MeanFunction,
+    QStorage, SourceData, Transition, TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -122,7 +122,6 @@ struct Memory<const N: usize> {
     samples: Vec<Record32>,
     weights: Vec<T>,
     candidates: Vec<awfqi::adaptive::Candidate<T>>,
-    alias: Vec<AliasEntry<T>>,
     fqi: Vec<FqiEntry<T>>,
     records: Vec<KnnRecord<T, 2>>,
     links: Vec<u16>,
@@ -141,7 +140,6 @@ impl<const N: usize> Memory<N> {
             samples: &mut self.samples,
             weights: &mut self.weights,
             candidates: &mut self.candidates,
-            alias: &mut self.alias,
             fqi: QStorage {
                 entries: &mut self.fqi,
                 records: &mut self.records,
@@ -300,7 +298,6 @@ fn with_learner_of<const N: usize>(
         samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
         weights: vec![0.0; setup.posteriors().len()],
         candidates: vec![awfqi::adaptive::Candidate::EMPTY; slots],
-        alias: vec![AliasEntry::EMPTY; slots],
         fqi: vec![FqiEntry::EMPTY; entries],
         records: vec![KnnRecord::EMPTY; records],
         links: vec![0; links],

@@ -67,8 +67,8 @@ pub enum KernelQFunction {
 pub struct SweepKnobs {
     /// Cells per axis (nodes at their corners).
     pub cells: usize,
-    /// One reward model for every action.
-    pub pooled: bool,
+    /// Which records a node's reward averages.
+    pub rewards: awfqi::RewardModel,
     /// The least reward weight of a node with data.
     pub min_mass: f64,
     /// Decide by one step of lookahead.
@@ -172,7 +172,7 @@ impl KernelQFunction {
                     .into()
             }
             Self::Sweep(k) => awfqi::ModelSweep::cube(0.0, 10.0, k.cells)?
-                .with_pooled_rewards(k.pooled)
+                .with_rewards(k.rewards)
                 .with_min_mass(k.min_mass as T)?
                 .with_lookahead(k.lookahead)
                 .into(),
@@ -397,7 +397,7 @@ impl<const N: usize> KernelSetup<N> {
             }
             KernelQFunction::Sweep(k) => {
                 out["fqi_sweep_cells"] = k.cells.into();
-                out["fqi_sweep_pooled"] = k.pooled.into();
+                out["fqi_sweep_rewards"] = format!("{:?}", k.rewards).into();
                 out["fqi_sweep_min_mass"] = k.min_mass.into();
                 out["fqi_sweep_lookahead"] = k.lookahead.into();
             }

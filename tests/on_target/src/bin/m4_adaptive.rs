@@ -8,13 +8,13 @@
 use awfqi::Result;
 use awfqi_on_target::probe;
 use awfqi_on_target::workloads::{
-    ADAPTIVE_M4, AdaptiveM4, AdaptiveM4Fqi, adaptive_setup,
+    ADAPTIVE_RECOMMENDED, AdaptiveRecommended, AdaptiveRecommendedFqi, adaptive_setup,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
-static mut MEMORY: AdaptiveM4 = AdaptiveM4::new();
-static mut FQI: AdaptiveM4Fqi = AdaptiveM4Fqi::new();
+static mut MEMORY: AdaptiveRecommended = AdaptiveRecommended::new();
+static mut FQI: AdaptiveRecommendedFqi = AdaptiveRecommendedFqi::new();
 
 /// The marker (as in `m4_counts.rs`).
 #[unsafe(no_mangle)]
@@ -34,7 +34,7 @@ fn run() -> Result<()> {
     let fqi = unsafe { &mut *core::ptr::addr_of_mut!(FQI) };
     let mut rng = ChaCha8Rng::seed_from_u64(core::hint::black_box(1));
     m4_counts_mark();
-    let mut kernel = adaptive_setup(memory, fqi.storage(), &ADAPTIVE_M4, &mut rng)?;
+    let mut kernel = adaptive_setup(memory, fqi.storage(), &ADAPTIVE_RECOMMENDED, &mut rng)?;
     m4_counts_mark();
     probe::report("setup", 1);
     m4_counts_mark();
@@ -42,7 +42,7 @@ fn run() -> Result<()> {
     m4_counts_mark();
     probe::report("plan", 1);
     const STEP_LABELS: [&str; 6] = ["step1", "step2", "step3", "step4", "step5", "step6"];
-    for label in STEP_LABELS.iter().take(ADAPTIVE_M4.steps) {
+    for label in STEP_LABELS.iter().take(ADAPTIVE_RECOMMENDED.steps) {
         m4_counts_mark();
         core::hint::black_box(kernel.step(&mut rng)?);
         m4_counts_mark();
@@ -73,7 +73,7 @@ fn parts<const N: usize>(
     use awfqi::fqi::{FqiConfig, SampleSet};
     use awfqi::record_gp::{GpTraining, Output, fit_gp};
     use awfqi_on_target::puddle_tables as t;
-    static mut SCRATCH: AdaptiveM4Fqi = AdaptiveM4Fqi::new();
+    static mut SCRATCH: AdaptiveRecommendedFqi = AdaptiveRecommendedFqi::new();
     // SAFETY: the only reference.
     let scratch = unsafe { &mut *core::ptr::addr_of_mut!(SCRATCH) };
     let config = kernel.config();
@@ -86,7 +86,7 @@ fn parts<const N: usize>(
         SampleSet::weighted(&t::SOURCE_2, weights.get(n1..n2), None),
         SampleSet::weighted(&t::SOURCE_3, weights.get(n2..), None),
     ];
-    let approximator = awfqi_on_target::workloads::adaptive_approximator(ADAPTIVE_M4.q)?;
+    let approximator = awfqi_on_target::workloads::adaptive_approximator(ADAPTIVE_RECOMMENDED.q)?;
     let mut q = approximator.build(awfqi::env::PUDDLE_ACTIONS, scratch.storage())?;
     let fqi = config.awfqi.fqi;
     for (label, iterations) in [("fqi_1_iteration", 1), ("fqi_60_iterations", 60)] {
