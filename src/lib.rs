@@ -44,10 +44,10 @@ pub use awfqi::{
 pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
 pub use fqi::{
-    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, Kernel, KnnFqi,
-    KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel, SampleSet,
-    SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode,
-    TreeRecord, TreeStorage,
+    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
+    KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
+    SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings,
+    TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};

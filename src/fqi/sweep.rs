@@ -36,7 +36,8 @@
 //! `D = 2`) and one [`SweepNode`] per node (3 scalars). A 21 × 21 node grid (20 cells per
 //! axis) with 4 actions: 21 168 + 5 292 bytes. No randomness.
 
-use super::{CellGrid, FqiConfig, SampleSet, check_magnitudes};
+use super::iteration::{self, NoDraws, Regressor};
+use super::{CellGrid, FqiConfig, SampleSet};
 use crate::env::Transition;
 use crate::{Error, Real, Result};
 
@@ -404,23 +405,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let mut total = 0usize;
-        for set in sets.clone() {
-            set.validate(self.actions)?;
-            total += set.len();
-        }
-        if total == 0 {
-            return Err(Error::EmptyData);
-        }
-        check_magnitudes(sets.clone(), config)?;
-        self.fit_rewards(sets.clone());
-        for action in 0..self.actions {
-            self.fit_steps(sets.clone(), action);
-        }
-        self.fit_absorption(sets);
-        self.discount = config.discount();
-        self.iterate(config.iterations());
-        Ok(())
+        iteration::fit(self, sets, config, &mut NoDraws)
     }
 
     /// The interpolation corners of `state` (clamped into the box).
@@ -854,26 +839,22 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         Some(out)
     }
 
-    /// Iterations 1..N: `V_k` into `value`, `V_{k−1}` left in `previous`.
-    fn iterate(&mut self, iterations: usize) {
+    /// One iteration: `V_{k−1}` into `previous`, then `V_k(x) = maxₐ Q_k(x, a)` into
+    /// `value` (iteration 1, from `V₀ = 0`: `maxₐ R̂`).
+    fn iterate(&mut self) {
         let strides = self.strides();
         let gamma = self.discount;
         for n in self.nodes.iter_mut() {
-            n.value = T::ZERO;
+            n.previous = n.value;
         }
-        for _ in 0..iterations {
-            for n in self.nodes.iter_mut() {
-                n.previous = n.value;
+        for (i, row) in self.entries.chunks_exact(self.actions).enumerate() {
+            let mut best = T::NEG_INFINITY;
+            for e in row {
+                let (v, omega) = ahead(e, self.nodes, &strides);
+                best = best.max(e.reward + gamma * (T::ONE - omega) * v);
             }
-            for (i, row) in self.entries.chunks_exact(self.actions).enumerate() {
-                let mut best = T::NEG_INFINITY;
-                for e in row {
-                    let (v, omega) = ahead(e, self.nodes, &strides);
-                    best = best.max(e.reward + gamma * (T::ONE - omega) * v);
-                }
-                if let Some(n) = self.nodes.get_mut(i) {
-                    n.value = best;
-                }
+            if let Some(n) = self.nodes.get_mut(i) {
+                n.value = best;
             }
         }
     }
@@ -957,6 +938,38 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
             }
         }
         Ok(best)
+    }
+}
+
+impl<T: Real, const D: usize> Regressor<T, D> for SweepFqi<'_, T, D> {
+    fn actions(&self) -> usize {
+        self.actions
+    }
+
+    /// The model (rewards, steps, absorption), then iteration 1 (`V₁ = maxₐ R̂`).
+    fn fit_reward_model<'s, I, R>(&mut self, sets: I, _: usize, config: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: rand_core::Rng + ?Sized,
+    {
+        self.fit_rewards(sets.clone());
+        for action in 0..self.actions {
+            self.fit_steps(sets.clone(), action);
+        }
+        self.fit_absorption(sets);
+        self.discount = config.discount();
+        self.iterate();
+    }
+
+    /// One sweep over the nodes.
+    fn bellman_iteration<'s, I, R>(&mut self, _: I, _: usize, _: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: rand_core::Rng + ?Sized,
+    {
+        self.iterate();
     }
 }
 
