@@ -130,14 +130,19 @@ pub enum Refit {
 }
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
-    /// The harness's default configuration (`docs/active-budget.md`): 3 sub-batches, 70 %
-    /// verification, surprise, uncertainty and decision relevance on, floor 0.1, 4 000
-    /// candidates, relevance width 0.1, relabelling off (on the tuning runs it helped the
-    /// harness's Extra-Trees FQI but neither the core's tile coding nor, measured again
-    /// with them, the core's streamed trees), on the thesis's AWFQI
-    /// settings for `budget` ([`AwfqiConfig::thesis`]), for a plant that starts in
-    /// `start`, with episodes of `horizon` steps, exploration `epsilon` (the protocol's
-    /// 0.3) and state `bounds`.
+    /// The recommended configuration (`docs/embedded-adaptive.md`, the harness's
+    /// `awfqi-adaptive-kernel`): 3 sub-batches, 70 % verification, surprise, uncertainty
+    /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
+    /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
+    /// each GP's first fit), on the thesis's AWFQI settings for `budget`
+    /// ([`AwfqiConfig::thesis`]), for a plant that starts in `start`, with episodes of
+    /// `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state `bounds`.
+    ///
+    /// With it, on Puddle World: 32-point GPs (`N = 32`) and FQI by a model sweep on 12
+    /// cells per axis with pooled rewards
+    /// (`ModelSweep::cube(0.0, 10.0, 12)?.with_rewards(RewardModel::Pooled)`), in 47 KB of
+    /// RAM and about 10⁸ Cortex-M4F instructions per step. `RewardModel::Pooled` assumes a
+    /// reward that depends on the state only; otherwise `RewardModel::Backfilled`.
     pub fn recommended(
         budget: usize,
         start: [T; D],
@@ -154,13 +159,17 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
             decision: true,
             floor: T::from_f64(0.1),
             relabel: false,
-            candidates: 4000,
+            candidates: 250,
             relevance_width: T::from_f64(0.1),
             start,
             horizon,
             epsilon,
             bounds,
-            refit: Refit::Search,
+            refit: Refit::Warm(SearchOptions {
+                max_evaluations: 30,
+                restarts: 0,
+                isotropic: true,
+            }),
         }
     }
 

@@ -28,7 +28,7 @@ use crate::gp_large::fixed::PredictiveVariance;
 use crate::run_range::RunRange;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
 use crate::transfer::algorithms::adaptive_kernel::{
-    ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
+    ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
 };
 use crate::transfer::algorithms::awfqi_kernel::{
     KernelConfig, KernelQFunction, KernelSetup, SweepKnobs, TreeKnobs,
@@ -262,7 +262,7 @@ pub struct Args {
     #[arg(long, default_value_t = 4)]
     pub kernel_tilings: usize,
     /// Q-function approximator of awfqi-adaptive-kernel's FQI.
-    #[arg(long, value_enum, default_value = "trees")]
+    #[arg(long, value_enum, default_value = "sweep")]
     pub adaptive_kernel_q: AdaptiveKernelQ,
     /// Neighbours per prediction of `--adaptive-kernel-q knn`.
     #[arg(long, default_value_t = 4)]
@@ -304,12 +304,12 @@ pub struct Args {
     #[arg(long)]
     pub kernel_tree_max_depth: Option<usize>,
     /// Cells per axis of `--adaptive-kernel-q sweep` (its nodes: one more per axis).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = ADAPTIVE_SWEEP_CELLS)]
     pub kernel_sweep_cells: usize,
     /// `--adaptive-kernel-q sweep`: which records a node's reward averages (`pooled`: every
     /// action's, for rewards that depend on the state only; `backfilled`: the action's own
     /// where it has some, every action's elsewhere).
-    #[arg(long, value_enum, default_value = "per-action")]
+    #[arg(long, value_enum, default_value = "pooled")]
     pub kernel_sweep_rewards: SweepRewards,
     /// `--adaptive-kernel-q sweep`: the least reward weight of a node with data (a record
     /// at the node weighs 1).
@@ -403,9 +403,9 @@ pub struct Args {
     pub adaptive_kernel_relabel: bool,
     /// awfqi-adaptive-kernel: after a target GP's first fit in a run, start each later
     /// search from its last hyperparameters with this many likelihood evaluations (the
-    /// core's `Refit::Warm`; absent: every fit searches as the thesis does).
-    #[arg(long)]
-    pub adaptive_kernel_refit_evaluations: Option<usize>,
+    /// core's `Refit::Warm`); 0: every fit searches as the thesis does.
+    #[arg(long, default_value_t = 30)]
+    pub adaptive_kernel_refit_evaluations: usize,
     /// awfqi-adaptive-kernel: random restarts of those warm searches.
     #[arg(long, default_value_t = 0)]
     pub adaptive_kernel_refit_restarts: usize,
@@ -413,6 +413,10 @@ pub struct Args {
     /// (16, 24, 32, 48 or 64).
     #[arg(long, default_value_t = AdaptiveOptions::default().kernel_gp_points)]
     pub adaptive_kernel_gp_points: usize,
+    /// awfqi-adaptive-kernel: candidate rows scored per sub-batch (`--adaptive-candidates`
+    /// is awfqi-adaptive's).
+    #[arg(long, default_value_t = AdaptiveOptions::default().kernel_candidates)]
+    pub adaptive_kernel_candidates: usize,
     /// awfqi-adaptive: drop source records whose episode end no other source or target
     /// record corroborates.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().corroborate)]
@@ -452,10 +456,12 @@ impl Args {
             consensus: self.adaptive_consensus,
             relabel: self.adaptive_relabel,
             kernel_relabel: self.adaptive_kernel_relabel,
-            kernel_refit: self
-                .adaptive_kernel_refit_evaluations
-                .map(|e| (e, self.adaptive_kernel_refit_restarts)),
+            kernel_refit: (self.adaptive_kernel_refit_evaluations > 0).then_some((
+                self.adaptive_kernel_refit_evaluations,
+                self.adaptive_kernel_refit_restarts,
+            )),
             kernel_gp_points: self.adaptive_kernel_gp_points,
+            kernel_candidates: self.adaptive_kernel_candidates,
             corroborate: self.adaptive_corroborate,
             oracle: self.adaptive_oracle,
             select: self.adaptive_select,

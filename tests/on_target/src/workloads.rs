@@ -583,13 +583,14 @@ pub fn adaptive_setup<
         config.awfqi.gp_training.search.max_evaluations = evaluations;
         config.awfqi.gp_training.search.restarts = restarts;
     }
-    if let Some((max_evaluations, restarts)) = run.refit {
-        config.refit = awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+    config.refit = match run.refit {
+        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
             max_evaluations,
             restarts,
             isotropic: true,
-        });
-    }
+        }),
+        None => awfqi::adaptive::Refit::Search,
+    };
     let sources = &PUBLISHED_SOURCES;
     let mut buffers = kernel.buffers();
     let approximator = adaptive_approximator(run.q)?;
@@ -683,18 +684,18 @@ pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
 /// `awfqi-adaptive-kernel` runs by default, the footprint image `adaptive_puddle` and the
 /// instruction-count image `m4_adaptive`): the sources' 32-point mean functions and the
 /// kernel's memory — a 32-point target GP, 6 steps × 50 target records, one weight per
-/// published source record, 500 candidate slots, 50 verified states, 3 beliefs — with
+/// published source record, 250 candidate slots, 50 verified states, 3 beliefs — with
 /// [`AdaptiveRecommendedFqi`] lent beside it.
-pub type AdaptiveRecommended = AdaptiveMemory<32, 300, 500, 0, 50>;
-/// Its FQI memory: a model sweep of 16 × 16 cells (17² nodes), 4 actions.
-pub type AdaptiveRecommendedFqi = awfqi::SweepStorage<f32, 2, { 289 * 4 }, 289>;
-/// Its run: 6 steps of 50 queries, 500 candidates, the sweep with pooled rewards, warm
+pub type AdaptiveRecommended = AdaptiveMemory<32, 300, 250, 0, 50>;
+/// Its FQI memory: a model sweep of 12 × 12 cells (13² nodes), 4 actions.
+pub type AdaptiveRecommendedFqi = awfqi::SweepStorage<f32, 2, { 169 * 4 }, 169>;
+/// Its run: 6 steps of 50 queries, 250 candidates, the sweep with pooled rewards, warm
 /// refits of 30 evaluations.
 pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
-    candidates: 500,
-    q: AdaptiveQ::Sweep(16, awfqi::RewardModel::Pooled, 0.0),
+    candidates: 250,
+    q: AdaptiveQ::Sweep(12, awfqi::RewardModel::Pooled, 0.0),
     search: None,
     relabel: false,
     refit: Some((30, 0)),

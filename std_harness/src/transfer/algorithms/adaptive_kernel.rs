@@ -24,28 +24,29 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use super::adaptive::AdaptiveOptions;
 use super::awfqi_kernel::{
-    GP_POINTS, KernelQFunction, KernelSetup, Record32, T, TreeKnobs, reward_gp_summary, row_set,
+    GP_POINTS, KernelQFunction, KernelSetup, Record32, SweepKnobs, T, reward_gp_summary, row_set,
     to_f64,
 };
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
 
-/// Trees per action of the adaptive kernel's FQI by default (streamed Extra-Trees, the
-/// default approximator since the trees round): chosen on the tuning runs (`--seed 100`, 20
-/// runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
+/// Trees per action of `--adaptive-kernel-q trees` by default: chosen on the tuning runs
+/// (`--seed 100`, 20 runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
 pub const ADAPTIVE_TREES: usize = 50;
 /// Nodes of the streamed trees' scratch tree by default (the FQI iterations' trees of the
 /// largest action are cut at this budget; the final trees are fully grown).
 pub const ADAPTIVE_TREE_NODES: usize = 1023;
-/// The adaptive kernel's default approximator: [`ADAPTIVE_TREES`] streamed Extra-Trees per
-/// action, a scratch tree of [`ADAPTIVE_TREE_NODES`] nodes, otherwise fully grown.
-pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Trees(TreeKnobs {
-    trees: ADAPTIVE_TREES,
-    nodes: ADAPTIVE_TREE_NODES,
-    min_samples_split: 2,
-    min_samples_leaf: 1,
-    max_depth: None,
-    streamed: true,
+/// Cells per axis of the model sweep by default (13 × 13 nodes over `[0, 10]²`), chosen on
+/// the tuning runs (`docs/embedded-adaptive.md`).
+pub const ADAPTIVE_SWEEP_CELLS: usize = 12;
+/// The adaptive kernel's default approximator: a model sweep on [`ADAPTIVE_SWEEP_CELLS`]
+/// cells per axis with one reward model for every action (Puddle World's reward depends on
+/// the state only).
+pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Sweep(SweepKnobs {
+    cells: ADAPTIVE_SWEEP_CELLS,
+    rewards: awfqi::RewardModel::Pooled,
+    min_mass: 0.0,
+    lookahead: false,
 });
 
 /// Tiles per axis of the adaptive kernel's tile coding (`--adaptive-kernel-q tiles`, the
@@ -101,16 +102,17 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
     c.uncertainty = o.uncertainty;
     c.decision = o.decision;
     c.floor = o.floor as T;
-    c.candidates = o.candidates;
+    c.candidates = o.kernel_candidates;
     c.relevance_width = o.relevance_width as T;
     c.relabel = o.kernel_relabel;
-    if let Some((max_evaluations, restarts)) = o.kernel_refit {
-        c.refit = awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+    c.refit = match o.kernel_refit {
+        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
             max_evaluations,
             restarts,
             isotropic: c.awfqi.gp_training.search.isotropic,
-        });
-    }
+        }),
+        None => awfqi::adaptive::Refit::Search,
+    };
     Ok(c)
 }
 
