@@ -555,7 +555,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         let range = action.map_or(0..self.actions, |a| a..a + 1);
         for (row, n) in self
             .entries
-            .chunks_exact_mut(self.actions)
+            .chunks_exact_mut(self.actions.max(1))
             .zip(&*self.nodes)
         {
             if take(n) {
@@ -665,7 +665,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
             .entries
             .iter_mut()
             .skip(action)
-            .step_by(actions)
+            .step_by(actions.max(1))
             .zip(0..self.nodes.len())
         {
             e.base = 0;
@@ -731,7 +731,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         let scale = T::from_usize(usize::from(FRAC_ONE));
         let width = (hi - lo) / T::from_usize(n_cells);
         let mut at = [0usize; D];
-        let rows = self.entries.chunks_exact_mut(self.actions);
+        let rows = self.entries.chunks_exact_mut(self.actions.max(1));
         for (row, n) in rows.zip(&*self.nodes) {
             let k = at.get(axis).copied().unwrap_or(0);
             let y = (lo + width * T::from_usize(k) + step(n)).clamp_to(lo, hi);
@@ -847,7 +847,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         for n in self.nodes.iter_mut() {
             n.previous = n.value;
         }
-        for (i, row) in self.entries.chunks_exact(self.actions).enumerate() {
+        for (i, row) in self.entries.chunks_exact(self.actions.max(1)).enumerate() {
             let mut best = T::NEG_INFINITY;
             for e in row {
                 let (v, omega) = ahead(e, self.nodes, &strides);
