@@ -451,7 +451,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
             .zip(&upper)
             .zip(&cells)
         {
-            *o = lo + (hi - lo) * T::from_usize(k) / T::from_usize(n);
+            *o = lo + (hi - lo) * (T::from_usize(k) / T::from_usize(n));
         }
         out
     }
@@ -834,7 +834,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                 *cells.get(d)?,
             );
             let t = T::from_usize(b) + T::from_usize(usize::from(f)) / scale;
-            *o = lo + (hi - lo) * t / T::from_usize(n);
+            *o = lo + (hi - lo) * (t / T::from_usize(n));
         }
         Some(out)
     }
