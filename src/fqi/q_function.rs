@@ -13,7 +13,8 @@ use super::{
     Neighbours, SampleSet, SweepEntry, SweepFqi, SweepNode, TabularFqi, TileFqi, Tilings, TreeFqi,
     TreeNode, TreeRecord,
 };
-use crate::{Real, Result};
+use crate::error::Result;
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The memory a [`QFunction`] is built in: FQI entries for a table or tiles, records and

@@ -38,8 +38,9 @@
 
 use super::iteration::{self, NoDraws, Regressor};
 use super::{CellGrid, FqiConfig, SampleSet};
-use crate::env::Transition;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::Transition;
 
 /// The settings of a model sweep: the grid and the model's options. What a caller chooses
 /// before storage exists.

@@ -130,7 +130,11 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     assert_eq!(kernel["fqi_sweep_rewards"], serde_json::json!("Pooled"));
     assert_eq!(kernel["gp_capacity"], serde_json::json!(32));
     let options = &adaptive["runs"][0]["parameters"]["adaptive"];
-    assert_eq!(options["kernel_candidates"], serde_json::json!(250), "{options}");
+    assert_eq!(
+        options["kernel_candidates"],
+        serde_json::json!(250),
+        "{options}"
+    );
     assert_eq!(options["kernel_refit"], serde_json::json!([30, 0]));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
