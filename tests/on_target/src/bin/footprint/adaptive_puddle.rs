@@ -1,8 +1,8 @@
 //! Footprint image: adaptive AWFQI (`awfqi-adaptive-kernel`) on Puddle World in its
 //! recommended configuration (f32): the published source data and their posteriors in
 //! flash, each source's 32-point reward GP fitted on the device and kept as a mean
-//! function, a 32-point target GP, 500 candidate rows of the spacing-0.1 grid per
-//! sub-batch, FQI by a model sweep on 17 × 17 nodes with pooled rewards, 6 steps of 50
+//! function, a 32-point target GP, 250 candidate rows of the spacing-0.1 grid per
+//! sub-batch, FQI by a model sweep on 13 × 13 nodes with pooled rewards, 6 steps of 50
 //! queries (3 sub-batches of 70 % verification each) with warm refits of the GPs; the
 //! greedy policy's evaluation. The memory is two zero-initialised statics (`.bss`).
 #![no_std]
