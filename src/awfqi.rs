@@ -554,6 +554,7 @@ where
             self.config.noise_subtraction,
             &mut wr,
             &mut wr_tally,
+            false,
         )?;
         // 5: weighted FQI on D₀ then the sources.
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);

@@ -508,7 +508,6 @@ pub(crate) mod buffer {
     pub(crate) const SCORES: &str = "scores (one per candidate row)";
     pub(crate) const TRANSITION_WEIGHTS: &str = "transition weights (one per source record)";
     pub(crate) const CANDIDATES: &str = "candidates (`C`: min(candidates, rows))";
-    pub(crate) const ADAPTIVE_ALIAS: &str = "alias (`C`: min(candidates, rows))";
     pub(crate) const PATH: &str = "path (`B`: the budget)";
     pub(crate) const BELIEFS: &str = "beliefs (`M`: one per source)";
 }

@@ -112,6 +112,8 @@ where
     /// The reward weights of every source record under the target GP (§7.2 steps 2–3) into
     /// the per-record values, each source's also added to `summary` and `tally`.
     ///
+    /// With `once`, each record is predicted once (see [`reward_weights`]).
+    ///
     /// Errors: those of [`reward_weights`].
     pub(crate) fn fit_reward_weights(
         &mut self,
@@ -119,6 +121,7 @@ where
         noise: NoiseSubtraction,
         summary: &mut WeightSummary<T>,
         tally: &mut WeightTally<T>,
+        once: bool,
     ) -> Result<()>
     where
         Dims<D, I>: StatePlusAction,
@@ -131,6 +134,7 @@ where
             self.weights,
             summary,
             tally,
+            once,
         )
     }
 
@@ -243,6 +247,9 @@ impl<T: Real, const I: usize> ReplanGp<T, I> {
 ///
 /// Errors: `weights` shorter than the source records ([`Error::CapacityExceeded`] with its
 /// length); those of the predictions and of [`WeightParams::weight`].
+/// With `once`, each record is predicted once ([`crate::record_gp::map_posteriors`]: the
+/// same weights up to rounding, at about half the cost) instead of twice (the thesis path).
+#[allow(clippy::too_many_arguments)] // the run state's parts, lent one by one to share the borrow
 pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     gp: &Gp<T, N, I>,
     sources: &SourceData<'_, T, D>,
@@ -251,12 +258,24 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     weights: &mut [T],
     summary: &mut WeightSummary<T>,
     tally: &mut WeightTally<T>,
+    once: bool,
 ) -> Result<()>
 where
     Dims<D, I>: StatePlusAction,
 {
     for_each_source(sources, weights, |records, posteriors, mine| {
-        source_weights(gp, records, posteriors, params, noise, mine)?;
+        if once {
+            if !records.is_empty() {
+                crate::record_gp::map_posteriors(gp, records, noise, mine, |i, r, target| {
+                    let source = posteriors.get(i).copied().ok_or(Error::InvalidParameter {
+                        parameter: "posteriors",
+                    })?;
+                    params.weight(r.reward, target, source)
+                })?;
+            }
+        } else {
+            source_weights(gp, records, posteriors, params, noise, mine)?;
+        }
         summary.add(mine)?;
         let discarded = posteriors.iter().filter(|&&p| params.discards(p)).count();
         tally.add(mine, params.max_weight(), discarded)

@@ -11,8 +11,8 @@ use awfqi::rand_core::{Rng, SeedableRng};
 use awfqi::record_gp::predict_posteriors;
 use awfqi::{
     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, EmptyCells, Evaluation,
-    ExtraTrees, FqiConfig, GenerativeModel, MultiStartProtocol, PointGrid, Posterior, Real, RowSet,
-    SampleSet, SourceData, SourceScales, StepReport, Transition, TreeStorage,
+    FqiConfig, GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, Posterior, Real,
+    RewardModel, RowSet, SampleSet, SourceData, SourceScales, StepReport, SweepStorage, Transition,
     evaluate_greedy_multi_start, evaluate_multi_start,
 };
 use rand_chacha::ChaCha8Rng;
@@ -152,22 +152,31 @@ pub const BUDGET: usize = 50;
 pub const STEPS: usize = 2;
 /// Target records of the run.
 pub const QUERIES: usize = STEPS * BUDGET;
-/// Capacity of every GP (the target's and the sources' mean functions).
-pub const GP_POINTS: usize = 64;
-/// Candidate rows scored per sub-batch (the recommended 4 000, of the 11³ × 4 rows of the
-/// spacing-0.1 grid).
-pub const CANDIDATES: usize = 4000;
+/// Capacity of every GP (the target's and the sources' mean functions): the recommended
+/// 32 points.
+pub const GP_POINTS: usize = 32;
+/// Candidate rows scored per sub-batch: room for the recommended configuration's 250 (of
+/// the 11³ × 4 rows of the spacing-0.1 grid).
+pub const CANDIDATES: usize = 250;
 
-/// The recommended adaptive kernel's Q-function, in one place: streamed Extra-Trees, this
-/// many trees per action grown in one scratch tree of [`NODES`] nodes.
-pub const TREES: usize = 50;
-/// Nodes of the scratch tree.
-pub const NODES: usize = 1023;
+/// The recommended adaptive kernel's Q-function, in one place: a model sweep with this many
+/// cells on every axis of [0, 1]³ (nodes at their corners).
+pub const SWEEP_CELLS: usize = 6;
+/// Nodes of the sweep.
+pub const SWEEP_NODES: usize = (SWEEP_CELLS + 1) * (SWEEP_CELLS + 1) * (SWEEP_CELLS + 1);
 
-/// The recommended Q-function ([`TREES`], [`NODES`]).
+/// The recommended Q-function: the model sweep on [`SWEEP_CELLS`] cells per axis. The
+/// heating cost makes the reward depend on the action, so each action keeps its own reward
+/// model where it was tried (`RewardModel::Backfilled`; `Pooled` is for rewards of the state
+/// alone).
 pub fn approximator() -> awfqi::Result<Approximator<f32, ZONES>> {
-    Ok(ExtraTrees::streamed(TREES, NODES)?.into())
+    Ok(ModelSweep::cube(0.0, 1.0, SWEEP_CELLS)?
+        .with_rewards(RewardModel::Backfilled)
+        .into())
 }
+
+/// A model sweep's memory: one entry per (node, action), one value per node.
+pub type Sweep = SweepStorage<f32, ZONES, { SWEEP_NODES * ACTIONS }, SWEEP_NODES>;
 
 /// All the RAM of a run, in one block for a `static` (`new` is all-zero: `.bss`).
 pub struct Memory {
@@ -177,7 +186,7 @@ pub struct Memory {
     pub posteriors: [Posterior<f32>; SOURCE_RECORDS],
     /// Each source's reward model.
     pub means: [MeanFunction<f32, GP_POINTS, { ZONES + 1 }>; SOURCES],
-    /// The adaptive kernel's storage (its FQI entries unused: the trees have their own).
+    /// The adaptive kernel's storage (its FQI entries unused: the sweep has its own).
     pub kernel: AdaptiveStorage<
         f32,
         ZONES,
@@ -190,10 +199,10 @@ pub struct Memory {
         BUDGET,
         SOURCES,
     >,
-    /// The kernel's trees: one record slot per target and source record.
-    pub trees: TreeStorage<f32, ZONES, { QUERIES + SOURCE_RECORDS }, NODES>,
-    /// The FQI baseline's trees, over the target records alone.
-    pub baseline: TreeStorage<f32, ZONES, QUERIES, NODES>,
+    /// The kernel's model sweep.
+    pub sweep: Sweep,
+    /// The FQI baseline's model sweep, over the target records alone.
+    pub baseline: Sweep,
 }
 
 impl Memory {
@@ -204,8 +213,8 @@ impl Memory {
             posteriors: [Posterior::EMPTY; SOURCE_RECORDS],
             means: [MeanFunction::EMPTY, MeanFunction::EMPTY],
             kernel: AdaptiveStorage::new(),
-            trees: TreeStorage::new(),
-            baseline: TreeStorage::new(),
+            sweep: SweepStorage::new(),
+            baseline: SweepStorage::new(),
         }
     }
 }
@@ -268,7 +277,7 @@ pub fn learn_and_compare(
         posteriors,
         means,
         kernel,
-        trees,
+        sweep,
         baseline,
     } = memory;
     log_sources(sources, &mut rng)?;
@@ -298,7 +307,7 @@ pub fn learn_and_compare(
     let plant = Zones {
         building: Building::Target,
     };
-    buffers.fqi = trees.storage();
+    buffers.fqi = sweep.storage();
     let rows = RowSet::grid(
         PointGrid::spanning([0.0; ZONES], [1.0; ZONES], 0.1)?,
         ACTIONS,
