@@ -9,8 +9,9 @@ use awfqi::adaptive::{Candidate, SourceBelief};
 use awfqi::rand_core::{Rng, SeedableRng};
 use awfqi::{
     AdaptiveConfig, AliasEntry, Approximator, AwfqiConfig, CellGrid, EmptyCells, ExtraTrees,
-    FqiConfig, FqiEntry, Kernel, KnnRecord, KnnStorage, MeanFunction, Neighbours, Posterior,
-    SampleSet, Scores, Transition, TreeNode, TreeRecord, TreeStorage,
+    FqiConfig, FqiEntry, Kernel, KnnRecord, KnnStorage, MeanFunction, ModelSweep, Neighbours,
+    Posterior, SampleSet, Scores, SweepEntry, SweepNode, SweepStorage, Transition, TreeNode,
+    TreeRecord, TreeStorage,
 };
 use rand_chacha::ChaCha8Rng;
 
@@ -29,6 +30,8 @@ fn every_buffer_element_type_has_a_const_empty_value() {
     static TREE_RECORDS: [TreeRecord<f32, 3>; 4] = [TreeRecord::EMPTY; 4];
     static NODES: [TreeNode<f32>; 4] = [TreeNode::EMPTY; 4];
     static MEANS: [MeanFunction<f32, 8, 4>; 2] = [MeanFunction::EMPTY, MeanFunction::EMPTY];
+    static SWEEP_ENTRIES: [SweepEntry<f32, 3>; 4] = [SweepEntry::EMPTY; 4];
+    static SWEEP_NODES: [SweepNode<f32>; 4] = [SweepNode::EMPTY; 4];
     // The empty values are the all-zero ones (what `.bss` holds), and the defaults.
     assert_eq!(POSTERIORS[0], Posterior::new(0.0, 0.0));
     assert_eq!(POSTERIORS[3], Posterior::default());
@@ -40,10 +43,13 @@ fn every_buffer_element_type_has_a_const_empty_value() {
     assert_eq!(BELIEFS[0].squared_errors, 0.0);
     assert_eq!(KNN.len() + TREE_RECORDS.len() + NODES.len(), 12);
     assert!(MEANS[1].is_empty());
+    assert_eq!(SWEEP_ENTRIES[0].reward(), 0.0);
+    assert_eq!(SWEEP_NODES[0].value(), 0.0);
 }
 
 /// An array is accepted wherever a slice of entries is: `Approximator::build` takes
-/// `&mut [FqiEntry<T>; E]` (and a tree or kernel-averaging storage block) directly.
+/// `&mut [FqiEntry<T>; E]` (and a tree, kernel-averaging or model-sweep storage block)
+/// directly.
 #[test]
 fn approximators_build_in_arrays_and_storage_blocks() {
     let samples = [
@@ -84,6 +90,15 @@ fn approximators_build_in_arrays_and_storage_blocks() {
     let mut q = Approximator::from(neighbours).build(2, &mut knn).unwrap();
     q.fit(&sets, &config, &mut rng).unwrap();
     assert!((q.value([0.75], 1).unwrap() + 1.0).abs() < 1e-6);
+
+    // A model sweep: 1 cell, 2 nodes × 2 actions. Each action has one absorbing record, so
+    // its Q-value is that record's reward at every node.
+    let mut sweep = SweepStorage::<f32, 1, 4, 2>::new();
+    let model = ModelSweep::cube(0.0, 1.0, 1).unwrap();
+    let mut q = Approximator::from(model).build(2, &mut sweep).unwrap();
+    q.fit(&sets, &config, &mut rng).unwrap();
+    assert!((q.value([0.2], 0).unwrap() - 1.0).abs() < 1e-6);
+    assert!((q.value([0.8], 1).unwrap() + 1.0).abs() < 1e-6);
 }
 
 /// A validated configuration answers for each of its settings.
