@@ -43,9 +43,8 @@ use awfqi::{
     ModelSweep, MultiStartProtocol, Neighbours, Output, QFunction, Real, RewardModel, RowSet,
     SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData, SourceMeans,
     SourceModel, SourceScales, SubsetRule, SweepEntry, SweepFqi, SweepNode, SweepStorage,
-    TabularFqi, TileFqi, Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage,
-    WhenFull, evaluate, evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start,
-    rollout,
+    TabularFqi, TileFqi, Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull,
+    evaluate, evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -934,7 +933,11 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
     }
 
     // fqi: the model sweep, directly and behind QFunction
-    let rewards = [RewardModel::PerAction, RewardModel::Pooled, RewardModel::Backfilled];
+    let rewards = [
+        RewardModel::PerAction,
+        RewardModel::Pooled,
+        RewardModel::Backfilled,
+    ];
     let sweep = ModelSweep::<T, D>::cube(num(0.0), high, index(3))
         .and_then(|s| s.with_min_mass(num(0.25)))
         .map(|s| {
