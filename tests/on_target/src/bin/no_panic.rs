@@ -858,7 +858,11 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
     }
 
     // fqi: the model sweep, directly and behind QFunction
-    let rewards = [RewardModel::PerAction, RewardModel::Pooled, RewardModel::Backfilled];
+    let rewards = [
+        RewardModel::PerAction,
+        RewardModel::Pooled,
+        RewardModel::Backfilled,
+    ];
     let sweep = ModelSweep::<T, D>::cube(num(0.0), high, index(3))
         .and_then(|s| s.with_min_mass(num(0.25)))
         .map(|s| {
