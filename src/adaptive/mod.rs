@@ -960,3 +960,9 @@ fn spread<T: Real, const N: usize, const I: usize>(
 
 #[cfg(test)]
 mod tests;
+
+/// The embedding example of `docs/embedded-adaptive.md`, compiled and run as a doctest so
+/// that the page's code stays the code that works.
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/embedded-adaptive.md")]
+struct EmbeddedAdaptiveDoc;
