@@ -446,22 +446,10 @@ impl<const D: usize> Forest<D> {
     /// Adds the prediction of the tree rooted at `root` at each input to `out`. Walks
     /// [`LANES`] inputs in lockstep, branch-free, so their memory accesses overlap.
     fn accumulate_tree(&self, root: u32, xs: &[[f64; D]], out: &mut [f64]) {
-        let nodes = self.nodes.as_slice();
         let mut chunks_x = xs.chunks_exact(LANES);
         let mut chunks_out = out.chunks_exact_mut(LANES);
         for (cx, co) in (&mut chunks_x).zip(&mut chunks_out) {
-            let mut idx = [root as usize; LANES];
-            loop {
-                let mut moved = false;
-                for (i, x) in idx.iter_mut().zip(cx) {
-                    let next = nodes[*i].step(x);
-                    moved |= next != *i;
-                    *i = next;
-                }
-                if !moved {
-                    break;
-                }
-            }
+            let idx = self.leaves_of_lanes(root, cx);
             for (o, &i) in co.iter_mut().zip(&idx) {
                 *o += self.values[i];
             }
@@ -469,6 +457,69 @@ impl<const D: usize> Forest<D> {
         for (x, o) in chunks_x.remainder().iter().zip(chunks_out.into_remainder()) {
             *o += self.values[self.leaf_of(root, x)];
         }
+    }
+
+    /// The arena indices of the leaves of the tree rooted at `root` that the [`LANES`]
+    /// inputs `xs` fall in, walked in lockstep, branch-free.
+    #[inline(always)]
+    fn leaves_of_lanes(&self, root: u32, xs: &[[f64; D]]) -> [usize; LANES] {
+        let nodes = self.nodes.as_slice();
+        let mut idx = [root as usize; LANES];
+        loop {
+            let mut moved = false;
+            for (i, x) in idx.iter_mut().zip(xs) {
+                let next = nodes[*i].step(x);
+                moved |= next != *i;
+                *i = next;
+            }
+            if !moved {
+                return idx;
+            }
+        }
+    }
+
+    /// The arena index of the leaf of tree `tree` that each input falls in, into `out`
+    /// (batch form of [`Forest::leaf_id`]).
+    ///
+    /// Errors: no such tree ([`Error::OutOfRange`]), `out.len() != xs.len()`
+    /// ([`Error::InvalidParameter`]).
+    pub fn leaf_ids_into(&self, tree: usize, xs: &[[f64; D]], out: &mut [u32]) -> Result<()> {
+        let &root = self
+            .roots
+            .get(tree)
+            .ok_or(Error::OutOfRange { parameter: "tree" })?;
+        if out.len() != xs.len() {
+            return Err(Error::InvalidParameter { parameter: "out" });
+        }
+        let mut chunks_x = xs.chunks_exact(LANES);
+        let mut chunks_out = out.chunks_exact_mut(LANES);
+        for (cx, co) in (&mut chunks_x).zip(&mut chunks_out) {
+            let idx = self.leaves_of_lanes(root, cx);
+            for (o, &i) in co.iter_mut().zip(&idx) {
+                *o = i as u32;
+            }
+        }
+        for (x, o) in chunks_x.remainder().iter().zip(chunks_out.into_remainder()) {
+            *o = self.leaf_of(root, x) as u32;
+        }
+        Ok(())
+    }
+
+    /// The node values by arena index (a leaf's prediction; 0 at splits).
+    pub(crate) fn node_values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The node values by arena index, to give a fixed structure new leaf values.
+    pub(crate) fn node_values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
+    /// `true` when arena index `node` is a leaf.
+    pub(crate) fn is_leaf(&self, node: usize) -> bool {
+        self.nodes
+            .get(node)
+            .is_some_and(|n| n.left as usize == node)
     }
 }
 
@@ -945,6 +996,11 @@ impl<const D: usize> ActionForests<D> {
     /// The forest of `action`, or `None` when out of range.
     pub fn forest(&self, action: usize) -> Option<&Forest<D>> {
         self.forests.get(action)
+    }
+
+    /// The forest of `action`, mutable (a frozen structure's new leaf values), or `None`.
+    pub(crate) fn forest_mut(&mut self, action: usize) -> Option<&mut Forest<D>> {
+        self.forests.get_mut(action)
     }
 
     /// `Q(state, action)`.
