@@ -176,7 +176,8 @@ pub struct FqiOptions<'a> {
     pub first_iteration_records: Option<usize>,
     /// Growth limits of every forest (default: fully grown trees, spec §4.1).
     pub tree: TreeParams,
-    /// Keep the trees of this iteration (≥ 2) and only refit their leaf values in later
+    /// Keep the trees of this iteration (≥ 2), grown without the impurity stop
+    /// ([`crate::trees::Forest::refit_fine`]), and only refit their leaf values in later
     /// iterations ([`crate::frozen_trees`]; `None`, the default: every iteration grows new
     /// trees, spec §5). An option, not the spec's FQI.
     pub freeze_after: Option<usize>,
@@ -343,21 +344,27 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
         for (&i, &v) in live.iter().zip(&max_q) {
             targets[i] += options.gamma * v;
         }
+        // The structure to be frozen is grown without the impurity stop, so that it stays
+        // fine where this iteration's targets happen to be constant.
+        let freezing = options.freeze_after == Some(iteration) && iteration < options.iterations;
         match &mut frozen {
             Some(f) => f.refit(&mut q, &targets)?,
             None => {
-                next.refit(
+                let (s, a, w, m) = (
                     &data.states,
                     &data.actions,
-                    &targets,
                     transition_weights,
                     options.n_trees,
-                    rng,
-                )?;
+                );
+                if freezing {
+                    next.refit_fine(s, a, &targets, w, m, rng)?;
+                } else {
+                    next.refit(s, a, &targets, w, m, rng)?;
+                }
                 std::mem::swap(&mut q, &mut next);
             }
         }
-        if options.freeze_after == Some(iteration) && iteration < options.iterations {
+        if freezing {
             frozen = Some(FrozenActionForests::new(
                 &q,
                 &data.states,

@@ -108,6 +108,8 @@ impl JointQ {
         best.map_or(0, |(a, _)| a)
     }
 
+    /// Refits the forest; without the impurity stop when `fine` ([`Forest::refit_fine`]).
+    #[allow(clippy::too_many_arguments)]
     fn refit<R: Rng + ?Sized>(
         &mut self,
         inputs: &[[f64; 3]],
@@ -115,10 +117,16 @@ impl JointQ {
         weights: &[f64],
         n_trees: usize,
         params: &TreeParams,
+        fine: bool,
         rng: &mut R,
     ) -> Result<()> {
-        self.forest
-            .refit_with(inputs, targets, weights, n_trees, params, rng)
+        if fine {
+            self.forest
+                .refit_fine(inputs, targets, weights, n_trees, params, rng)
+        } else {
+            self.forest
+                .refit_with(inputs, targets, weights, n_trees, params, rng)
+        }
     }
 
     /// `max_a Q(states[i], a)` for every state, into `out` (batched over actions).
@@ -208,6 +216,7 @@ pub fn fqi_joint<const D: usize, R: Rng + ?Sized>(
         &reward_weights[..m],
         options.n_trees,
         &options.tree,
+        false,
         rng,
     )?;
     let model_rewards = match options.rewards {
@@ -243,6 +252,8 @@ pub fn fqi_joint<const D: usize, R: Rng + ?Sized>(
         for (&i, &v) in live.iter().zip(&max_q) {
             targets[i] += options.gamma * v;
         }
+        // As in `fqi`: the structure to be frozen is grown without the impurity stop.
+        let freezing = options.freeze_after == Some(iteration) && iteration < options.iterations;
         match &mut frozen {
             Some((f, _)) => f.refit(&mut q.forest, &targets)?,
             None => {
@@ -252,12 +263,13 @@ pub fn fqi_joint<const D: usize, R: Rng + ?Sized>(
                     transition_weights,
                     options.n_trees,
                     &options.tree,
+                    freezing,
                     rng,
                 )?;
                 std::mem::swap(&mut q, &mut next);
             }
         }
-        if options.freeze_after == Some(iteration) && iteration < options.iterations {
+        if freezing {
             // Every (next state, action value) pair, state-major.
             let queries: Vec<[f64; 3]> = live_next
                 .iter()

@@ -309,6 +309,40 @@ impl<const D: usize> Forest<D> {
         params: &TreeParams,
         rng: &mut R,
     ) -> Result<()> {
+        self.refit_stopping(states, targets, weights, n_trees, params, true, rng)
+    }
+
+    /// [`Forest::refit_with`] without the impurity stop: a node is split until the size
+    /// limits or constant inputs stop it, so the leaves stay small where this fit's
+    /// targets happen to be constant. For a structure that later fits reuse with other
+    /// targets ([`crate::frozen_trees`]). A pure node's children keep its mean, but the
+    /// draws for its splits shift those of the nodes grown after it, so the forest is
+    /// another draw of the spec's, not the same one.
+    ///
+    /// Errors: as [`Forest::refit_with`].
+    pub fn refit_fine<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        params: &TreeParams,
+        rng: &mut R,
+    ) -> Result<()> {
+        self.refit_stopping(states, targets, weights, n_trees, params, false, rng)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn refit_stopping<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        params: &TreeParams,
+        impurity_stop: bool,
+        rng: &mut R,
+    ) -> Result<()> {
         params.validate()?;
         if n_trees == 0 {
             return Err(Error::InvalidParameter {
@@ -321,11 +355,20 @@ impl<const D: usize> Forest<D> {
         if states.len() > limit || n_trees.saturating_mul(2 * states.len()) > u32::MAX as usize {
             return Err(Error::CapacityExceeded { capacity: limit });
         }
-        self.grow(states, targets, weights, n_trees, params, rng);
+        self.grow(
+            states,
+            targets,
+            weights,
+            n_trees,
+            params,
+            impurity_stop,
+            rng,
+        );
         Ok(())
     }
 
     /// Grows the trees on validated input.
+    #[allow(clippy::too_many_arguments)]
     fn grow<R: Rng + ?Sized>(
         &mut self,
         states: &[[f64; D]],
@@ -333,6 +376,7 @@ impl<const D: usize> Forest<D> {
         weights: &[f64],
         n_trees: usize,
         params: &TreeParams,
+        impurity_stop: bool,
         rng: &mut R,
     ) {
         self.nodes.clear();
@@ -368,6 +412,7 @@ impl<const D: usize> Forest<D> {
                 nodes: &mut self.nodes,
                 values: &mut self.values,
                 params,
+                impurity_stop,
             };
             tree.grow(&mut ws.first, &mut ws.second, &mut ws.stack, &mut tree_rng);
         }
@@ -580,6 +625,8 @@ struct Tree<'a> {
     nodes: &'a mut Vec<Node>,
     values: &'a mut Vec<f64>,
     params: &'a TreeParams,
+    /// Whether a node of impurity `≤` [`MIN_IMPURITY`] is a leaf (spec §4.1).
+    impurity_stop: bool,
 }
 
 impl Tree<'_> {
@@ -626,7 +673,8 @@ impl Tree<'_> {
             let impurity = st.q / st.w - value * value;
             // A zero-weight node (impurity NaN) is a leaf too; only a degenerate root could
             // be one, and the forest never grows it.
-            if impurity <= MIN_IMPURITY || impurity.is_nan() || src.len() < self.params.min_node() {
+            let pure = self.impurity_stop && impurity <= MIN_IMPURITY;
+            if pure || impurity.is_nan() || src.len() < self.params.min_node() {
                 continue;
             }
             if let [a, b] = src {
@@ -948,6 +996,35 @@ impl<const D: usize> ActionForests<D> {
         n_trees: usize,
         rng: &mut R,
     ) -> Result<()> {
+        self.refit_stopping(states, actions, targets, weights, n_trees, true, rng)
+    }
+
+    /// [`ActionForests::refit`] without the impurity stop ([`Forest::refit_fine`]).
+    ///
+    /// Errors: as [`ActionForests::refit`].
+    pub fn refit_fine<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        actions: &[usize],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        rng: &mut R,
+    ) -> Result<()> {
+        self.refit_stopping(states, actions, targets, weights, n_trees, false, rng)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn refit_stopping<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        actions: &[usize],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        impurity_stop: bool,
+        rng: &mut R,
+    ) -> Result<()> {
         if actions.len() != states.len() {
             return Err(Error::InvalidParameter {
                 parameter: "actions",
@@ -976,12 +1053,13 @@ impl<const D: usize> ActionForests<D> {
             buf.weights.push(w);
         }
         for (forest, buf) in self.forests.iter_mut().zip(&self.buffers) {
-            forest.refit_with(
+            forest.refit_stopping(
                 &buf.states,
                 &buf.targets,
                 &buf.weights,
                 n_trees,
                 &self.params,
+                impurity_stop,
                 rng,
             )?;
         }
