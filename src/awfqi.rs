@@ -64,17 +64,20 @@
 //! Q-function keeps its previous fit; the step counter does not advance.
 
 pub mod builder;
+pub(crate) mod transfer;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 
-use crate::env::{GenerativeModel, Transition};
-use crate::fqi::{Approximator, FqiConfig, QFunction, SampleSet};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::fqi::{Approximator, FqiConfig, QFunction};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
+use transfer::{SourceValues, Transfer};
 
 /// Settings of AWFQI for a GP input dimension `I` (`D + 1`): the parameters before
 /// validation (linfa style: [`AwfqiConfig::validate`] turns them into a
@@ -271,16 +274,9 @@ pub struct StepReport<T, const I: usize> {
 #[derive(Debug)]
 pub struct Awfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     config: ValidAwfqiConfig<T, I>,
-    target: G,
     sampler: RowSampler<'a, T, D>,
-    sources: SourceData<'a, T, D>,
-    samples: &'a mut [Transition<[T; D], T>],
-    len: usize,
-    weights: &'a mut [T],
-    gp: &'a mut Gp<T, N, I>,
-    fqi: QFunction<'a, T, D>,
     transitions: Option<TransitionWeighting<'a, T>>,
-    steps: usize,
+    run: Transfer<'a, T, G, D, I, N>,
 }
 
 /// Transition weights (§7.2 step 4, every next-state dimension on): the estimator, the
@@ -325,34 +321,23 @@ where
         samples: &'a mut [Transition<[T; D], T>],
         weights: &'a mut [T],
         gp: &'a mut Gp<T, N, I>,
-        mut fqi: QFunction<'a, T, D>,
+        fqi: QFunction<'a, T, D>,
         transitions: Option<TransitionWeighting<'a, T>>,
     ) -> Result<Self> {
         let () = InputDim::<D, I>::CHECK;
-        gp.clear();
-        gp.set_hyperparameters(config.gp_training.initial)?;
-        fqi.clear();
+        let run = Transfer::new(target, sources, samples, weights, gp, fqi);
+        run.gp.set_hyperparameters(config.gp_training.initial)?;
         Ok(Self {
             config,
-            target,
             sampler,
-            sources,
-            samples,
-            len: 0,
-            weights,
-            gp,
-            fqi,
             transitions,
-            steps: 0,
+            run,
         })
     }
 
     /// Starts a new run on the same set-up: empties `D₀`, resets Q to 0 and the step count.
     pub fn reset(&mut self) {
-        self.len = 0;
-        self.steps = 0;
-        self.fqi.clear();
-        self.gp.clear();
+        self.run.reset();
     }
 
     /// The configuration.
@@ -362,22 +347,22 @@ where
 
     /// Steps completed in this run.
     pub fn steps(&self) -> usize {
-        self.steps
+        self.run.steps
     }
 
     /// The target dataset `D₀` (generative-model records, in query order).
     pub fn target_samples(&self) -> &[Transition<[T; D], T>] {
-        self.samples.get(..self.len).unwrap_or(&[])
+        self.run.target_samples()
     }
 
     /// The reward weights of the last step, source by source, record by record.
     pub fn reward_weights(&self) -> &[T] {
-        self.weights.get(..self.sources.len()).unwrap_or(&[])
+        self.run.source_values()
     }
 
     /// The source data with their stored posteriors.
     pub fn sources(&self) -> &SourceData<'a, T, D> {
-        &self.sources
+        &self.run.sources
     }
 
     /// The score table's row sampler.
@@ -387,26 +372,26 @@ where
 
     /// The Q-function of the last step (0 before the first).
     pub fn q(&self) -> &QFunction<'a, T, D> {
-        &self.fqi
+        &self.run.fqi
     }
 
     /// The transition weights of the last step, source by source, record by record
     /// (empty when transition weights are off: every weight is then 1).
     pub fn transition_weights(&self) -> &[T] {
         match &self.transitions {
-            Some(t) => t.weights.get(..self.sources.len()).unwrap_or(&[]),
+            Some(t) => t.weights.get(..self.run.sources.len()).unwrap_or(&[]),
             None => &[],
         }
     }
 
     /// The target GP of the last step.
     pub fn gp(&self) -> &Gp<T, N, I> {
-        self.gp
+        self.run.gp
     }
 
     /// The target model.
     pub fn target(&self) -> &G {
-        &self.target
+        &self.run.target
     }
 
     /// Runs one step (module docs): `n` queries, target GP, reward weights, weighted FQI.
@@ -417,22 +402,15 @@ where
     /// module docs describe.
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let budget = self.config.budget;
-        self.len
-            .checked_add(budget)
-            .filter(|&e| e <= self.samples.len())
-            .ok_or(Error::CapacityExceeded {
-                capacity: self.samples.len(),
-            })?;
+        let run = &mut self.run;
+        run.ensure_room(budget)?;
         // 1–3: draw rows and query the target.
         for _ in 0..budget {
             let (_, state, action) = self.sampler.draw(rng);
-            let record = self.target.query(state, action, rng)?;
-            if let Some(slot) = self.samples.get_mut(self.len) {
-                *slot = record;
-                self.len += 1;
-            }
+            let record = run.target.query(state, action, rng)?;
+            run.push(record);
         }
-        let target = self.samples.get(..self.len).unwrap_or(&[]);
+        let target = run.samples.get(..run.len).unwrap_or(&[]);
         // Transition weights first (§7.2 step 4), one target GP per next-state dimension
         // fitted in turn in the same fixed-capacity GP, so that it holds the reward GP at
         // the end of the step.
@@ -442,7 +420,7 @@ where
         if let Some(tw) = self.transitions.as_mut() {
             for d in 0..D {
                 fit_gp(
-                    self.gp,
+                    run.gp,
                     target,
                     Output::NextState(d),
                     self.config.subset,
@@ -450,14 +428,14 @@ where
                     rng,
                 )?;
                 let mut start = 0usize;
-                for records in self.sources.records {
+                for records in run.sources.records {
                     let end = start + records.len();
                     let out = tw
                         .weights
                         .get_mut(start..end)
                         .ok_or(Error::CapacityExceeded { capacity: end })?;
                     transition_weights_of(
-                        self.gp,
+                        run.gp,
                         records,
                         tw.posteriors.get(start * D..end * D).unwrap_or(&[]),
                         d,
@@ -468,11 +446,11 @@ where
                     start = end;
                 }
             }
-            ws.add(tw.weights.get(..self.sources.len()).unwrap_or(&[]))?;
+            ws.add(tw.weights.get(..run.sources.len()).unwrap_or(&[]))?;
         }
         // 4: target reward GP on a bounded subset of D₀.
         let lml = fit_gp(
-            self.gp,
+            run.gp,
             target,
             Output::Reward,
             self.config.subset,
@@ -482,140 +460,19 @@ where
         // Reward weights, one noise-subtraction batch per source.
         let mut wr = WeightSummary::new();
         wr.add_ones(target.len());
-        reward_weights(
-            self.gp,
-            &self.sources,
-            &self.config.weights,
-            self.config.noise_subtraction,
-            self.weights,
-            &mut wr,
-        )?;
+        run.fit_reward_weights(&self.config.weights, self.config.noise_subtraction, &mut wr)?;
         // 5: weighted FQI on D₀ then the sources.
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
-        fit_weighted_fqi(
-            &mut self.fqi,
-            target,
-            &self.sources,
-            Some(self.weights),
-            transition,
-            None,
-            &self.config.fqi,
-            rng,
-        )?;
-        self.steps += 1;
-        Ok(StepReport {
-            step: self.steps,
-            n_target_samples: self.len,
-            n_source_samples: self.sources.len(),
-            gp_points: self.gp.len(),
-            gp_log_likelihood: lml,
-            gp_hyperparameters: *self.gp.hyperparameters(),
-            wr_mean: wr.mean(),
-            wr_eff: wr.effective_sample_size(),
-            // Off: exactly 1 and the record count, as before transition weights existed.
-            ws_mean: if transitions_on { ws.mean() } else { T::ONE },
-            ws_eff: if transitions_on {
-                ws.effective_sample_size()
-            } else {
-                wr.count()
-            },
-        })
-    }
-}
-
-/// The reward weights of every source record under the target GP `gp` (§7.2 steps 2–3),
-/// one noise-subtraction batch per source, into `weights` (source after source, record
-/// after record), each source's weights also added to `summary`.
-///
-/// Errors: `weights` shorter than the source records ([`Error::CapacityExceeded`] with its
-/// length); those of the predictions and of [`WeightParams::weight`].
-pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: usize>(
-    gp: &Gp<T, N, I>,
-    sources: &SourceData<'_, T, D>,
-    params: &WeightParams<T>,
-    noise: NoiseSubtraction,
-    weights: &mut [T],
-    summary: &mut WeightSummary<T>,
-) -> Result<()> {
-    for_each_source(sources, weights, |records, posteriors, mine| {
-        source_weights(gp, records, posteriors, params, noise, mine)?;
-        summary.add(mine)
-    })
-}
-
-/// Calls `f` with each source's records, stored posteriors and its part of `out` (source
-/// after source, one value per record), the split every per-record pass over the sources
-/// shares.
-///
-/// Errors: `out` shorter than the source records ([`Error::CapacityExceeded`] with its
-/// length, before the first source that does not fit); those of `f`.
-pub(crate) fn for_each_source<T: Real, U, const D: usize>(
-    sources: &SourceData<'_, T, D>,
-    out: &mut [U],
-    mut f: impl FnMut(Records<'_, T, D>, &[Posterior<T>], &mut [U]) -> Result<()>,
-) -> Result<()> {
-    let capacity = out.len();
-    let mut rest: &mut [U] = out;
-    for (records, posteriors) in sources.iter() {
-        let (mine, tail) = core::mem::take(&mut rest)
-            .split_at_mut_checked(records.len())
-            .ok_or(Error::CapacityExceeded { capacity })?;
-        rest = tail;
-        f(records, posteriors, mine)?;
-    }
-    Ok(())
-}
-
-/// Weighted FQI (§12 step 5) on `target` (weight 1) followed by the sources in order, with
-/// the sources' reward weights `weights`, transition weights `transition` and replacement
-/// rewards `rewards` (source after source; `None`: all 1, their own rewards).
-///
-/// Errors: those of [`QFunction::fit_sets`] (e.g. a weight slice of the wrong length).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn fit_weighted_fqi<'s, T: Real, const D: usize, R: Rng + ?Sized>(
-    fqi: &mut QFunction<'_, T, D>,
-    target: &'s [Transition<[T; D], T>],
-    sources: &'s SourceData<'_, T, D>,
-    weights: Option<&'s [T]>,
-    transition: Option<&'s [T]>,
-    rewards: Option<&'s [T]>,
-    config: &FqiConfig<T>,
-    rng: &mut R,
-) -> Result<()> {
-    let sets = core::iter::once(SampleSet::unweighted(target)).chain(sources.records.iter().scan(
-        0usize,
-        move |offset, &s| {
-            let start = *offset;
-            *offset += s.len();
-            let range = start..*offset;
-            let part = |x: Option<&'s [T]>| x.and_then(|x| x.get(range.clone()));
-            Some(
-                SampleSet::weighted(s, part(weights), part(transition)).with_rewards(part(rewards)),
-            )
-        },
-    ));
-    fqi.fit_sets(sets, config, rng)
-}
-
-/// The reward weights of one source's records under the target GP (§7.2 steps 2–3).
-fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
-    gp: &Gp<T, N, I>,
-    records: &[Transition<[T; D], T>],
-    posteriors: &[Posterior<T>],
-    params: &WeightParams<T>,
-    noise: NoiseSubtraction,
-    out: &mut [T],
-) -> Result<()> {
-    if records.is_empty() {
-        return Ok(());
-    }
-    let mut slots = out.iter_mut().zip(posteriors);
-    visit_posteriors(gp, records, noise, |r, target| {
-        if let Some((w, &source)) = slots.next() {
-            *w = params.weight(r.reward, target, source)?;
+        run.fit_q(SourceValues::Weights, transition, &self.config.fqi, rng)?;
+        run.steps += 1;
+        let mut report = run.report(&wr, lml, *run.gp.hyperparameters(), run.gp.len());
+        if transitions_on {
+            report.ws_mean = ws.mean();
+            report.ws_eff = ws.effective_sample_size();
         }
-        Ok(())
-    })
+        // Off: exactly 1 and the record count, as before transition weights existed.
+        Ok(report)
+    }
 }
 
 /// Multiplies `out[i]` by the weight of coordinate `d` of record `i`'s next state under the

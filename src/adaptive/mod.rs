@@ -60,16 +60,16 @@ pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
 use crate::alias::AliasTable;
 use crate::awfqi::builder::short;
-use crate::awfqi::{
-    AwfqiConfig, SourceData, StepReport, fit_weighted_fqi, for_each_source, reward_weights,
-};
-use crate::env::{GenerativeModel, Transition};
+use crate::awfqi::transfer::{SourceValues, Transfer, for_each_source};
+use crate::awfqi::{AwfqiConfig, SourceData, StepReport};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{InputDim, fit_gp_on, input, visit_posteriors};
 use crate::score::RowSet;
 use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// Settings of adaptive AWFQI for a `D`-dimensional plant (`I = D + 1`): the AWFQI
@@ -217,28 +217,22 @@ impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig
 #[derive(Debug)]
 pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     config: ValidAdaptiveConfig<T, D, I>,
-    target: G,
     rows: RowSet<'a, T, D>,
-    sources: SourceData<'a, T, D>,
     means: &'a [MeanFunction<T, N, I>],
     beliefs: &'a mut [SourceBelief<T>],
-    samples: &'a mut [Transition<[T; D], T>],
-    len: usize,
-    weights: &'a mut [T],
-    gp: &'a mut Gp<T, N, I>,
-    /// `gp` holds the residual GP of the last re-plan.
+    /// `run.gp` holds the residual GP of the last re-plan.
     residual: bool,
-    /// `weights` holds the relabelled rewards the Q-function was last fitted on.
+    /// `run.weights` holds the relabelled rewards the Q-function was last fitted on.
     relabelled: bool,
-    fqi: QFunction<'a, T, D>,
     slots: &'a mut [Candidate<T>],
-    alias: &'a mut [crate::AliasEntry<T>],
+    alias: &'a mut [crate::alias::AliasEntry<T>],
     path: &'a mut [[T; D]],
     path_len: usize,
     /// The Q-function has been fitted in this run.
     planned: bool,
-    steps: usize,
     last: Option<StepReport<T, I>>,
+    /// `D₀`, the sources, the weights, the GP, the Q-function, the step count.
+    run: Transfer<'a, T, G, D, I, N>,
 }
 
 impl<'a, T, G, const D: usize, const I: usize, const N: usize> AdaptiveAwfqi<'a, T, G, D, I, N>
@@ -311,25 +305,18 @@ where
             .ok_or(Error::CapacityExceeded { capacity: m })?;
         let mut kernel = Self {
             config,
-            target,
             rows,
-            sources,
             means,
             beliefs,
-            samples,
-            len: 0,
-            weights,
-            gp,
             residual: false,
             relabelled: false,
-            fqi,
             slots: candidates,
             alias,
             path,
             path_len: 0,
             planned: false,
-            steps: 0,
             last: None,
+            run: Transfer::new(target, sources, samples, weights, gp, fqi),
         };
         kernel.reset();
         Ok(kernel)
@@ -338,15 +325,12 @@ where
     /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
     /// step count.
     pub fn reset(&mut self) {
-        self.len = 0;
-        self.steps = 0;
+        self.run.reset();
         self.path_len = 0;
         self.planned = false;
         self.residual = false;
         self.relabelled = false;
         self.last = None;
-        self.fqi.clear();
-        self.gp.clear();
         plausibility::reset(self.beliefs);
     }
 
@@ -357,12 +341,12 @@ where
 
     /// Steps completed in this run.
     pub fn steps(&self) -> usize {
-        self.steps
+        self.run.steps
     }
 
     /// The target dataset `D₀` (generative-model records, in query order).
     pub fn target_samples(&self) -> &[Transition<[T; D], T>] {
-        self.samples.get(..self.len).unwrap_or(&[])
+        self.run.target_samples()
     }
 
     /// The reward weights of the last re-plan, source by source, record by record (empty
@@ -371,7 +355,7 @@ where
         if self.config.relabel {
             return &[];
         }
-        self.weights.get(..self.sources.len()).unwrap_or(&[])
+        self.run.source_values()
     }
 
     /// The sources' rewards as the last re-plan relabelled them, source by source, record by
@@ -381,7 +365,7 @@ where
         if !self.relabelled {
             return &[];
         }
-        self.weights.get(..self.sources.len()).unwrap_or(&[])
+        self.run.source_values()
     }
 
     /// The sources' beliefs (plausibilities as of the last re-plan).
@@ -396,17 +380,17 @@ where
 
     /// The Q-function of the last re-plan (0 before the first).
     pub fn q(&self) -> &QFunction<'a, T, D> {
-        &self.fqi
+        &self.run.fqi
     }
 
     /// The GP: the residual GP of the last re-plan (empty before target data).
     pub fn gp(&self) -> &Gp<T, N, I> {
-        self.gp
+        self.run.gp
     }
 
     /// The target model.
     pub fn target(&self) -> &G {
-        &self.target
+        &self.run.target
     }
 
     /// Runs one step (module docs): `sub_batches` × (verification, drawn queries,
@@ -418,12 +402,7 @@ where
     /// greedy action, a query, a GP fit, a prediction, a weight or FQI (module docs).
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let n = self.config.awfqi.budget;
-        self.len
-            .checked_add(n)
-            .filter(|&e| e <= self.samples.len())
-            .ok_or(Error::CapacityExceeded {
-                capacity: self.samples.len(),
-            })?;
+        self.run.ensure_room(n)?;
         self.path_len = 0;
         if !self.planned {
             self.replan(rng)?;
@@ -442,11 +421,11 @@ where
             self.draw(quota - verify, rng)?;
             report = Some(self.replan(rng)?);
         }
-        self.steps += 1;
+        self.run.steps += 1;
         let mut report = report.ok_or(Error::InvalidParameter {
             parameter: "sub_batches",
         })?;
-        report.step = self.steps;
+        report.step = self.run.steps;
         self.last = Some(report);
         Ok(report)
     }
@@ -456,18 +435,15 @@ where
         let mut evidence = Evidence {
             config: &self.config,
             means: self.means,
-            sources: &self.sources,
             beliefs: self.beliefs,
-            samples: self.samples,
-            len: &mut self.len,
         };
-        evidence.append(record)
+        evidence.append(&mut self.run, record)
     }
 
     /// `n` queries along greedy rollouts from the start state (ε-greedy after the first
     /// rollout of the call), each state kept in the path.
     fn verify<R: Rng + ?Sized>(&mut self, n: usize, rng: &mut R) -> Result<()> {
-        let actions = self.target.num_actions();
+        let actions = self.run.target.num_actions();
         let mut left = n;
         let mut first = true;
         while left > 0 {
@@ -480,9 +456,9 @@ where
                 let action = if explore {
                     crate::rng::uniform_index(rng, actions)
                 } else {
-                    self.fqi.greedy_action(state)?
+                    self.run.fqi.greedy_action(state)?
                 };
-                let record = self.target.query(state, action, rng)?;
+                let record = self.run.target.query(state, action, rng)?;
                 self.record(record)?;
                 if let Some(slot) = self.path.get_mut(self.path_len) {
                     *slot = state;
@@ -513,7 +489,7 @@ where
             .ok_or(Error::CapacityExceeded { capacity })?;
         let path = self.path.get(..self.path_len).unwrap_or(&[]);
         let config = &self.config;
-        let residual = self.residual.then_some(&*self.gp);
+        let residual = self.residual.then_some(&*self.run.gp);
         let mut smallest = T::INFINITY;
         // Pass 1: rows and the factors that do not depend on the batch.
         for slot in slots.iter_mut() {
@@ -573,10 +549,7 @@ where
         let mut evidence = Evidence {
             config: &self.config,
             means: self.means,
-            sources: &self.sources,
             beliefs: self.beliefs,
-            samples: self.samples,
-            len: &mut self.len,
         };
         for _ in 0..n {
             let j = table.sample(rng);
@@ -585,7 +558,8 @@ where
                 .rows
                 .row(row)
                 .ok_or(Error::OutOfRange { parameter: "row" })?;
-            evidence.append(self.target.query(state, action, rng)?)?;
+            let record = self.run.target.query(state, action, rng)?;
+            evidence.append(&mut self.run, record)?;
         }
         Ok(())
     }
@@ -595,86 +569,59 @@ where
     /// residual GP.
     fn replan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let config = &self.config.awfqi;
-        let target = self.samples.get(..self.len).unwrap_or(&[]);
+        let run = &mut self.run;
         let mut wr = WeightSummary::new();
-        wr.add_ones(target.len());
-        if target.is_empty() {
-            fit_weighted_fqi(
-                &mut self.fqi,
-                target,
-                &self.sources,
-                None,
-                None,
-                None,
-                &config.fqi,
-                rng,
-            )?;
-            wr.add_ones(self.sources.len());
+        wr.add_ones(run.len);
+        if run.len == 0 {
+            run.fit_q(SourceValues::Unused, None, &config.fqi, rng)?;
+            wr.add_ones(run.sources.len());
             self.planned = true;
             self.residual = false;
             self.relabelled = false;
-            return Ok(self.report(&wr, T::ZERO, *self.gp.hyperparameters(), 0));
+            return Ok(run.report(&wr, T::ZERO, *run.gp.hyperparameters(), 0));
         }
+        let target = run.samples.get(..run.len).unwrap_or(&[]);
         let relabel = self.config.relabel;
         // Relabelling reads the GP far from the target data too, so its prior mean is the
         // target rewards' median there (a zero prior would relabel towards an optimistic 0).
         let centre = if relabel { median(target) } else { T::ZERO };
         // `r − 0` is `r` exactly: without relabelling this is the thesis's zero-mean GP.
         let lml = fit_gp_on(
-            self.gp,
+            run.gp,
             target,
             |r| Ok(r.reward - centre),
             config.subset,
             &config.gp_training,
             rng,
         )?;
-        let (hyper, points) = (*self.gp.hyperparameters(), self.gp.len());
+        let (hyper, points) = (*run.gp.hyperparameters(), run.gp.len());
         self.relabelled = false;
-        if relabel {
-            // `weights` holds the relabelled rewards; every weight is 1.
+        let values = if relabel {
+            // The per-record values are the relabelled rewards; every weight is 1.
             relabel_rewards(
-                self.gp,
-                &self.sources,
+                run.gp,
+                &run.sources,
                 centre,
                 config.weights.noise_variance(),
                 config.noise_subtraction,
-                self.weights,
+                run.weights,
             )?;
-            wr.add_ones(self.sources.len());
+            wr.add_ones(run.sources.len());
+            SourceValues::Rewards
         } else {
-            reward_weights(
-                self.gp,
-                &self.sources,
-                &config.weights,
-                config.noise_subtraction,
-                self.weights,
-                &mut wr,
-            )?;
-        }
-        let source_values = self.weights.get(..self.sources.len());
-        let (weights, rewards) = if relabel {
-            (None, source_values)
-        } else {
-            (source_values, None)
+            run.fit_reward_weights(&config.weights, config.noise_subtraction, &mut wr)?;
+            SourceValues::Weights
         };
-        fit_weighted_fqi(
-            &mut self.fqi,
-            target,
-            &self.sources,
-            weights,
-            None,
-            rewards,
-            &config.fqi,
-            rng,
-        )?;
+        run.fit_q(values, None, &config.fqi, rng)?;
         self.relabelled = relabel;
         self.planned = true;
         // The residual model for the next sub-batch's scores.
         self.residual = false;
         plausibility::update(self.beliefs, config.weights.noise_variance())?;
         let (means, beliefs) = (self.means, &*self.beliefs);
+        let target = run.samples.get(..run.len).unwrap_or(&[]);
         fit_gp_on(
-            self.gp,
+            run.gp,
             target,
             |r| {
                 let (prior, _) = spread(means, beliefs, &input(r.state, r.action))?;
@@ -685,56 +632,35 @@ where
             rng,
         )?;
         self.residual = true;
-        Ok(self.report(&wr, lml, hyper, points))
-    }
-
-    fn report(
-        &self,
-        wr: &WeightSummary<T>,
-        lml: T,
-        hyper: Hyperparameters<T, I>,
-        points: usize,
-    ) -> StepReport<T, I> {
-        StepReport {
-            step: self.steps,
-            n_target_samples: self.len,
-            n_source_samples: self.sources.len(),
-            gp_points: points,
-            gp_log_likelihood: lml,
-            gp_hyperparameters: hyper,
-            wr_mean: wr.mean(),
-            wr_eff: wr.effective_sample_size(),
-            ws_mean: T::ONE,
-            ws_eff: wr.count(),
-        }
+        Ok(run.report(&wr, lml, hyper, points))
     }
 }
 
-/// What a query changes: `D₀` and the sources' running errors.
+/// What a query changes besides `D₀`: the sources' running errors.
 struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {
     config: &'k ValidAdaptiveConfig<T, D, I>,
     means: &'a [MeanFunction<T, N, I>],
-    sources: &'k SourceData<'a, T, D>,
     beliefs: &'k mut [SourceBelief<T>],
-    samples: &'k mut [Transition<[T; D], T>],
-    len: &'k mut usize,
 }
 
 impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N> {
-    /// Appends `record` to `D₀` and adds its clipped errors to the beliefs.
-    fn append(&mut self, record: Transition<[T; D], T>) -> Result<()> {
-        let capacity = self.samples.len();
-        let slot = self
-            .samples
-            .get_mut(*self.len)
-            .ok_or(Error::CapacityExceeded { capacity })?;
+    /// Adds `record`'s clipped errors to the beliefs and appends it to `run`'s `D₀`.
+    ///
+    /// Errors: `D₀` full ([`Error::CapacityExceeded`], checked first), those of a mean
+    /// function; either way nothing changes.
+    fn append<G: GenerativeModel<T, State = [T; D]>>(
+        &mut self,
+        run: &mut Transfer<'_, T, G, D, I, N>,
+        record: Transition<[T; D], T>,
+    ) -> Result<()> {
+        run.ensure_room(1)?;
         let z = input(record.state, record.action);
         let v = self.config.awfqi.weights.noise_variance();
         for ((belief, mean), source) in self
             .beliefs
             .iter_mut()
             .zip(self.means)
-            .zip(self.sources.records())
+            .zip(run.sources.records())
         {
             let ends = plausibility::nearest_ends(
                 source,
@@ -750,8 +676,7 @@ impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T
             );
             belief.squared_errors += e2;
         }
-        *slot = record;
-        *self.len += 1;
+        run.push(record);
         Ok(())
     }
 }

@@ -7,8 +7,8 @@
 //! records are dense (a verified greedy path, a narrow passage) they decide the value
 //! alone, and where the data are sparse the neighbourhood widens by itself. Like the tiles
 //! it is an averager (every prediction a convex combination of regression targets), so FQI
-//! is a contraction and cannot diverge. The IWFQI structure is the table's (module docs of
-//! [`super`]):
+//! is a contraction and cannot diverge. The IWFQI structure is the loop's ([module
+//! docs](super)):
 //!
 //! 1. **Reward model** `R̂` at every record `i`: the reward-weighted mean of the rewards of
 //!    the records of action `aᵢ` within radius `ρᵢ` of `sᵢ`, where `ρᵢ` is the distance to
@@ -37,9 +37,14 @@
 //! 47 988 + 42 656 bytes. Fit cost: `O(records² · actions)` for the links (once), then
 //! `O(records · actions · k)` per iteration; a prediction scans the records, `O(records)`.
 
-use super::{FqiConfig, SampleSet, check_magnitudes};
+use super::argmax::ArgMax;
+use super::iteration::{self, NoDraws, Regressor};
+use super::samples::load;
+use super::{FqiConfig, SampleSet};
+use crate::error::{Error, Result};
 use crate::error::{ensure_all_finite, ensure_finite};
-use crate::{Error, Real, Result};
+use crate::float::Real;
+use rand_core::Rng;
 
 /// The largest `k` (the neighbour lists of a prediction live on the stack).
 pub const MAX_NEIGHBOURS: usize = 32;
@@ -413,51 +418,7 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let mut total = 0usize;
-        for set in sets.clone() {
-            set.validate(self.actions)?;
-            total = total.saturating_add(set.len());
-        }
-        if total == 0 {
-            return Err(Error::EmptyData);
-        }
-        if total > self.records.len() {
-            return Err(Error::CapacityExceeded {
-                capacity: self.records.len(),
-            });
-        }
-        check_magnitudes(sets.clone(), config)?;
-        self.min_weight = config.min_weight();
-        let mut slots = self.records.iter_mut();
-        for set in sets {
-            for (s, reward, w_r, w_s) in set.iter() {
-                if let Some(slot) = slots.next() {
-                    *slot = KnnRecord {
-                        state: s.state,
-                        next_state: s.next_state,
-                        weight: w_s,
-                        reward: T::ZERO,
-                        target: reward,
-                        value: w_r,
-                        action: s.action as u16,
-                        absorbing: s.absorbing,
-                    };
-                }
-            }
-        }
-        self.len = total;
-        self.fit_reward_model();
-        for r in self.live_mut() {
-            r.target = r.reward;
-            r.value = T::ZERO;
-        }
-        if config.iterations() > 1 {
-            self.link();
-            for _ in 1..config.iterations() {
-                self.bellman_iteration(config.discount());
-            }
-        }
-        Ok(())
+        iteration::fit(self, sets, config, &mut NoDraws)
     }
 
     fn live(&self) -> &[KnnRecord<T, D>] {
@@ -476,7 +437,7 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
 
     /// Iteration 1: `R̂ᵢ` into every record's `reward` (the raw reward is in `target`,
     /// its weight in `value`).
-    fn fit_reward_model(&mut self) {
+    fn reward_model(&mut self) {
         let min = self.min_weight;
         let nb = self.neighbours;
         for i in 0..self.len {
@@ -631,7 +592,7 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
 
     /// One iteration k ≥ 2: `V_{k−1}` at every next state from the links, then the
     /// targets `y = R̂ + γ(1−ω)V` (Jacobi: all values before any target changes).
-    fn bellman_iteration(&mut self, gamma: T) {
+    fn bellman_targets(&mut self, gamma: T) {
         let k = self.neighbours.k;
         for i in 0..self.len {
             let Some(&me) = self.records.get(i) else {
@@ -707,20 +668,65 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         ensure_all_finite(&state, "state")?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
-        let mut best_has_data = false;
+        let mut best = ArgMax::new();
         self.values(&state, |a, fitted| {
-            let has_data = fitted.is_some();
-            let q = fitted.unwrap_or(T::ZERO);
-            let better = a == 0 || q > best_q || (q == best_q && has_data && !best_has_data);
-            if better {
-                best = a;
-                best_q = q;
-                best_has_data = has_data;
-            }
+            best.offer(a, fitted.unwrap_or(T::ZERO), fitted.is_some());
         });
-        Ok(best)
+        Ok(best.action())
+    }
+}
+
+impl<T: Real, const D: usize> Regressor<T, D> for KnnFqi<'_, T, D> {
+    fn actions(&self) -> usize {
+        self.actions
+    }
+
+    fn capacity(&self) -> Option<usize> {
+        Some(self.records.len())
+    }
+
+    /// The records, then `R̂ᵢ` at every record, which is its first target.
+    fn fit_reward_model<'s, I, R>(
+        &mut self,
+        sets: I,
+        total: usize,
+        config: &FqiConfig<T>,
+        _: &mut R,
+    ) where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        self.min_weight = config.min_weight();
+        load(self.records, sets, |(s, reward, w_r, w_s)| KnnRecord {
+            state: s.state,
+            next_state: s.next_state,
+            weight: w_s,
+            reward: T::ZERO,
+            target: reward,
+            value: w_r,
+            action: s.action as u16,
+            absorbing: s.absorbing,
+        });
+        self.len = total;
+        self.reward_model();
+        for r in self.live_mut() {
+            r.target = r.reward;
+            r.value = T::ZERO;
+        }
+    }
+
+    /// The links once (iteration 2), then the targets from them.
+    fn bellman_iteration<'s, I, R>(&mut self, _: I, k: usize, config: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        if k == 2 {
+            self.link();
+        }
+        self.bellman_targets(config.discount());
     }
 }
 

@@ -1,15 +1,18 @@
 //! The Q-function approximators of weighted FQI behind one type, so the AWFQI loop (and a
 //! user) picks one by configuration: the table of [`CellGrid`] cells, tile coding
-//! ([`Tilings`]), kernel averaging over the records ([`Neighbours`]) or Extra-Trees
-//! ([`ExtraTrees`]). The first two keep their values in [`FqiEntry`] storage, the third in
-//! [`KnnRecord`]s and links, the fourth in [`TreeRecord`]s and [`TreeNode`]s ([`QStorage`]
-//! lends any of them). Only the trees draw random numbers, from the caller's generator.
+//! ([`Tilings`]), kernel averaging over the records ([`Neighbours`]), both averaged, or
+//! Extra-Trees ([`ExtraTrees`]). The table and tiles keep their values in [`FqiEntry`]
+//! storage, kernel averaging in [`KnnRecord`]s and links, the trees in [`TreeRecord`]s and
+//! [`TreeNode`]s ([`QStorage`] lends any of them). Only the trees draw random numbers, from
+//! the caller's generator.
 
+use super::iteration;
 use super::{
-    CellGrid, ExtraTrees, FqiConfig, FqiEntry, KnnFqi, KnnRecord, Neighbours, SampleSet,
+    CellGrid, ExtraTrees, FqiConfig, FqiEntry, HybridFqi, KnnFqi, KnnRecord, Neighbours, SampleSet,
     TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord,
 };
-use crate::{Real, Result};
+use crate::error::Result;
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The memory a [`QFunction`] is built in: FQI entries for a table or tiles, records and
@@ -120,10 +123,10 @@ impl<T: Real, const D: usize> Approximator<T, D> {
                 storage.records,
                 storage.links,
             )?),
-            Approximator::Hybrid(tilings, neighbours) => QFunction::Hybrid(
+            Approximator::Hybrid(tilings, neighbours) => QFunction::Hybrid(HybridFqi::new(
                 TileFqi::new(tilings, actions, storage.entries)?,
                 KnnFqi::new(neighbours, actions, storage.records, storage.links)?,
-            ),
+            )?),
             Approximator::Trees(forests) => QFunction::Trees(TreeFqi::new(
                 forests,
                 actions,
@@ -134,7 +137,22 @@ impl<T: Real, const D: usize> Approximator<T, D> {
     }
 }
 
-/// A fitted (or fresh) Q-function of either approximator.
+/// Calls `$body` with `$q` bound to the approximator behind a [`QFunction`] (`$self` or
+/// `&mut $self`): the one place that lists the variants for the methods every approximator
+/// has.
+macro_rules! each {
+    ($self:expr, $q:ident => $body:expr) => {
+        match $self {
+            QFunction::Tabular($q) => $body,
+            QFunction::Tiles($q) => $body,
+            QFunction::Knn($q) => $body,
+            QFunction::Hybrid($q) => $body,
+            QFunction::Trees($q) => $body,
+        }
+    };
+}
+
+/// A fitted (or fresh) Q-function of any approximator.
 #[derive(Debug)]
 pub enum QFunction<'a, T, const D: usize> {
     /// A table of cells.
@@ -144,7 +162,7 @@ pub enum QFunction<'a, T, const D: usize> {
     /// Kernel averaging over the records.
     Knn(KnnFqi<'a, T, D>),
     /// The mean of tile coding and kernel averaging.
-    Hybrid(TileFqi<'a, T, D>, KnnFqi<'a, T, D>),
+    Hybrid(HybridFqi<'a, T, D>),
     /// Per-action Extra-Trees forests.
     Trees(TreeFqi<'a, T, D>),
 }
@@ -152,13 +170,7 @@ pub enum QFunction<'a, T, const D: usize> {
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     /// Number of actions.
     pub fn actions(&self) -> usize {
-        match self {
-            QFunction::Tabular(q) => q.actions(),
-            QFunction::Tiles(q) => q.actions(),
-            QFunction::Knn(q) => q.actions(),
-            QFunction::Hybrid(q, _) => q.actions(),
-            QFunction::Trees(q) => q.actions(),
-        }
+        each!(self, q => q.actions())
     }
 
     /// The entries in use (layout per approximator: [`TabularFqi::entries`],
@@ -167,7 +179,8 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     pub fn entries(&self) -> &[FqiEntry<T>] {
         match self {
             QFunction::Tabular(q) => q.entries(),
-            QFunction::Tiles(q) | QFunction::Hybrid(q, _) => q.entries(),
+            QFunction::Tiles(q) => q.entries(),
+            QFunction::Hybrid(q) => q.tiles().entries(),
             QFunction::Knn(_) | QFunction::Trees(_) => &[],
         }
     }
@@ -178,53 +191,34 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => Some(q),
             QFunction::Tiles(_)
             | QFunction::Knn(_)
-            | QFunction::Hybrid(..)
+            | QFunction::Hybrid(_)
             | QFunction::Trees(_) => None,
         }
     }
 
     /// Resets Q to 0 everywhere.
     pub fn clear(&mut self) {
-        match self {
-            QFunction::Tabular(q) => q.clear(),
-            QFunction::Tiles(q) => q.clear(),
-            QFunction::Knn(q) => q.clear(),
-            QFunction::Hybrid(t, k) => {
-                t.clear();
-                k.clear();
-            }
-            QFunction::Trees(q) => q.clear(),
-        }
+        each!(self, q => q.clear())
     }
 
     /// Fits Q from scratch by weighted FQI on sets produced by an iterator; the trees draw
     /// their randomness from `rng` (the other approximators draw nothing).
     ///
-    /// Errors: those of [`TabularFqi::fit`].
+    /// Errors: those of [`TabularFqi::fit`], and for the approximators that keep the
+    /// records more records than slots ([`crate::Error::CapacityExceeded`]).
     pub fn fit_sets<'s, I, R>(&mut self, sets: I, config: &FqiConfig<T>, rng: &mut R) -> Result<()>
     where
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
         R: Rng + ?Sized,
     {
-        match self {
-            QFunction::Tabular(q) => q.fit_sets(sets, config),
-            QFunction::Tiles(q) => q.fit_sets(sets, config),
-            QFunction::Knn(q) => q.fit_sets(sets, config),
-            QFunction::Hybrid(t, k) => {
-                // Checked by the kNN fit first (its capacity can be short), so a refused
-                // fit leaves both as they were.
-                k.fit_sets(sets.clone(), config)?;
-                t.fit_sets(sets, config)
-            }
-            QFunction::Trees(q) => q.fit_sets(sets, config, rng),
-        }
+        each!(self, q => iteration::fit(q, sets, config, rng))
     }
 
     /// Fits Q from scratch by weighted FQI on the union of `sets` (randomness as
     /// [`QFunction::fit_sets`]).
     ///
-    /// Errors: those of [`TabularFqi::fit`].
+    /// Errors: those of [`QFunction::fit_sets`].
     pub fn fit<R: Rng + ?Sized>(
         &mut self,
         sets: &[SampleSet<'_, T, D>],
@@ -238,59 +232,22 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
     ///
     /// Errors: a non-finite state, an action `≥ actions`.
     pub fn value(&self, state: [T; D], action: usize) -> Result<T> {
-        match self {
-            QFunction::Tabular(q) => q.value(state, action),
-            QFunction::Tiles(q) => q.value(state, action),
-            QFunction::Knn(q) => q.value(state, action),
-            QFunction::Trees(q) => q.value(state, action),
-            QFunction::Hybrid(t, k) => {
-                Ok((t.value(state, action)? + k.value(state, action)?) / T::from_f64(2.0))
-            }
-        }
+        each!(self, q => q.value(state, action))
     }
 
     /// `maxₐ Q(state, a)`.
     ///
     /// Errors: a non-finite state.
     pub fn max_value(&self, state: [T; D]) -> Result<T> {
-        match self {
-            QFunction::Tabular(q) => q.max_value(state),
-            QFunction::Tiles(q) => q.max_value(state),
-            QFunction::Knn(q) => q.max_value(state),
-            QFunction::Trees(q) => q.max_value(state),
-            QFunction::Hybrid(..) => {
-                let mut best = T::NEG_INFINITY;
-                for a in 0..self.actions() {
-                    best = best.max(self.value(state, a)?);
-                }
-                Ok(best)
-            }
-        }
+        each!(self, q => q.max_value(state))
     }
 
-    /// The greedy action (ties: an action with data first, then the smallest index).
+    /// The greedy action (ties as the approximator breaks them: an action with data first,
+    /// then the smallest index).
     ///
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
-        match self {
-            QFunction::Tabular(q) => q.greedy_action(state),
-            QFunction::Tiles(q) => q.greedy_action(state),
-            QFunction::Knn(q) => q.greedy_action(state),
-            QFunction::Trees(q) => q.greedy_action(state),
-            QFunction::Hybrid(..) => {
-                // The largest mean value, ties to the smallest index.
-                let mut best = 0;
-                let mut best_q = T::NEG_INFINITY;
-                for a in 0..self.actions() {
-                    let q = self.value(state, a)?;
-                    if a == 0 || q > best_q {
-                        best = a;
-                        best_q = q;
-                    }
-                }
-                Ok(best)
-            }
-        }
+        each!(self, q => q.greedy_action(state))
     }
 }
 
@@ -303,32 +260,15 @@ pub trait Greedy<T, const D: usize> {
     fn greedy(&self, state: [T; D]) -> Result<usize>;
 }
 
-impl<T: Real, const D: usize> Greedy<T, D> for TabularFqi<'_, T, D> {
-    fn greedy(&self, state: [T; D]) -> Result<usize> {
-        self.greedy_action(state)
-    }
+/// [`Greedy`] by each type's own `greedy_action`.
+macro_rules! greedy_by_greedy_action {
+    ($($q:ident),*) => {$(
+        impl<T: Real, const D: usize> Greedy<T, D> for $q<'_, T, D> {
+            fn greedy(&self, state: [T; D]) -> Result<usize> {
+                self.greedy_action(state)
+            }
+        }
+    )*};
 }
 
-impl<T: Real, const D: usize> Greedy<T, D> for TileFqi<'_, T, D> {
-    fn greedy(&self, state: [T; D]) -> Result<usize> {
-        self.greedy_action(state)
-    }
-}
-
-impl<T: Real, const D: usize> Greedy<T, D> for KnnFqi<'_, T, D> {
-    fn greedy(&self, state: [T; D]) -> Result<usize> {
-        self.greedy_action(state)
-    }
-}
-
-impl<T: Real, const D: usize> Greedy<T, D> for TreeFqi<'_, T, D> {
-    fn greedy(&self, state: [T; D]) -> Result<usize> {
-        self.greedy_action(state)
-    }
-}
-
-impl<T: Real, const D: usize> Greedy<T, D> for QFunction<'_, T, D> {
-    fn greedy(&self, state: [T; D]) -> Result<usize> {
-        self.greedy_action(state)
-    }
-}
+greedy_by_greedy_action!(TabularFqi, TileFqi, KnnFqi, HybridFqi, TreeFqi, QFunction);

@@ -15,7 +15,7 @@
 //! cannot diverge. Iteration `k ≥ 2` regresses
 //! `yᵢ = R̂(sᵢ, aᵢ) + γ (1 − ωᵢ) maxₐ′ Q_{k−1}(s′ᵢ, a′)` in every tiling, where `R̂` and
 //! `Q_{k−1}` are the tiling averages; pairs without data in a tiling are filled per tiling
-//! by the [`EmptyCells`](super::EmptyCells) rule, exactly as in the table.
+//! by the [`EmptyCells`] rule, exactly as in the table.
 //!
 //! **Geometry.** `n` tiles of width `wᵈ = (upperᵈ − lowerᵈ)/n` per axis; tiling `t` is
 //! shifted down by `wᵈ · ((t·(2d + 1)) mod k)/k` on axis `d` (the asymmetric displacements
@@ -28,12 +28,17 @@
 //! actions: 1 152 entries = 23 040 bytes in `f32`. Fit cost per iteration:
 //! `O(samples · k · actions)`.
 
-use super::{
-    EmptyCells, FqiConfig, FqiEntry, SampleSet, check_magnitudes, fill_empty, nearest_donors,
-};
+use super::argmax::ArgMax;
+use super::entry::NIL;
+use super::fill::{fill_empty, nearest_donors};
+use super::iteration::{self, NoDraws, Regressor};
+use super::samples::each;
+use super::{EmptyCells, FqiConfig, FqiEntry, SampleSet};
 use crate::error::ensure_finite;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::CellGrid;
-use crate::{Error, Real, Result};
+use rand_core::Rng;
 
 /// The geometry of `k` offset tilings of the box `[lower, upper]`, `n` tiles per axis each
 /// (see the module docs). Size: `3D` scalars and `D + 2` words.
@@ -170,7 +175,7 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
                 parameter: "actions",
             });
         }
-        let limit = super::NIL as usize - 1;
+        let limit = NIL as usize - 1;
         tilings
             .tiles_per_tiling()
             .checked_mul(actions)
@@ -227,28 +232,7 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let mut total = 0usize;
-        for set in sets.clone() {
-            set.validate(self.actions)?;
-            total += set.len();
-        }
-        if total == 0 {
-            return Err(Error::EmptyData);
-        }
-        check_magnitudes(sets.clone(), config)?;
-        self.fit_reward_model(sets.clone(), config);
-        for e in self.entries.iter_mut() {
-            e.q = e.reward;
-        }
-        if config.iterations > 1 {
-            self.for_each_tiling(|grid, actions, entries| {
-                nearest_donors(grid, actions, entries, |e| e.weight > T::ZERO);
-            });
-            for _ in 1..config.iterations {
-                self.bellman_iteration(sets.clone(), config);
-            }
-        }
-        Ok(())
+        iteration::fit(self, sets, config, &mut NoDraws)
     }
 
     /// Runs `f` on every tiling's entries with the shared layout.
@@ -266,98 +250,6 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
     fn index(&self, t: usize, state: &[T; D], action: usize) -> usize {
         let per = self.tilings.tiles_per_tiling() * self.actions;
         t * per + self.tilings.tile_of(t, state) * self.actions + action
-    }
-
-    /// Iteration 1 in every tiling: `R̂_t` into `reward`, `Σ w_s` into `weight`.
-    fn fit_reward_model<'s>(
-        &mut self,
-        sets: impl Iterator<Item = SampleSet<'s, T, D>>,
-        config: &FqiConfig<T>,
-    ) where
-        T: 's,
-    {
-        self.entries.fill(FqiEntry::EMPTY);
-        for set in sets {
-            for (s, reward, w_r, w_s) in set.iter() {
-                for t in 0..self.tilings.count {
-                    let i = self.index(t, &s.state, s.action);
-                    if let Some(e) = self.entries.get_mut(i) {
-                        // `next` holds Σ w_r while the reward model is being fitted.
-                        e.reward += w_r * reward;
-                        e.next += w_r;
-                        e.weight += w_s;
-                    }
-                }
-            }
-        }
-        for e in self.entries.iter_mut() {
-            if e.next < config.min_weight {
-                e.next = T::ZERO;
-            }
-            if e.weight < config.min_weight {
-                e.weight = T::ZERO;
-            }
-            if e.next > T::ZERO {
-                e.reward /= e.next;
-            }
-        }
-        let empty = config.empty_cells;
-        self.for_each_tiling(|grid, actions, entries| {
-            nearest_donors(grid, actions, entries, |e| e.next > T::ZERO);
-            fill_empty(
-                entries,
-                actions,
-                empty,
-                |e| e.next > T::ZERO,
-                |e| &mut e.reward,
-            );
-        });
-    }
-
-    /// One iteration k ≥ 2: every tiling regresses `r̂ + γ(1−ω)V_{k−1}(s′)`.
-    fn bellman_iteration<'s>(
-        &mut self,
-        sets: impl Iterator<Item = SampleSet<'s, T, D>>,
-        config: &FqiConfig<T>,
-    ) where
-        T: 's,
-    {
-        for e in self.entries.iter_mut() {
-            e.next = T::ZERO;
-        }
-        let gamma = config.discount;
-        for set in sets {
-            for (s, _, _, w_s) in set.iter() {
-                if w_s <= T::ZERO {
-                    continue;
-                }
-                let mut y = self.average(&s.state, s.action, |e| e.reward);
-                if !s.absorbing {
-                    y += gamma * self.max_value_finite(&s.next_state);
-                }
-                for t in 0..self.tilings.count {
-                    let i = self.index(t, &s.state, s.action);
-                    if let Some(e) = self.entries.get_mut(i) {
-                        e.next += w_s * y;
-                    }
-                }
-            }
-        }
-        for e in self.entries.iter_mut() {
-            if e.weight > T::ZERO {
-                e.q = e.next / e.weight;
-            }
-        }
-        let empty: EmptyCells<T> = config.empty_cells;
-        self.for_each_tiling(|_, actions, entries| {
-            fill_empty(
-                entries,
-                actions,
-                empty,
-                |e| e.weight > T::ZERO,
-                |e| &mut e.q,
-            );
-        });
     }
 
     /// The mean over tilings of `field` of the tiles containing `state`, for `action`.
@@ -414,20 +306,104 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         crate::error::ensure_all_finite(&state, "state")?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
-        let mut best_has_data = false;
+        let mut best = ArgMax::new();
         for a in 0..self.actions {
-            let q = self.average(&state, a, |e| e.q);
-            let has_data = self.has_data(&state, a);
-            let better = a == 0 || q > best_q || (q == best_q && has_data && !best_has_data);
-            if better {
-                best = a;
-                best_q = q;
-                best_has_data = has_data;
+            best.offer(
+                a,
+                self.average(&state, a, |e| e.q),
+                self.has_data(&state, a),
+            );
+        }
+        Ok(best.action())
+    }
+}
+
+impl<T: Real, const D: usize> Regressor<T, D> for TileFqi<'_, T, D> {
+    fn actions(&self) -> usize {
+        self.actions
+    }
+
+    /// In every tiling: `R̂_t` into `reward` and `q`, `Σ w_s` into `weight`.
+    fn fit_reward_model<'s, I, R>(&mut self, sets: I, _: usize, config: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        self.entries.fill(FqiEntry::EMPTY);
+        for (s, reward, w_r, w_s) in each(sets) {
+            for t in 0..self.tilings.count {
+                let i = self.index(t, &s.state, s.action);
+                if let Some(e) = self.entries.get_mut(i) {
+                    e.add_reward(reward, w_r, w_s);
+                }
             }
         }
-        Ok(best)
+        for e in self.entries.iter_mut() {
+            e.close_reward_model(config.min_weight());
+        }
+        let empty = config.empty_cells();
+        self.for_each_tiling(|grid, actions, entries| {
+            nearest_donors(grid, actions, entries, |e| e.next > T::ZERO);
+            fill_empty(
+                entries,
+                actions,
+                empty,
+                |e| e.next > T::ZERO,
+                |e| &mut e.reward,
+            );
+        });
+        for e in self.entries.iter_mut() {
+            e.q = e.reward;
+        }
+    }
+
+    /// Every tiling regresses `r̂ + γ(1−ω)V_{k−1}(s′)`.
+    fn bellman_iteration<'s, I, R>(&mut self, sets: I, k: usize, config: &FqiConfig<T>, _: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        if k == 2 {
+            self.for_each_tiling(|grid, actions, entries| {
+                nearest_donors(grid, actions, entries, |e| e.weight > T::ZERO);
+            });
+        }
+        for e in self.entries.iter_mut() {
+            e.next = T::ZERO;
+        }
+        let gamma = config.discount();
+        for (s, _, _, w_s) in each(sets) {
+            if w_s <= T::ZERO {
+                continue;
+            }
+            let mut y = self.average(&s.state, s.action, |e| e.reward);
+            if !s.absorbing {
+                y += gamma * self.max_value_finite(&s.next_state);
+            }
+            for t in 0..self.tilings.count {
+                let i = self.index(t, &s.state, s.action);
+                if let Some(e) = self.entries.get_mut(i) {
+                    e.next += w_s * y;
+                }
+            }
+        }
+        for e in self.entries.iter_mut() {
+            if e.weight > T::ZERO {
+                e.q = e.next / e.weight;
+            }
+        }
+        let empty: EmptyCells<T> = config.empty_cells();
+        self.for_each_tiling(|_, actions, entries| {
+            fill_empty(
+                entries,
+                actions,
+                empty,
+                |e| e.weight > T::ZERO,
+                |e| &mut e.q,
+            );
+        });
     }
 }
 
@@ -435,8 +411,8 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::Transition;
     use crate::fqi::TabularFqi;
+    use crate::model::Transition;
     use rand_chacha::ChaCha8Rng;
     use rand_core::{Rng, SeedableRng};
     use std::vec;

@@ -60,9 +60,13 @@
 //! records, 60 iterations, `examples/core_tree_timing.rs`): 50 streamed trees fit in about
 //! 2.5 s and decide in about 6 ms; 10 stored trees fit in 0.6 s and decide in 2 µs.
 
-use super::{FqiConfig, SampleSet, check_magnitudes};
+use super::argmax::ArgMax;
+use super::iteration::{self, Regressor};
+use super::samples::load;
+use super::{FqiConfig, SampleSet};
 use crate::error::ensure_all_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// A node whose weighted impurity is at most this is a leaf (spec §4.1).
@@ -918,9 +922,10 @@ pub struct TreeFqi<'a, T, const D: usize> {
     records: &'a mut [TreeRecord<T, D>],
     nodes: &'a mut [TreeNode<T>],
     len: usize,
-    /// Streamed: the growth rules of the final trees (their weights, the minimum weight)
-    /// and their seed.
-    last: Growth<T>,
+    /// The growth rules of the iteration being grown (its weights, the minimum weight),
+    /// after a fit those of the last one (a streamed forest's final trees), and the seed of
+    /// a streamed forest's final trees.
+    growth: Growth<T>,
     seed: u64,
 }
 
@@ -961,7 +966,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             records,
             nodes,
             len: 0,
-            last: Growth::of(&forests, T::ZERO),
+            growth: Growth::of(&forests, T::ZERO),
             seed: 0,
         };
         q.clear();
@@ -1024,101 +1029,7 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
         T: 's,
         R: Rng + ?Sized,
     {
-        let mut total = 0usize;
-        for set in sets.clone() {
-            set.validate(self.actions)?;
-            total = total.saturating_add(set.len());
-        }
-        if total == 0 {
-            return Err(Error::EmptyData);
-        }
-        if total > self.records.len() {
-            return Err(Error::CapacityExceeded {
-                capacity: self.records.len(),
-            });
-        }
-        check_magnitudes(sets.clone(), config)?;
-        let mut slots = self.records.iter_mut();
-        for set in sets {
-            for (s, reward, w_r, w_s) in set.iter() {
-                if let Some(slot) = slots.next() {
-                    *slot = TreeRecord {
-                        state: s.state,
-                        next_state: s.next_state,
-                        weight: w_s,
-                        reward: w_r,
-                        target: reward,
-                        acc: T::ZERO,
-                        best: T::ZERO,
-                        own: T::ZERO,
-                        action: s.action as u16,
-                        absorbing: s.absorbing,
-                    };
-                }
-            }
-        }
-        self.len = total;
-        self.group_by_action();
-        let mut growth = Growth::of(&self.forests, config.min_weight());
-        if self.forests.streamed {
-            self.fit_streamed(growth, config, rng);
-            return Ok(());
-        }
-        self.grow_all(&growth, rng);
-        // R̂ at every record (its reward weight is no longer needed).
-        for i in 0..self.len {
-            let Some(&r) = self.records.get(i) else {
-                break;
-            };
-            let fitted = self.forest_value(&r.state, r.action());
-            if let Some(r) = self.records.get_mut(i) {
-                r.reward = fitted;
-                r.target = fitted;
-            }
-        }
-        growth.first = false;
-        let gamma = config.discount();
-        for _ in 1..config.iterations() {
-            // Every target from Q_{k−1} before the forests are regrown.
-            for i in 0..self.len {
-                let Some(&r) = self.records.get(i) else {
-                    break;
-                };
-                let future = if r.absorbing {
-                    T::ZERO
-                } else {
-                    self.max_finite(&r.next_state)
-                };
-                if let Some(r) = self.records.get_mut(i) {
-                    r.target = r.reward + gamma * future;
-                }
-            }
-            self.grow_all(&growth, rng);
-        }
-        Ok(())
-    }
-
-    /// FQI with streamed trees: iterations 1..N−1 grow every tree in the scratch tree and
-    /// add it to the sums of the records it is evaluated at; iteration N is only its seed
-    /// (the final trees are grown along each query's path).
-    fn fit_streamed<R: Rng + ?Sized>(
-        &mut self,
-        mut growth: Growth<T>,
-        config: &FqiConfig<T>,
-        rng: &mut R,
-    ) {
-        let gamma = config.discount();
-        if config.iterations() > 1 {
-            self.stream_iteration(&growth, rng);
-            growth.first = false;
-            for _ in 2..config.iterations() {
-                self.bootstrap_targets(gamma);
-                self.stream_iteration(&growth, rng);
-            }
-            self.bootstrap_targets(gamma);
-        }
-        self.last = growth;
-        self.seed = rng.next_u64();
+        iteration::fit(self, sets, config, rng)
     }
 
     /// `y = R̂ + γ(1 − ω)·maxₐ′ Q(s′, a′)` from the streamed sums.
@@ -1237,7 +1148,12 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
             let records = self.records.get(start..end).unwrap_or(&[]);
             let mut sum = T::ZERO;
             for t in 0..trees {
-                sum += lazy_tree(records, state, tree_seed(self.seed, action, t), &self.last);
+                sum += lazy_tree(
+                    records,
+                    state,
+                    tree_seed(self.seed, action, t),
+                    &self.growth,
+                );
             }
             return sum / T::from_usize(trees);
         }
@@ -1287,16 +1203,115 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         ensure_all_finite(&state, "state")?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
+        let mut best = ArgMax::new();
         for a in 0..self.actions {
-            let q = self.forest_value(&state, a);
-            if a == 0 || q > best_q {
-                best = a;
-                best_q = q;
+            best.offer(a, self.forest_value(&state, a), true);
+        }
+        Ok(best.action())
+    }
+}
+
+impl<T: Real, const D: usize> Regressor<T, D> for TreeFqi<'_, T, D> {
+    fn actions(&self) -> usize {
+        self.actions
+    }
+
+    fn capacity(&self) -> Option<usize> {
+        Some(self.records.len())
+    }
+
+    /// The records, grouped by action, then the forests of the rewards and `R̂` at every
+    /// record; streamed, the first iteration's trees are grown and evaluated at once (when
+    /// there is a second iteration to use them).
+    fn fit_reward_model<'s, I, R>(
+        &mut self,
+        sets: I,
+        total: usize,
+        config: &FqiConfig<T>,
+        rng: &mut R,
+    ) where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        load(self.records, sets, |(s, reward, w_r, w_s)| TreeRecord {
+            state: s.state,
+            next_state: s.next_state,
+            weight: w_s,
+            reward: w_r,
+            target: reward,
+            acc: T::ZERO,
+            best: T::ZERO,
+            own: T::ZERO,
+            action: s.action as u16,
+            absorbing: s.absorbing,
+        });
+        self.len = total;
+        self.group_by_action();
+        let growth = Growth::of(&self.forests, config.min_weight());
+        self.growth = growth;
+        if self.forests.streamed {
+            if config.iterations() > 1 {
+                self.stream_iteration(&growth, rng);
+                self.growth.first = false;
+            }
+            return;
+        }
+        self.grow_all(&growth, rng);
+        // R̂ at every record (its reward weight is no longer needed).
+        for i in 0..self.len {
+            let Some(&r) = self.records.get(i) else {
+                break;
+            };
+            let fitted = self.forest_value(&r.state, r.action());
+            if let Some(r) = self.records.get_mut(i) {
+                r.reward = fitted;
+                r.target = fitted;
             }
         }
-        Ok(best)
+        self.growth.first = false;
+    }
+
+    /// Every target from `Q_{k−1}`, then the forests regrown on them; streamed, the targets
+    /// from the sums of the trees just streamed, and this iteration's trees streamed unless
+    /// it is the last (whose trees are grown along each query's path).
+    fn bellman_iteration<'s, I, R>(&mut self, _: I, k: usize, config: &FqiConfig<T>, rng: &mut R)
+    where
+        I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
+        T: 's,
+        R: Rng + ?Sized,
+    {
+        let gamma = config.discount();
+        let growth = self.growth;
+        if self.forests.streamed {
+            self.bootstrap_targets(gamma);
+            if k < config.iterations() {
+                self.stream_iteration(&growth, rng);
+            }
+            return;
+        }
+        // Every target from Q_{k−1} before the forests are regrown.
+        for i in 0..self.len {
+            let Some(&r) = self.records.get(i) else {
+                break;
+            };
+            let future = if r.absorbing {
+                T::ZERO
+            } else {
+                self.max_finite(&r.next_state)
+            };
+            if let Some(r) = self.records.get_mut(i) {
+                r.target = r.reward + gamma * future;
+            }
+        }
+        self.grow_all(&growth, rng);
+    }
+
+    /// Streamed: the seed of the final trees.
+    fn finish<R: Rng + ?Sized>(&mut self, _: &FqiConfig<T>, rng: &mut R) {
+        if self.forests.streamed {
+            self.seed = rng.next_u64();
+        }
     }
 }
 

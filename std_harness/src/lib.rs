@@ -15,5 +15,6 @@ pub mod joint_q;
 pub mod plot;
 pub mod run_range;
 pub mod seeding;
+pub mod store;
 pub mod transfer;
 pub mod trees;

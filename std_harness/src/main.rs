@@ -27,15 +27,30 @@ enum Command {
     Dam(commands::transfer::Args),
     /// The IWFQI paper's multitask Acrobot: every algorithm on the protocol of spec §3.
     Acrobot(commands::transfer::Args),
+    /// Combines the result files of shard directories (same configuration, disjoint runs)
+    /// into OUT and regenerates the summary, metrics and plots.
+    Merge(commands::merge::Args),
 }
 
 fn main() -> anyhow::Result<()> {
+    // The transfer commands record their command line in their result files.
+    let typed = || std::env::args().skip(1).collect::<Vec<String>>();
     match Cli::parse().command {
         Command::Demo(args) => commands::demo::run(&args),
         Command::Gp(args) => commands::gp::run(&args),
         Command::Identify(args) => commands::identify::run(&args),
-        Command::Puddle(args) => commands::puddle::run(&args),
-        Command::Dam(args) => commands::dam::run(&args),
-        Command::Acrobot(args) => commands::acrobot::run(&args),
+        Command::Puddle(mut args) => {
+            args.command = typed();
+            commands::puddle::run(&args)
+        }
+        Command::Dam(mut args) => {
+            args.command = typed();
+            commands::dam::run(&args)
+        }
+        Command::Acrobot(mut args) => {
+            args.command = typed();
+            commands::acrobot::run(&args)
+        }
+        Command::Merge(args) => commands::merge::run(&args),
     }
 }

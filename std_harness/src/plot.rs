@@ -141,23 +141,47 @@ impl Figure {
         ensure_font()?;
         let png = stem.with_extension("png");
         let svg = stem.with_extension("svg");
+        // Drawn under temporary names, then renamed: a failed write (no space, no
+        // permission) leaves the previous figure as it was.
+        let name = stem
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let partial = |ext: &str| {
+            stem.with_file_name(format!(".{name}.{}.partial.{ext}", std::process::id()))
+        };
+        let (png_partial, svg_partial) = (partial("png"), partial("svg"));
+        let drawn = self.draw_files(&png_partial, &svg_partial).and_then(|()| {
+            std::fs::rename(&png_partial, &png)
+                .with_context(|| format!("writing {}", png.display()))?;
+            std::fs::rename(&svg_partial, &svg)
+                .with_context(|| format!("writing {}", svg.display()))
+        });
+        if drawn.is_err() {
+            let _ = std::fs::remove_file(&png_partial);
+            let _ = std::fs::remove_file(&svg_partial);
+        }
+        drawn?;
+        Ok([png, svg])
+    }
+
+    fn draw_files(&self, png: &Path, svg: &Path) -> anyhow::Result<()> {
         let size = (
             self.panel_width * self.panels.len().max(1) as u32,
             self.height,
         );
         {
-            let root = BitMapBackend::new(&png, size).into_drawing_area();
+            let root = BitMapBackend::new(png, size).into_drawing_area();
             self.draw(&root)
                 .with_context(|| format!("drawing {}", png.display()))?;
             root.present().map_err(plot_error)?;
         }
         {
-            let root = SVGBackend::new(&svg, size).into_drawing_area();
+            let root = SVGBackend::new(svg, size).into_drawing_area();
             self.draw(&root)
                 .with_context(|| format!("drawing {}", svg.display()))?;
             root.present().map_err(plot_error)?;
         }
-        Ok([png, svg])
+        Ok(())
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {

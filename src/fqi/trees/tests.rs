@@ -1,7 +1,7 @@
 extern crate std;
 use super::*;
-use crate::Transition;
 use crate::fqi::{EmptyCells, QFunction, QStorage};
+use crate::model::Transition;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::vec;
@@ -573,7 +573,7 @@ fn streamed_trees_reproduce_the_obvious_split_and_ignore_zero_weights() {
         // Each tree's leaf at 0 is {x = 0} or everything of positive weight.
         for x in [0.0, 1.0, 2.0] {
             for t in 0..5 {
-                let v = lazy_tree(q.records(), &[x], tree_seed(q.seed, 0, t), &q.last);
+                let v = lazy_tree(q.records(), &[x], tree_seed(q.seed, 0, t), &q.growth);
                 assert!(allowed.iter().any(|a| (v - a).abs() < 1e-12), "{v} at {x}");
             }
         }

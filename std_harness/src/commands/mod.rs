@@ -5,5 +5,6 @@ pub mod dam;
 pub mod demo;
 pub mod gp;
 pub mod identify;
+pub mod merge;
 pub mod puddle;
 pub mod transfer;

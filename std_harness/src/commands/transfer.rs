@@ -7,8 +7,9 @@
 //! Acrobot's published configurations). Runs of all algorithms go in parallel (rayon,
 //! `--threads`), each run seeded from (`--seed`, algorithm, run index), so the same seed
 //! gives the same numbers whatever the scheduling, and `--runs A..B` computes a slice of
-//! runs whose results merge into the `<algorithm>.json` files already in `--out` (same
-//! configuration only).
+//! runs whose results merge into the `<algorithm>.json` files already in `--out`
+//! ([`crate::transfer::result_dir`]: same configuration only, runs already there kept,
+//! writers locked).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -26,6 +27,7 @@ use rayon::prelude::*;
 use crate::domains::{Domain, IdealMeans};
 use crate::gp_large::fixed::PredictiveVariance;
 use crate::run_range::RunRange;
+use crate::store::write_csv;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
 use crate::transfer::algorithms::adaptive_kernel::{
     ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
@@ -40,6 +42,7 @@ use crate::transfer::algorithms::{
 use crate::transfer::gp::{FixedGpUpdate, GpOptions, GpSearch};
 use crate::transfer::metrics::{TransferMetrics, markdown_table, transfer_metrics};
 use crate::transfer::protocol::{self, Protocol};
+use crate::transfer::result_dir::{ResultDir, recorded_command};
 use crate::transfer::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
 use crate::transfer::score_tables::{self, Mode, ScoreTableData};
 use crate::transfer::sources::SourceSet;
@@ -293,6 +296,17 @@ pub struct Args {
     /// Compute nothing: summarise and plot the runs of this configuration already in --out.
     #[arg(long)]
     pub no_run: bool,
+    /// Recompute runs already in --out, and start anew a result file that holds another
+    /// configuration or cannot be read, keeping the old file as
+    /// `<name>.json.<timestamp>.bak`. Without it such a file is an error (nothing is
+    /// written) and runs already there are kept, so rerunning an interrupted command
+    /// finishes only the runs it lacks.
+    #[arg(long)]
+    pub replace: bool,
+    /// The command line as typed (the subcommand and its options), recorded in the result
+    /// files without the options that only say where and how; filled by the binary.
+    #[arg(skip)]
+    pub command: Vec<String>,
     /// awfqi-adaptive: sub-batches (re-planning points) per step.
     #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
     pub adaptive_sub_batches: usize,
@@ -892,7 +906,8 @@ pub fn run<const D: usize>(
 pub fn ensure_writable(out: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(out)
         .with_context(|| format!("output directory {}: cannot be created", out.display()))?;
-    let probe = out.join(".awfqi-write-probe");
+    // One probe per process: writers sharing the directory must not remove each other's.
+    let probe = out.join(format!(".awfqi-write-probe.{}", std::process::id()));
     std::fs::write(&probe, b"")
         .with_context(|| format!("output directory {}: cannot be written", out.display()))?;
     std::fs::remove_file(&probe).with_context(|| {
@@ -927,11 +942,40 @@ fn run_in_pool<const D: usize>(
         ..config.clone()
     };
     let experiment = build_experiment(&build, domain, dynamics, hooks)?;
-    let runs: Vec<usize> = (config.runs.start..config.runs.end).collect();
-    let mut jobs: Vec<(Algorithm, usize)> = algorithms
+    let runs: Vec<usize> = if args.no_run {
+        Vec::new()
+    } else {
+        (config.runs.start..config.runs.end).collect()
+    };
+    let json = experiment_json(config, &experiment);
+    // Before any run: every result file in --out must hold this configuration.
+    let parameters = build
+        .algorithms
         .iter()
-        .flat_map(|&a| runs.iter().map(move |&r| (a, r)))
+        .map(|&a| (a, experiment.parameters(a)))
         .collect();
+    let (store, notes) = ResultDir::open(
+        out,
+        json.clone(),
+        parameters,
+        &runs,
+        recorded_command(&args.command),
+        args.replace,
+    )?;
+    for note in &notes {
+        eprintln!("note: {note}");
+    }
+    let mut kept: BTreeMap<Algorithm, Vec<usize>> = BTreeMap::new();
+    let mut jobs: Vec<(Algorithm, usize)> = Vec::new();
+    for &a in &build.algorithms {
+        for &r in &runs {
+            if !store.replaces() && store.present(a).is_some_and(|p| p.contains(&r)) {
+                kept.entry(a).or_default().push(r);
+            } else {
+                jobs.push((a, r));
+            }
+        }
+    }
     jobs.sort_by_key(|&(a, r)| (cost_rank(a), r));
 
     let multi = MultiProgress::new();
@@ -945,15 +989,14 @@ fn run_in_pool<const D: usize>(
     let bars: BTreeMap<Algorithm, ProgressBar> = algorithms
         .iter()
         .map(|&a| {
-            let bar = multi.add(ProgressBar::new((runs.len() * config.steps) as u64));
+            let todo = jobs.iter().filter(|&&(b, _)| b == a).count();
+            let bar = multi.add(ProgressBar::new((todo * config.steps) as u64));
             bar.set_style(style.clone());
             bar.set_prefix(a.name());
             (a, bar)
         })
         .collect();
-    let json = experiment_json(config, &experiment);
     let finished: Mutex<Vec<(Algorithm, RunRecord)>> = Mutex::new(Vec::new());
-    let jobs = if args.no_run { Vec::new() } else { jobs };
     jobs.par_iter()
         .try_for_each(|&(algorithm, run)| -> anyhow::Result<()> {
             let bar = &bars[&algorithm];
@@ -962,11 +1005,11 @@ fn run_in_pool<const D: usize>(
             // Each run is merged into its file as soon as it ends, so an interrupted
             // invocation keeps every finished run.
             let mut done = finished.lock().map_err(|_| anyhow!("poisoned"))?;
-            save_run(out, &json, algorithm, record.clone())?;
+            store.save_run(algorithm, record.clone())?;
             if args.check_gp_search {
                 // The fits checked so far (this run's and, with several threads, some of
                 // the runs still going), kept even if the invocation is interrupted.
-                write_search_checks(out, &crate::transfer::gp::search_checks())?;
+                write_search_checks(&store, &crate::transfer::gp::search_checks())?;
             }
             done.push((algorithm, record));
             Ok(())
@@ -976,23 +1019,16 @@ fn run_in_pool<const D: usize>(
     }
     let compute_seconds = wall.elapsed().as_secs_f64();
     let finished = finished.into_inner().map_err(|_| anyhow!("poisoned"))?;
-    let timing = timing_report(out, &finished, compute_seconds)?;
+    let timing = timing_report(&store, &finished, compute_seconds)?;
     if args.check_gp_search {
-        write_search_checks(out, &crate::transfer::gp::search_checks())?;
+        write_search_checks(&store, &crate::transfer::gp::search_checks())?;
         summarise_search_checks(out)?;
     }
 
-    // Summarise every run of this configuration in --out (this invocation's and earlier
-    // ones').
-    let mut files: BTreeMap<Algorithm, ResultFile> = BTreeMap::new();
-    for a in Algorithm::ALL {
-        let path = out.join(format!("{}.json", a.name()));
-        if let Ok(old) = ResultFile::read(&path)
-            && old.experiment == json
-        {
-            files.insert(a, old);
-        }
-    }
+    // Summarise every run in --out (this invocation's and earlier ones', all of this
+    // configuration), with no writer half-way.
+    let _lock = store.lock()?;
+    let files: BTreeMap<Algorithm, ResultFile> = store.load()?;
     let summaries: Vec<(Algorithm, Vec<SummaryRow>)> = files
         .iter()
         .map(|(a, f)| (*a, f.summary(a.name())))
@@ -1009,12 +1045,8 @@ fn run_in_pool<const D: usize>(
         .filter_map(|(a, rows)| transfer_metrics(a.name(), rows, baseline, config.threshold))
         .collect();
     let report = report_markdown(config, &experiment, &summaries, &metrics);
-    std::fs::write(out.join("report.md"), &report)?;
-    let mut w = csv::Writer::from_path(out.join("transfer_metrics.csv"))?;
-    for m in &metrics {
-        w.serialize(m)?;
-    }
-    w.flush()?;
+    crate::store::write_atomic(&out.join("report.md"), report.as_bytes())?;
+    write_csv(&out.join("transfer_metrics.csv"), &metrics)?;
 
     if !args.no_plots {
         let title = format!(
@@ -1092,8 +1124,29 @@ fn run_in_pool<const D: usize>(
     }
     println!("{report}");
     println!("{timing}");
+    if !kept.is_empty() {
+        println!("{}", kept_note(&kept, out));
+    }
     println!("outputs in {}", out.display());
     Ok(())
+}
+
+/// "Kept 3 run(s) already in OUT (fqi: 0, 1; iwfqi: 0) …": the runs skipped because a
+/// result file holds them.
+fn kept_note(kept: &BTreeMap<Algorithm, Vec<usize>>, out: &Path) -> String {
+    let total: usize = kept.values().map(Vec::len).sum();
+    let lists: Vec<String> = kept
+        .iter()
+        .map(|(a, runs)| {
+            let runs: Vec<String> = runs.iter().map(ToString::to_string).collect();
+            format!("{}: {}", a.name(), runs.join(", "))
+        })
+        .collect();
+    format!(
+        "Kept {total} run(s) already in {} instead of recomputing them ({}); --replace recomputes them.",
+        out.display(),
+        lists.join("; ")
+    )
 }
 
 /// "Puddle World, shared dynamics", "Dam", "Acrobot".
@@ -1113,66 +1166,36 @@ fn title<const D: usize>(experiment: &Experiment<D>) -> String {
     }
 }
 
-/// Merges one finished run into `<out>/<algorithm>.json` (created when absent; a file of
-/// another configuration is replaced, with a note).
-fn save_run(
-    out: &Path,
-    config: &serde_json::Value,
-    algorithm: Algorithm,
-    record: RunRecord,
-) -> anyhow::Result<()> {
-    let path = out.join(format!("{}.json", algorithm.name()));
-    let mut file = ResultFile::new(config.clone(), vec![record]);
-    if path.exists() {
-        match ResultFile::read(&path) {
-            Ok(mut old) if old.experiment == *config => {
-                old.merge(file)?;
-                file = old;
-            }
-            _ => eprintln!(
-                "note: {} holds another configuration; replacing it",
-                path.display()
-            ),
-        }
-    }
-    file.write(&path)
-}
-
 /// Appends this invocation's wall times to `timing.csv` (`algorithm,run,step,seconds`, one
 /// row per step and one with step 0 for the whole run) and returns a Markdown table of the
 /// mean time per run. Wall times are the only output that differs between identical
 /// invocations, so they stay out of every other file.
 fn timing_report(
-    out: &Path,
+    store: &ResultDir,
     finished: &[(Algorithm, RunRecord)],
     compute_seconds: f64,
 ) -> anyhow::Result<String> {
     use std::fmt::Write as _;
-    use std::io::Write as _;
-    let path = out.join("timing.csv");
-    let new = !path.exists();
-    let mut file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(&path)?;
-    if new {
-        writeln!(file, "algorithm,run,step,seconds,threads")?;
-    }
     let threads = rayon::current_num_threads();
+    let mut rows = String::new();
     let mut per_algorithm: BTreeMap<Algorithm, Vec<f64>> = BTreeMap::new();
     for (a, r) in finished {
         for s in &r.steps {
-            writeln!(
-                file,
+            let _ = writeln!(
+                rows,
                 "{},{},{},{:.3},{threads}",
                 a.name(),
                 r.run,
                 s.step,
                 s.seconds
-            )?;
+            );
         }
-        writeln!(file, "{},{},0,{:.3},{threads}", a.name(), r.run, r.seconds)?;
+        let _ = writeln!(rows, "{},{},0,{:.3},{threads}", a.name(), r.run, r.seconds);
         per_algorithm.entry(*a).or_default().push(r.seconds);
+    }
+    {
+        let _lock = store.lock()?;
+        store.append_log("timing.csv", TIMING_HEADER, &rows)?;
     }
     let mut out = String::from("| algorithm | runs | wall time per run (s) |\n|---|---:|---:|\n");
     for (a, secs) in &per_algorithm {
@@ -1186,14 +1209,16 @@ fn timing_report(
     Ok(out)
 }
 
-/// The GP search of the report's header: the one asked for, else the spec's and the
-/// algorithms of this configuration whose default differs from it.
-fn search_description<const D: usize>(config: &Config, experiment: &Experiment<D>) -> String {
+/// The GP search of the report's header: the one asked for, else the spec's and those of
+/// the summarised `algorithms` whose default differs from it.
+fn search_description<const D: usize>(
+    algorithms: &[Algorithm],
+    experiment: &Experiment<D>,
+) -> String {
     if let Some(search) = experiment.options.gp.search {
         return format!("{search:?}");
     }
-    let screened: Vec<&str> = config
-        .algorithms
+    let screened: Vec<&str> = algorithms
         .iter()
         .filter(|&&a| experiment.default_search(a) == GpSearch::Screened)
         .map(|a| a.name())
@@ -1236,7 +1261,10 @@ fn report_markdown<const D: usize>(
         config.args.seed,
         experiment.options.gp.restarts,
         experiment.options.gp.max_gp,
-        search_description(config, experiment),
+        search_description(
+            &summaries.iter().map(|(a, _)| *a).collect::<Vec<_>>(),
+            experiment
+        ),
         p.iterations,
         p.trees
     );
@@ -1268,16 +1296,11 @@ fn report_markdown<const D: usize>(
 
 /// Appends one row per checked fit to `gp_search_check.tsv` (header when it is new).
 fn write_search_checks(
-    out: &std::path::Path,
+    store: &ResultDir,
     checks: &[crate::transfer::gp::SearchCheck],
 ) -> anyhow::Result<()> {
     use std::fmt::Write as _;
-    use std::io::Write as _;
-    let path = out.join("gp_search_check.tsv");
     let mut tsv = String::new();
-    if !path.exists() {
-        tsv.push_str("kept\tpoints\tlml_kept\tlml_other\trelative_difference\tfactorizations_kept\tfactorizations_other\tseconds_kept\tseconds_other\n");
-    }
     for c in checks {
         let m = &c.comparison;
         let _ = writeln!(
@@ -1294,13 +1317,15 @@ fn write_search_checks(
             m.other_seconds
         );
     }
-    std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(&path)?
-        .write_all(tsv.as_bytes())?;
-    Ok(())
+    let _lock = store.lock()?;
+    store.append_log("gp_search_check.tsv", SEARCH_CHECK_HEADER, &tsv)
 }
+
+/// The header of `gp_search_check.tsv`.
+const SEARCH_CHECK_HEADER: &str = "kept\tpoints\tlml_kept\tlml_other\trelative_difference\tfactorizations_kept\tfactorizations_other\tseconds_kept\tseconds_other\n";
+
+/// The header of `timing.csv`.
+pub const TIMING_HEADER: &str = "algorithm,run,step,seconds,threads\n";
 
 /// Prints the largest relative log-marginal-likelihood difference of `gp_search_check.tsv`
 /// and the factorisation and time totals of both searches.

@@ -173,6 +173,12 @@ pub struct Args {
     /// Skip writing the plots.
     #[arg(long)]
     pub no_plots: bool,
+    /// Recompute runs already in `identify.json`, and start anew a file that holds another
+    /// configuration or cannot be read, keeping the old one as
+    /// `identify.json.<timestamp>.bak`. Without it such a file is an error (nothing is
+    /// written) and runs already there are kept.
+    #[arg(long)]
+    pub replace: bool,
 }
 
 impl Default for Args {
@@ -247,7 +253,8 @@ pub struct Row {
 pub struct StudyConfig {
     /// Budgets.
     pub budgets: Vec<usize>,
-    /// Run range.
+    /// From the first run index of the records to one past the last (the records of one
+    /// configuration merge whatever their ranges; no other field may differ).
     pub runs: RunRange,
     /// Criteria.
     pub criteria: Vec<CriterionName>,
@@ -559,32 +566,14 @@ pub fn aggregate(config: &StudyConfig, records: &[RunRecord]) -> Vec<Row> {
 /// Runs the study (in parallel over runs, on the current rayon pool) without writing
 /// anything.
 pub fn study(args: &Args, progress: bool) -> anyhow::Result<Study> {
-    if args.budgets.is_empty() || args.criteria.is_empty() || args.policy.is_empty() {
-        bail!("--budgets, --criteria and --policy need at least one value each");
-    }
-    let shared = Shared::new(args)?;
-    let bar = if progress {
-        let bar = ProgressBar::new((args.runs.end - args.runs.start) as u64);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "identify {bar:40} {pos}/{len} runs  {elapsed} (eta {eta})",
-            )
-            .map_err(|e| anyhow!("{e}"))?,
-        );
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
-    let records = (args.runs.start..args.runs.end)
-        .into_par_iter()
-        .map(|run| {
-            let record = run_one(args, &shared, run);
-            bar.inc(1);
-            record
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    bar.finish_and_clear();
-    let config = StudyConfig {
+    let runs: Vec<usize> = (args.runs.start..args.runs.end).collect();
+    let records = run_records(args, &runs, progress)?;
+    Ok(assemble(config(args), records))
+}
+
+/// The configuration of `args` as `identify.json` records it.
+pub fn config(args: &Args) -> StudyConfig {
+    StudyConfig {
         budgets: args.budgets.clone(),
         runs: args.runs,
         criteria: args.criteria.clone(),
@@ -596,16 +585,59 @@ pub fn study(args: &Args, progress: bool) -> anyhow::Result<Study> {
         mi_bins: args.mi_bins,
         design: args.design,
         goals: awfqi::env::THESIS_GOALS.to_vec(),
-    };
+    }
+}
+
+/// The study of `config` over `records` (any order, distinct runs): records by run index,
+/// `config.runs` their hull, and the aggregated rows.
+pub fn assemble(mut config: StudyConfig, mut records: Vec<RunRecord>) -> Study {
+    records.sort_by_key(|r| r.run);
+    if let (Some(first), Some(last)) = (records.first(), records.last()) {
+        config.runs = RunRange {
+            start: first.run,
+            end: last.run + 1,
+        };
+    }
     let rows = aggregate(&config, &records);
-    Ok(Study {
+    Study {
         config,
         rows,
         records,
-    })
+    }
+}
+
+/// The records of `runs` (in parallel, on the current rayon pool), in that order.
+pub fn run_records(args: &Args, runs: &[usize], progress: bool) -> anyhow::Result<Vec<RunRecord>> {
+    if args.budgets.is_empty() || args.criteria.is_empty() || args.policy.is_empty() {
+        bail!("--budgets, --criteria and --policy need at least one value each");
+    }
+    let shared = Shared::new(args)?;
+    let bar = if progress {
+        let bar = ProgressBar::new(runs.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "identify {bar:40} {pos}/{len} runs  {elapsed} (eta {eta})",
+            )
+            .map_err(|e| anyhow!("{e}"))?,
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let records = runs
+        .par_iter()
+        .map(|&run| {
+            let record = run_one(args, &shared, run);
+            bar.inc(1);
+            record
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    bar.finish_and_clear();
+    Ok(records)
 }
 
 mod outputs;
+pub mod stored;
 pub use outputs::{identification_figure, return_figure, table, write_outputs};
 
 #[cfg(test)]

@@ -2,7 +2,6 @@
 //! policy-return figures, and the console table.
 
 use std::fs;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -10,19 +9,16 @@ use anyhow::Context;
 use super::{K, PolicyName, Row, Study};
 use crate::plot::{Figure, LegendPosition, Panel, Series, SeriesStyle, XScale};
 
-/// Writes `identify.json`, `identify.csv` and (unless disabled) the two plots.
+/// Writes `identify.json`, `identify.csv` and (unless disabled) the two plots, each
+/// atomically (a failed write leaves the previous file).
 pub fn write_outputs(study: &Study, out: &Path, plots: bool) -> anyhow::Result<Vec<PathBuf>> {
     fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let json = out.join("identify.json");
-    let mut file = fs::File::create(&json)?;
-    serde_json::to_writer_pretty(&mut file, study)?;
-    file.write_all(b"\n")?;
+    let mut text = serde_json::to_vec_pretty(study)?;
+    text.push(b'\n');
+    crate::store::write_atomic(&json, &text)?;
     let csv_path = out.join("identify.csv");
-    let mut writer = csv::Writer::from_path(&csv_path)?;
-    for row in &study.rows {
-        writer.serialize(row)?;
-    }
-    writer.flush()?;
+    crate::store::write_csv(&csv_path, &study.rows)?;
     let mut written = vec![json, csv_path];
     if plots {
         written.extend(identification_figure(study).save(&out.join("identification_rate"))?);
@@ -76,7 +72,7 @@ pub fn identification_figure(study: &Study) -> Figure {
             }
         })
         .collect();
-    let runs = study.config.runs.end - study.config.runs.start;
+    let runs = study.records.len();
     Figure::single(Panel {
         title: format!("Identification rate of θ* (Grid World, {runs} runs)"),
         x_label: "budget n (queries)".into(),

@@ -14,6 +14,7 @@
 //! - [`score_tables`]: the oracle and realistic score tables (§11), built once per
 //!   experiment and shared by all runs;
 //! - [`results`]: result files in the reference's layout, summaries, merging of run ranges;
+//! - [`result_dir`]: an output directory shared by invocations: locked, checked, resumable;
 //! - [`metrics`]: transfer metrics (jump-start, asymptotic performance, total reward,
 //!   transfer ratio, time to threshold);
 //! - [`figures`]: learning curves and sample scatters.
@@ -30,6 +31,7 @@ pub mod figures;
 pub mod gp;
 pub mod metrics;
 pub mod protocol;
+pub mod result_dir;
 pub mod results;
 pub mod score_tables;
 pub mod sources;

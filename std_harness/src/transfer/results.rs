@@ -1,6 +1,7 @@
 //! Result files in the reference's layout (spec §3.4): one `<algorithm>.json` per algorithm
-//! with `experiment`, `n_runs` and `runs[]`, each run with its parameters and `steps[]`;
-//! the aggregated `summary.csv`; and merging of runs computed separately (`--runs A..B`).
+//! with `experiment`, `n_runs` and `runs[]`, each run with its parameters and `steps[]`
+//! (and the command that made them, so the outputs can be regenerated elsewhere); the
+//! aggregated `summary.csv`; and merging of runs computed separately (`--runs A..B`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -36,6 +37,11 @@ pub const SAMPLE_RUNS: usize = 3;
 pub struct ResultFile {
     /// The experiment's configuration (the same for every run; runs merge only when equal).
     pub experiment: serde_json::Value,
+    /// The command line that computes these runs, without the options that only say where
+    /// and how (`--runs`, `--out`, `--threads`, …): `awfqi-harness merge` regenerates the
+    /// summary and plots with it. Empty when unknown.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub command: Vec<String>,
     /// Number of runs in the file.
     pub n_runs: usize,
     /// The runs, by increasing index.
@@ -48,9 +54,18 @@ impl ResultFile {
         runs.sort_by_key(|r| r.run);
         Self {
             experiment,
+            command: Vec::new(),
             n_runs: runs.len(),
             runs,
         }
+    }
+
+    /// The file recording `command` (kept as it was when `command` is empty).
+    pub fn with_command(mut self, command: &[String]) -> Self {
+        if !command.is_empty() {
+            self.command = command.to_vec();
+        }
+        self
     }
 
     /// Merges `other`'s runs into this file: a run index present in both takes `other`'s.
@@ -77,14 +92,11 @@ impl ResultFile {
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
     }
 
-    /// Writes the file (pretty JSON) atomically: into `<path>.partial`, then renamed, so an
-    /// interrupted or failed write never leaves a file that looks complete.
+    /// Writes the file (pretty JSON) atomically ([`crate::store::write_atomic`]): an
+    /// interrupted or failed write leaves the previous file as it was.
     pub fn write(&self, path: &Path) -> anyhow::Result<()> {
-        let text = serde_json::to_string_pretty(self)?;
-        let partial = path.with_extension("json.partial");
-        std::fs::write(&partial, text + "\n")
-            .with_context(|| format!("writing {}", partial.display()))?;
-        std::fs::rename(&partial, path).with_context(|| format!("writing {}", path.display()))
+        let text = serde_json::to_string_pretty(self)? + "\n";
+        crate::store::write_atomic(path, text.as_bytes())
     }
 
     /// Per-step statistics across runs (§3.4 aggregation).
@@ -143,14 +155,9 @@ pub struct SummaryRow {
 }
 
 /// Writes `summary.csv` with the columns `algorithm,step,n_episodes,n_target_samples,mean,
-/// stderr,runs`.
+/// stderr,runs` (atomically).
 pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> anyhow::Result<()> {
-    let mut w = csv::Writer::from_path(path)?;
-    for r in rows {
-        w.serialize(r)?;
-    }
-    w.flush()?;
-    Ok(())
+    crate::store::write_csv(path, rows)
 }
 
 #[cfg(test)]

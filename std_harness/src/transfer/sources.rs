@@ -422,13 +422,27 @@ impl<const D: usize> SourceSet<D> {
         })
     }
 
-    /// Writes the datasets into `dir` under `layout`'s file names.
+    /// Writes the datasets into `dir` under `layout`'s file names, each atomically.
+    ///
+    /// Errors: a file there already holds other data (it is left as it is), or a write
+    /// fails. A file that already holds these data is left untouched.
     pub fn write_dir(&self, dir: &Path, layout: &SourceLayout) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir)?;
         for (k, s) in self.sources.iter().enumerate() {
             let path = dir.join(layout.file_name(k + 1));
-            std::fs::write(&path, s.to_csv(layout))
-                .with_context(|| format!("writing {}", path.display()))?;
+            let csv = s.to_csv(layout);
+            match std::fs::read(&path) {
+                // Another shard of the same configuration wrote them already.
+                Ok(old) if old == csv.as_bytes() => continue,
+                Ok(_) => bail!(
+                    "{} holds other source data (another --seed or generation budget?); \
+                     nothing was replaced: use another --out or move it away",
+                    path.display()
+                ),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => bail!("reading {}: {e}", path.display()),
+            }
+            crate::store::write_atomic(&path, csv.as_bytes())?;
         }
         Ok(())
     }

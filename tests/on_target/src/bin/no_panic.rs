@@ -36,11 +36,12 @@ use awfqi::weights::{
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
-    ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HyperparameterBounds,
-    Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, Neighbours, Output,
-    QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData,
-    SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings, Transition, TreeFqi,
-    TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy, rollout,
+    ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi,
+    HyperparameterBounds, Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction,
+    Neighbours, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores,
+    SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings,
+    Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy,
+    rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -756,7 +757,27 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
                 let s = [num::<T>(0.4); D];
                 keep((q.value(s, 0), q.max_value(s), q.greedy_action(s)));
                 keep((q.actions(), q.entries().len()));
+                if let QFunction::Hybrid(h) = &q {
+                    keep((h.tiles().entries().len(), h.knn().records().len()));
+                }
                 q.clear();
+            }
+            let mut entries = [FqiEntry::<T>::EMPTY; 400];
+            let mut slots = [KnnRecord::<T, D>::EMPTY; 12];
+            let mut links = [0u16; 12 * 4 * 3];
+            let halves = (
+                TileFqi::new(tilings, actions, &mut entries),
+                KnnFqi::new(neighbours, opaque(actions), &mut slots, &mut links),
+            );
+            if let (Ok(t), Ok(k)) = halves {
+                if let Ok(mut h) = HybridFqi::new(t, k) {
+                    keep(h.fit(&sets, &config));
+                    keep(h.fit_sets(sets.iter().copied(), &config));
+                    let s = [num::<T>(0.3); D];
+                    keep((h.value(s, index(1)), h.max_value(s), h.greedy_action(s)));
+                    keep((h.greedy(s), h.actions()));
+                    h.clear();
+                }
             }
         }
         let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
