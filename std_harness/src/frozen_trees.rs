@@ -9,7 +9,7 @@
 //! query falls in is found once. An iteration then costs one pass over the records per
 //! tree (leaf sums) and one gather per query and tree, instead of growing the trees and
 //! walking every query through them: on the Dam's 65 000 records × 8 releases × 100 trees,
-//! ≈ 20× less per iteration (docs/performance.md).
+//! ≈ 20× less per iteration (docs/large-data.md).
 //!
 //! A query's prediction is the sum of its leaves' values in tree order divided by the
 //! number of trees, the arithmetic of [`Forest::predict_into`], so before any refit the

@@ -221,7 +221,7 @@ pub struct Args {
     pub q_function: Option<crate::joint_q::QFunctionKind>,
     /// FQI keeps the trees of this iteration (≥ 2) and only refits their leaf values in
     /// the later ones, a fixed averaging operator (absent: every iteration grows new trees,
-    /// spec §5). A speed option, compared with the default in docs/performance.md.
+    /// spec §5). A speed option, compared with the default in docs/large-data.md.
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..))]
     pub freeze_trees_after: Option<u64>,
     /// Grid spacing of the score tables. Default: Puddle World 0.1 (both coordinates), Dam
