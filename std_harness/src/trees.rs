@@ -1200,4 +1200,4 @@ impl<const D: usize> ActionForests<D> {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -3,24 +3,10 @@
 
 use super::*;
 use crate::trees::TreeParams;
+use crate::trees::tests::random_set;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::collections::HashMap;
-
-/// Random points in [0, 10]² with targets and weights, some weights exactly 0.
-fn random_set(n: usize, seed: u64) -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
-    let mut r = ChaCha8Rng::seed_from_u64(seed);
-    let mut u = || awfqi::rng::uniform_f64(&mut r);
-    let mut xs = Vec::new();
-    let mut ys = Vec::new();
-    let mut ws = Vec::new();
-    for i in 0..n {
-        xs.push([10.0 * u(), 10.0 * u()]);
-        ys.push(-5.0 + 10.0 * u());
-        ws.push(if i % 4 == 0 { 0.0 } else { 0.1 + 2.0 * u() });
-    }
-    (xs, ys, ws)
-}
 
 fn fitted(n: usize, seed: u64) -> (Forest<2>, Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
     let (xs, ys, ws) = random_set(n, seed);

@@ -8,7 +8,7 @@ fn rng(seed: u64) -> ChaCha8Rng {
 }
 
 /// Random points in [0, 10]² with targets and weights, some weights exactly 0.
-fn random_set(n: usize, seed: u64) -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
+pub(crate) fn random_set(n: usize, seed: u64) -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
     let mut r = rng(seed);
     let mut u = || awfqi::rng::uniform_f64(&mut r);
     let mut xs = Vec::new();

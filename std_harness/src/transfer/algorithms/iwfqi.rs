@@ -230,14 +230,15 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
     }
 }
 
+/// One step's weighted FQI input: the union of target and source records, its reward and
+/// transition weights, and the target reward GP's summary.
+pub type WeightedStep<const D: usize> = (Dataset<D>, Vec<f64>, Vec<f64>, Option<GpSummary>);
+
 impl<const D: usize> Iwfqi<'_, D> {
     /// One step's data for its weighted FQI (§7.2 steps 1–4): collects, then returns the
     /// union of all target records and the sources (target first), its reward and
     /// transition weights (1 for target records), and the target reward GP's summary.
-    pub fn collect_weighted(
-        &mut self,
-        rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<(Dataset<D>, Vec<f64>, Vec<f64>, Option<GpSummary>)> {
+    pub fn collect_weighted(&mut self, rng: &mut ChaCha8Rng) -> anyhow::Result<WeightedStep<D>> {
         self.query(rng)?;
         let (wr_source, ws_source, gp) = self.source_weights(rng)?;
         let n_target = self.run.data.len();
