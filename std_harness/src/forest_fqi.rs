@@ -16,6 +16,7 @@
 //! prefix, say) need no new code. Each call starts from scratch: there is no warm start across
 //! experiment steps (spec §5).
 
+use crate::frozen_trees::FrozenActionForests;
 use crate::trees::{ActionForests, DEFAULT_TREES, TreeParams};
 use awfqi::env::Transition;
 use awfqi::{Error, Result};
@@ -175,6 +176,11 @@ pub struct FqiOptions<'a> {
     pub first_iteration_records: Option<usize>,
     /// Growth limits of every forest (default: fully grown trees, spec §4.1).
     pub tree: TreeParams,
+    /// Keep the trees of this iteration (≥ 2), grown without the impurity stop
+    /// ([`crate::trees::Forest::refit_fine`]), and only refit their leaf values in later
+    /// iterations ([`crate::frozen_trees`]; `None`, the default: every iteration grows new
+    /// trees, spec §5). An option, not the spec's FQI.
+    pub freeze_after: Option<usize>,
 }
 
 impl<'a> FqiOptions<'a> {
@@ -191,6 +197,7 @@ impl<'a> FqiOptions<'a> {
             rewards: Rewards::Observed,
             first_iteration_records: None,
             tree: TreeParams::FULLY_GROWN,
+            freeze_after: None,
         }
     }
 
@@ -215,7 +222,7 @@ impl<'a> FqiOptions<'a> {
         }
     }
 
-    fn validate(&self, n: usize) -> Result<()> {
+    pub(crate) fn validate(&self, n: usize) -> Result<()> {
         if self.iterations == 0 {
             return Err(Error::InvalidParameter {
                 parameter: "iterations",
@@ -232,6 +239,11 @@ impl<'a> FqiOptions<'a> {
             });
         }
         self.tree.validate()?;
+        if self.freeze_after.is_some_and(|k| k < 2) {
+            return Err(Error::InvalidParameter {
+                parameter: "freeze_after",
+            });
+        }
         if !(0.0..=1.0).contains(&self.gamma) {
             return Err(Error::OutOfRange { parameter: "gamma" });
         }
@@ -309,40 +321,72 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
     };
     let rewards = model_rewards.as_deref().unwrap_or(&data.rewards);
 
-    // Iterations 2..N_it: only non-absorbing records need max_a′ Q(s′, a′).
+    // Iterations 2..N_it: only non-absorbing records of positive weight need
+    // max_a′ Q(s′, a′) (a record of weight 0 adds exactly 0 to every sum of the fit, so its
+    // target is never read; it keeps its reward).
     // They are visited in a space-filling-curve order of their next states: neighbouring
     // queries walk a tree along similar paths, so the lanes of a batch walk
     // (`Forest::predict_into`) end at similar depths. Each query's value does not depend on
     // the order.
-    let live = live_in_locality_order(data);
+    let live = live_in_locality_order(data, transition_weights);
     let live_next: Vec<[f64; D]> = live.iter().map(|&i| data.next_states[i]).collect();
     let mut max_q = vec![0.0; live.len()];
     let mut scratch = vec![0.0; live.len()];
     let mut targets = vec![0.0; n];
     let mut next = ActionForests::zero_with(options.num_actions, options.tree);
-    for _ in 1..options.iterations {
-        q.max_over_actions_into(&live_next, &mut max_q, &mut scratch)?;
+    let mut frozen: Option<FrozenActionForests> = None;
+    for iteration in 2..=options.iterations {
+        match &frozen {
+            Some(f) => f.max_over_actions_into(&q, &mut max_q, &mut scratch)?,
+            None => q.max_over_actions_into(&live_next, &mut max_q, &mut scratch)?,
+        }
         targets.copy_from_slice(rewards);
         for (&i, &v) in live.iter().zip(&max_q) {
             targets[i] += options.gamma * v;
         }
-        next.refit(
-            &data.states,
-            &data.actions,
-            &targets,
-            transition_weights,
-            options.n_trees,
-            rng,
-        )?;
-        std::mem::swap(&mut q, &mut next);
+        // The structure to be frozen is grown without the impurity stop, so that it stays
+        // fine where this iteration's targets happen to be constant.
+        let freezing = options.freeze_after == Some(iteration) && iteration < options.iterations;
+        match &mut frozen {
+            Some(f) => f.refit(&mut q, &targets)?,
+            None => {
+                let (s, a, w, m) = (
+                    &data.states,
+                    &data.actions,
+                    transition_weights,
+                    options.n_trees,
+                );
+                if freezing {
+                    next.refit_fine(s, a, &targets, w, m, rng)?;
+                } else {
+                    next.refit(s, a, &targets, w, m, rng)?;
+                }
+                std::mem::swap(&mut q, &mut next);
+            }
+        }
+        if freezing {
+            frozen = Some(FrozenActionForests::new(
+                &q,
+                &data.states,
+                &data.actions,
+                transition_weights,
+                &live_next,
+            )?);
+        }
     }
     Ok(FqiOutput { q, model_rewards })
 }
 
-/// The indices of the non-absorbing records, ordered by the Morton key of their next
-/// states ([`morton_key`]), the order in which FQI asks for `max_a′ Q(s′, a′)`.
-pub(crate) fn live_in_locality_order<const D: usize>(data: &Dataset<D>) -> Vec<usize> {
-    let mut live: Vec<usize> = (0..data.len()).filter(|&i| !data.absorbing[i]).collect();
+/// The indices of the non-absorbing records of positive `weights`, ordered by the Morton
+/// key of their next states ([`morton_key`]), the order in which FQI asks for
+/// `max_a′ Q(s′, a′)`.
+pub(crate) fn live_in_locality_order<const D: usize>(
+    data: &Dataset<D>,
+    weights: &[f64],
+) -> Vec<usize> {
+    let mut live: Vec<usize> = (0..data.len())
+        .filter(|&i| !data.absorbing[i] && weights[i] > 0.0)
+        .collect();
     let bounds = bounding_box(live.iter().map(|&i| &data.next_states[i]));
     live.sort_by_key(|&i| morton_key(&data.next_states[i], &bounds));
     live

@@ -8,6 +8,7 @@
 pub mod commands;
 pub mod domains;
 pub mod forest_fqi;
+pub mod frozen_trees;
 pub mod gp_large;
 pub mod identification;
 pub mod joint_q;

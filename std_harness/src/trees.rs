@@ -309,6 +309,40 @@ impl<const D: usize> Forest<D> {
         params: &TreeParams,
         rng: &mut R,
     ) -> Result<()> {
+        self.refit_stopping(states, targets, weights, n_trees, params, true, rng)
+    }
+
+    /// [`Forest::refit_with`] without the impurity stop: a node is split until the size
+    /// limits or constant inputs stop it, so the leaves stay small where this fit's
+    /// targets happen to be constant. For a structure that later fits reuse with other
+    /// targets ([`crate::frozen_trees`]). A pure node's children keep its mean, but the
+    /// draws for its splits shift those of the nodes grown after it, so the forest is
+    /// another draw of the spec's, not the same one.
+    ///
+    /// Errors: as [`Forest::refit_with`].
+    pub fn refit_fine<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        params: &TreeParams,
+        rng: &mut R,
+    ) -> Result<()> {
+        self.refit_stopping(states, targets, weights, n_trees, params, false, rng)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn refit_stopping<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        params: &TreeParams,
+        impurity_stop: bool,
+        rng: &mut R,
+    ) -> Result<()> {
         params.validate()?;
         if n_trees == 0 {
             return Err(Error::InvalidParameter {
@@ -321,11 +355,20 @@ impl<const D: usize> Forest<D> {
         if states.len() > limit || n_trees.saturating_mul(2 * states.len()) > u32::MAX as usize {
             return Err(Error::CapacityExceeded { capacity: limit });
         }
-        self.grow(states, targets, weights, n_trees, params, rng);
+        self.grow(
+            states,
+            targets,
+            weights,
+            n_trees,
+            params,
+            impurity_stop,
+            rng,
+        );
         Ok(())
     }
 
     /// Grows the trees on validated input.
+    #[allow(clippy::too_many_arguments)]
     fn grow<R: Rng + ?Sized>(
         &mut self,
         states: &[[f64; D]],
@@ -333,6 +376,7 @@ impl<const D: usize> Forest<D> {
         weights: &[f64],
         n_trees: usize,
         params: &TreeParams,
+        impurity_stop: bool,
         rng: &mut R,
     ) {
         self.nodes.clear();
@@ -368,6 +412,7 @@ impl<const D: usize> Forest<D> {
                 nodes: &mut self.nodes,
                 values: &mut self.values,
                 params,
+                impurity_stop,
             };
             tree.grow(&mut ws.first, &mut ws.second, &mut ws.stack, &mut tree_rng);
         }
@@ -446,22 +491,10 @@ impl<const D: usize> Forest<D> {
     /// Adds the prediction of the tree rooted at `root` at each input to `out`. Walks
     /// [`LANES`] inputs in lockstep, branch-free, so their memory accesses overlap.
     fn accumulate_tree(&self, root: u32, xs: &[[f64; D]], out: &mut [f64]) {
-        let nodes = self.nodes.as_slice();
         let mut chunks_x = xs.chunks_exact(LANES);
         let mut chunks_out = out.chunks_exact_mut(LANES);
         for (cx, co) in (&mut chunks_x).zip(&mut chunks_out) {
-            let mut idx = [root as usize; LANES];
-            loop {
-                let mut moved = false;
-                for (i, x) in idx.iter_mut().zip(cx) {
-                    let next = nodes[*i].step(x);
-                    moved |= next != *i;
-                    *i = next;
-                }
-                if !moved {
-                    break;
-                }
-            }
+            let idx = self.leaves_of_lanes(root, cx);
             for (o, &i) in co.iter_mut().zip(&idx) {
                 *o += self.values[i];
             }
@@ -469,6 +502,69 @@ impl<const D: usize> Forest<D> {
         for (x, o) in chunks_x.remainder().iter().zip(chunks_out.into_remainder()) {
             *o += self.values[self.leaf_of(root, x)];
         }
+    }
+
+    /// The arena indices of the leaves of the tree rooted at `root` that the [`LANES`]
+    /// inputs `xs` fall in, walked in lockstep, branch-free.
+    #[inline(always)]
+    fn leaves_of_lanes(&self, root: u32, xs: &[[f64; D]]) -> [usize; LANES] {
+        let nodes = self.nodes.as_slice();
+        let mut idx = [root as usize; LANES];
+        loop {
+            let mut moved = false;
+            for (i, x) in idx.iter_mut().zip(xs) {
+                let next = nodes[*i].step(x);
+                moved |= next != *i;
+                *i = next;
+            }
+            if !moved {
+                return idx;
+            }
+        }
+    }
+
+    /// The arena index of the leaf of tree `tree` that each input falls in, into `out`
+    /// (batch form of [`Forest::leaf_id`]).
+    ///
+    /// Errors: no such tree ([`Error::OutOfRange`]), `out.len() != xs.len()`
+    /// ([`Error::InvalidParameter`]).
+    pub fn leaf_ids_into(&self, tree: usize, xs: &[[f64; D]], out: &mut [u32]) -> Result<()> {
+        let &root = self
+            .roots
+            .get(tree)
+            .ok_or(Error::OutOfRange { parameter: "tree" })?;
+        if out.len() != xs.len() {
+            return Err(Error::InvalidParameter { parameter: "out" });
+        }
+        let mut chunks_x = xs.chunks_exact(LANES);
+        let mut chunks_out = out.chunks_exact_mut(LANES);
+        for (cx, co) in (&mut chunks_x).zip(&mut chunks_out) {
+            let idx = self.leaves_of_lanes(root, cx);
+            for (o, &i) in co.iter_mut().zip(&idx) {
+                *o = i as u32;
+            }
+        }
+        for (x, o) in chunks_x.remainder().iter().zip(chunks_out.into_remainder()) {
+            *o = self.leaf_of(root, x) as u32;
+        }
+        Ok(())
+    }
+
+    /// The node values by arena index (a leaf's prediction; 0 at splits).
+    pub(crate) fn node_values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The node values by arena index, to give a fixed structure new leaf values.
+    pub(crate) fn node_values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
+    /// `true` when arena index `node` is a leaf.
+    pub(crate) fn is_leaf(&self, node: usize) -> bool {
+        self.nodes
+            .get(node)
+            .is_some_and(|n| n.left as usize == node)
     }
 }
 
@@ -529,6 +625,8 @@ struct Tree<'a> {
     nodes: &'a mut Vec<Node>,
     values: &'a mut Vec<f64>,
     params: &'a TreeParams,
+    /// Whether a node of impurity `≤` [`MIN_IMPURITY`] is a leaf (spec §4.1).
+    impurity_stop: bool,
 }
 
 impl Tree<'_> {
@@ -575,7 +673,8 @@ impl Tree<'_> {
             let impurity = st.q / st.w - value * value;
             // A zero-weight node (impurity NaN) is a leaf too; only a degenerate root could
             // be one, and the forest never grows it.
-            if impurity <= MIN_IMPURITY || impurity.is_nan() || src.len() < self.params.min_node() {
+            let pure = self.impurity_stop && impurity <= MIN_IMPURITY;
+            if pure || impurity.is_nan() || src.len() < self.params.min_node() {
                 continue;
             }
             if let [a, b] = src {
@@ -897,6 +996,35 @@ impl<const D: usize> ActionForests<D> {
         n_trees: usize,
         rng: &mut R,
     ) -> Result<()> {
+        self.refit_stopping(states, actions, targets, weights, n_trees, true, rng)
+    }
+
+    /// [`ActionForests::refit`] without the impurity stop ([`Forest::refit_fine`]).
+    ///
+    /// Errors: as [`ActionForests::refit`].
+    pub fn refit_fine<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        actions: &[usize],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        rng: &mut R,
+    ) -> Result<()> {
+        self.refit_stopping(states, actions, targets, weights, n_trees, false, rng)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn refit_stopping<R: Rng + ?Sized>(
+        &mut self,
+        states: &[[f64; D]],
+        actions: &[usize],
+        targets: &[f64],
+        weights: &[f64],
+        n_trees: usize,
+        impurity_stop: bool,
+        rng: &mut R,
+    ) -> Result<()> {
         if actions.len() != states.len() {
             return Err(Error::InvalidParameter {
                 parameter: "actions",
@@ -925,12 +1053,13 @@ impl<const D: usize> ActionForests<D> {
             buf.weights.push(w);
         }
         for (forest, buf) in self.forests.iter_mut().zip(&self.buffers) {
-            forest.refit_with(
+            forest.refit_stopping(
                 &buf.states,
                 &buf.targets,
                 &buf.weights,
                 n_trees,
                 &self.params,
+                impurity_stop,
                 rng,
             )?;
         }
@@ -945,6 +1074,11 @@ impl<const D: usize> ActionForests<D> {
     /// The forest of `action`, or `None` when out of range.
     pub fn forest(&self, action: usize) -> Option<&Forest<D>> {
         self.forests.get(action)
+    }
+
+    /// The forest of `action`, mutable (a frozen structure's new leaf values), or `None`.
+    pub(crate) fn forest_mut(&mut self, action: usize) -> Option<&mut Forest<D>> {
+        self.forests.get_mut(action)
     }
 
     /// `Q(state, action)`.
@@ -1066,4 +1200,4 @@ impl<const D: usize> ActionForests<D> {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -243,6 +243,11 @@ pub struct Args {
     /// space it leaves undeclared). An ablation; FQI on 2-D states (Dam, Puddle World) only.
     #[arg(long, value_enum)]
     pub q_function: Option<crate::joint_q::QFunctionKind>,
+    /// FQI keeps the trees of this iteration (≥ 2) and only refits their leaf values in
+    /// the later ones, a fixed averaging operator (absent: every iteration grows new trees,
+    /// spec §5). A speed option, compared with the default in docs/large-data.md.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(2..))]
+    pub freeze_trees_after: Option<u64>,
     /// Grid spacing of the score tables. Default: Puddle World 0.1 (both coordinates), Dam
     /// 10 (storage; every day), Acrobot π/6 (angles; 9 values per velocity).
     #[arg(long)]
@@ -740,6 +745,7 @@ pub fn build_experiment<const D: usize>(
     protocol.trees = config.trees;
     protocol.first_step = config.args.first_step.unwrap_or_default();
     protocol.q_function = config.args.q_function.unwrap_or_default();
+    protocol.freeze_trees_after = config.args.freeze_trees_after.map(|k| k as usize);
     anyhow::ensure!(
         protocol.q_function.is_per_action()
             || (D == 2 && config.algorithms.iter().all(|&a| !a.is_active())),

@@ -328,3 +328,95 @@ fn morton_key_interleaves_the_quantised_coordinates() {
         [(0.0, 0.0); 2]
     );
 }
+
+#[test]
+fn frozen_trees_reach_the_chains_q_star_too() {
+    // Fully grown trees only merge records of equal targets. From iteration 5 on, two
+    // records of an action have equal targets exactly when their Q* is equal (before, the
+    // horizon hides the goal from the farthest states: at iteration 4, left from states
+    // 0, 1 and 2 still look alike), so trees frozen after iteration 5 are as fine as
+    // regrown ones and the frozen iterations still converge to Q*.
+    let gamma: f64 = 0.99;
+    let v = |s: usize| -(1.0 - gamma.powi(4 - s as i32)) / (1.0 - gamma);
+    let options = FqiOptions {
+        iterations: 10,
+        num_actions: 2,
+        freeze_after: Some(5),
+        ..FqiOptions::plain()
+    };
+    let out = fqi(&chain(), &options, &mut rng(1)).unwrap();
+    for s in 0..4 {
+        let x = [s as f64, 0.0];
+        let right = out.q.predict(&x, 0).unwrap();
+        assert!((right - v(s)).abs() < 1e-12, "Q({s}, right) = {right}");
+        let left = out.q.predict(&x, 1).unwrap();
+        let expected_left = -1.0 + gamma * v(s.saturating_sub(1));
+        assert!((left - expected_left).abs() < 1e-12, "{left}");
+    }
+}
+
+#[test]
+fn freezing_at_or_after_the_last_iteration_changes_no_bit() {
+    // A noisy 2-D problem where the trees average several records per leaf.
+    let mut r = rng(11);
+    let mut data = Dataset::new();
+    for i in 0..300 {
+        let x = [
+            10.0 * awfqi::rng::uniform_f64(&mut r),
+            10.0 * awfqi::rng::uniform_f64(&mut r),
+        ];
+        let next = [
+            (x[0] + awfqi::rng::uniform_f64(&mut r)).min(10.0),
+            x[1] * 0.9,
+        ];
+        data.push(Transition {
+            state: x,
+            action: i % 3,
+            reward: -x[0] + awfqi::rng::uniform_f64(&mut r),
+            next_state: next,
+            absorbing: i % 17 == 0,
+        });
+    }
+    let weights: Vec<f64> = (0..300).map(|i| 0.5 + (i % 5) as f64).collect();
+    let base = FqiOptions {
+        iterations: 6,
+        n_trees: 7,
+        num_actions: 3,
+        tree: TreeParams {
+            min_samples_split: 6,
+            min_samples_leaf: 2,
+        },
+        ..FqiOptions::iwfqi(&weights, &weights)
+    };
+    let grid: Vec<[f64; 2]> = (0..50).map(|i| [i as f64 / 5.0, (i % 7) as f64]).collect();
+    let values = |options: &FqiOptions<'_>| -> Vec<u64> {
+        let q = fqi(&data, options, &mut rng(12)).unwrap().q;
+        grid.iter()
+            .flat_map(|x| (0..3).map(|a| q.predict(x, a).unwrap().to_bits()))
+            .collect()
+    };
+    let faithful = values(&base);
+    for k in [6, 9] {
+        let frozen = FqiOptions {
+            freeze_after: Some(k),
+            ..base
+        };
+        assert_eq!(values(&frozen), faithful, "freeze_after {k}");
+    }
+    // Frozen earlier, the structure differs from iteration 3 on, and so do the values.
+    let early = FqiOptions {
+        freeze_after: Some(2),
+        ..base
+    };
+    assert_ne!(values(&early), faithful);
+    let bad = FqiOptions {
+        freeze_after: Some(1),
+        ..base
+    };
+    assert_eq!(
+        fqi(&data, &bad, &mut rng(12)).map(|_| ()),
+        Err(Error::InvalidParameter {
+            parameter: "freeze_after"
+        })
+    );
+}

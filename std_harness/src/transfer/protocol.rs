@@ -49,6 +49,10 @@ pub struct Protocol {
     /// code's single forest over state and action value on the Dam, an ablation).
     #[serde(default, skip_serializing_if = "QFunctionKind::is_per_action")]
     pub q_function: QFunctionKind,
+    /// FQI keeps the trees of this iteration and only refits their leaf values afterwards
+    /// (absent: new trees every iteration, spec §5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub freeze_trees_after: Option<usize>,
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
@@ -95,6 +99,7 @@ impl Protocol {
             tree: p.tree,
             first_step: FirstStep::Uniform,
             q_function: QFunctionKind::PerAction,
+            freeze_trees_after: None,
         }
     }
 }

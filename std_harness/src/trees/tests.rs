@@ -8,7 +8,7 @@ fn rng(seed: u64) -> ChaCha8Rng {
 }
 
 /// Random points in [0, 10]² with targets and weights, some weights exactly 0.
-fn random_set(n: usize, seed: u64) -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
+pub(crate) fn random_set(n: usize, seed: u64) -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
     let mut r = rng(seed);
     let mut u = || awfqi::rng::uniform_f64(&mut r);
     let mut xs = Vec::new();
@@ -471,4 +471,35 @@ fn growth_limits_bound_node_and_leaf_sizes() {
         min_samples_leaf: 1,
     };
     assert!(b.refit_with(&xs, &ys, &ones, 5, &bad, &mut rng(3)).is_err());
+}
+
+#[test]
+fn fine_growth_splits_pure_nodes_down_to_the_size_limit() {
+    // Constant targets: every node is pure, so the spec's trees are single leaves, while
+    // the fine ones split until min_samples_split stops them; both predict the constant.
+    let (xs, _, _) = random_set(200, 21);
+    let (ys, ws) = (vec![3.5; xs.len()], vec![1.0; xs.len()]);
+    let params = TreeParams {
+        min_samples_split: 10,
+        min_samples_leaf: 1,
+    };
+    let mut spec = Forest::empty();
+    spec.refit_with(&xs, &ys, &ws, 5, &params, &mut rng(22))
+        .unwrap();
+    assert_eq!(spec.n_nodes(), 5);
+    let mut fine = Forest::empty();
+    fine.refit_fine(&xs, &ys, &ws, 5, &params, &mut rng(22))
+        .unwrap();
+    assert!(fine.n_nodes() > 5 * 20, "{}", fine.n_nodes());
+    for t in 0..5 {
+        for members in leaves_of(&fine, t, &xs).values() {
+            // A leaf of the fine tree is below the size limit or holds equal inputs.
+            let distinct = members.iter().any(|&i| xs[i] != xs[members[0]]);
+            assert!(members.len() < 10 || !distinct, "{}", members.len());
+        }
+    }
+    for x in &xs {
+        assert!((fine.predict(x) - 3.5).abs() < 1e-12);
+        assert_eq!(spec.predict(x), 3.5);
+    }
 }

@@ -230,6 +230,28 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
     }
 }
 
+/// One step's weighted FQI input: the union of target and source records, its reward and
+/// transition weights, and the target reward GP's summary.
+pub type WeightedStep<const D: usize> = (Dataset<D>, Vec<f64>, Vec<f64>, Option<GpSummary>);
+
+impl<const D: usize> Iwfqi<'_, D> {
+    /// One step's data for its weighted FQI (§7.2 steps 1–4): collects, then returns the
+    /// union of all target records and the sources (target first), its reward and
+    /// transition weights (1 for target records), and the target reward GP's summary.
+    pub fn collect_weighted(&mut self, rng: &mut ChaCha8Rng) -> anyhow::Result<WeightedStep<D>> {
+        self.query(rng)?;
+        let (wr_source, ws_source, gp) = self.source_weights(rng)?;
+        let n_target = self.run.data.len();
+        let mut union: Dataset<D> = self.run.data.iter().copied().collect();
+        union.extend_from(&self.sources);
+        let mut wr = vec![1.0; n_target];
+        wr.extend_from_slice(&wr_source);
+        let mut ws = vec![1.0; n_target];
+        ws.extend_from_slice(&ws_source);
+        Ok((union, wr, ws, gp))
+    }
+}
+
 /// The ideal weights of §7.7 for every source record, in order: reward weights with
 /// variance `v_r` and transition weights (product over the state coordinates) with `v_s`,
 /// from the target's and the record's source's models; uncapped. With
@@ -279,15 +301,7 @@ pub fn ideal_weights<const D: usize>(
 
 impl<const D: usize> EpisodicLearner<D> for Iwfqi<'_, D> {
     fn learn(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
-        self.query(rng)?;
-        let (wr_source, ws_source, gp) = self.source_weights(rng)?;
-        let n_target = self.run.data.len();
-        let mut union: Dataset<D> = self.run.data.iter().copied().collect();
-        union.extend_from(&self.sources);
-        let mut wr = vec![1.0; n_target];
-        wr.extend_from_slice(&wr_source);
-        let mut ws = vec![1.0; n_target];
-        ws.extend_from_slice(&ws_source);
+        let (union, wr, ws, gp) = self.collect_weighted(rng)?;
         let options = self.run.options(FqiOptions::iwfqi(&wr, &ws));
         self.run.q = Some(self.run.fit(&union, &options, rng)?);
         let summary = |w: &[f64]| -> anyhow::Result<(f64, f64)> {
