@@ -24,5 +24,6 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let domain = acrobot::domain();
     let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
-    super::transfer::run(&config, domain, None, None)
+    let data = crate::transfer::domain_data::acrobot::data();
+    super::transfer::run(&config, domain, data, None, None)
 }

@@ -23,5 +23,6 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let domain = dam::domain();
     let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
-    super::transfer::run(&config, domain, None, None)
+    let data = crate::transfer::domain_data::dam::data();
+    super::transfer::run(&config, domain, data, None, None)
 }

@@ -39,5 +39,6 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         learner: awfqi_kernel::with_learner,
         adaptive_learner: adaptive_kernel::with_learner,
     };
-    super::transfer::run(&config, domain, Some(dynamics), Some(hooks))
+    let data = crate::transfer::domain_data::puddle::data(dynamics);
+    super::transfer::run(&config, domain, data, Some(dynamics), Some(hooks))
 }

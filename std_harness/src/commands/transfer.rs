@@ -39,6 +39,7 @@ use crate::transfer::algorithms::rbt::ComplianceSum;
 use crate::transfer::algorithms::{
     Algorithm, Experiment, ScopedLearner, TransferOptions, Variances,
 };
+use crate::transfer::domain_data::DomainData;
 use crate::transfer::gp::{FixedGpUpdate, GpOptions, GpSearch};
 use crate::transfer::metrics::{TransferMetrics, markdown_table, transfer_metrics};
 use crate::transfer::protocol::{self, Protocol};
@@ -631,20 +632,25 @@ fn experiment_json<const D: usize>(
 fn load_sources<const D: usize>(
     config: &Config,
     domain: &Domain<D>,
+    data: &DomainData<D>,
 ) -> anyhow::Result<SourceSet<D>> {
     let args = &config.args;
     match args.sources.as_str() {
-        "published" => (domain.load_published)(),
+        "published" => (data.published)(),
         "generate" => {
-            let generation = domain
-                .generation
-                .with_budget(config.iterations, config.trees);
+            let generation = data.generation.with_budget(config.iterations, config.trees);
             eprintln!("generating source data ({generation:?})…");
             let start = Instant::now();
-            let set =
-                crate::transfer::sources::generate(domain, &generation, &config.gp(), args.seed)?;
+            let set = crate::transfer::sources::generate(
+                domain,
+                &data.weighting,
+                &data.layout,
+                &generation,
+                &config.gp(),
+                args.seed,
+            )?;
             let dir = config.out.join("sources");
-            set.write_dir(&dir, &domain.source_layout)?;
+            set.write_dir(&dir, &data.layout)?;
             eprintln!(
                 "source data: {:?} records, written to {} ({:.1} s)",
                 set.sources.iter().map(|s| s.len()).collect::<Vec<_>>(),
@@ -655,7 +661,7 @@ fn load_sources<const D: usize>(
         }
         dir => SourceSet::read_layout(
             Path::new(dir),
-            &domain.source_layout,
+            &data.layout,
             domain.sources.len(),
             domain.num_actions(),
         ),
@@ -667,11 +673,12 @@ fn load_sources<const D: usize>(
 pub fn build_experiment<const D: usize>(
     config: &Config,
     domain: Arc<Domain<D>>,
+    data: Arc<DomainData<D>>,
     dynamics: Option<Dynamics>,
     hooks: Option<KernelHooks<D>>,
 ) -> anyhow::Result<Experiment<D>> {
     let args = &config.args;
-    let sources = Arc::new(load_sources(config, &domain)?);
+    let sources = Arc::new(load_sources(config, &domain, &data)?);
     let mut protocol = Protocol::published(&domain, config.steps, config.episodes_per_step);
     protocol.dynamics = dynamics;
     protocol.iterations = config.iterations;
@@ -714,6 +721,7 @@ pub fn build_experiment<const D: usize>(
     let source_gps = if wants(Algorithm::Awfqi) || wants(Algorithm::AwfqiAdaptive) {
         Some(score_tables::fit_source_gps(
             &domain,
+            &data.weighting,
             &sources,
             &options.gp,
             args.seed,
@@ -742,11 +750,12 @@ pub fn build_experiment<const D: usize>(
     let kernel = match (wants_kernel, hooks) {
         (true, Some(h)) => {
             let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
-            let q = KernelQFunction::from_args(
-                args.kernel_q,
-                args.kernel_resolution,
-                args.kernel_tilings,
-            )?;
+            let q = match args.kernel_q {
+                KernelQ::Tabular => KernelQFunction::tabular(args.kernel_resolution)?,
+                KernelQ::Tiles => {
+                    KernelQFunction::tiles(args.kernel_resolution, args.kernel_tilings)?
+                }
+            };
             let mut kernel = KernelConfig::new(config.setting, config.spacing).with_q(q);
             // The adaptive kernel's tiles (`tiles`, `hybrid`): 12 × 12 × 8 unless a
             // resolution is given, which then sets both kernels' tiles.
@@ -800,6 +809,7 @@ pub fn build_experiment<const D: usize>(
     }
     let mut experiment = Experiment {
         domain,
+        data,
         protocol,
         sources,
         options,
@@ -886,6 +896,7 @@ fn cost_rank(a: Algorithm) -> usize {
 pub fn run<const D: usize>(
     config: &Config,
     domain: Domain<D>,
+    data: DomainData<D>,
     dynamics: Option<Dynamics>,
     hooks: Option<KernelHooks<D>>,
 ) -> anyhow::Result<()> {
@@ -893,7 +904,7 @@ pub fn run<const D: usize>(
         .num_threads(config.args.threads)
         .build()
         .context("building the thread pool")?;
-    pool.install(|| run_in_pool(config, Arc::new(domain), dynamics, hooks))
+    pool.install(|| run_in_pool(config, Arc::new(domain), Arc::new(data), dynamics, hooks))
 }
 
 /// Creates `out` and checks that a file can be written in it, before any run starts.
@@ -916,6 +927,7 @@ pub fn ensure_writable(out: &Path) -> anyhow::Result<()> {
 fn run_in_pool<const D: usize>(
     config: &Config,
     domain: Arc<Domain<D>>,
+    data: Arc<DomainData<D>>,
     dynamics: Option<Dynamics>,
     hooks: Option<KernelHooks<D>>,
 ) -> anyhow::Result<()> {
@@ -935,7 +947,7 @@ fn run_in_pool<const D: usize>(
         },
         ..config.clone()
     };
-    let experiment = build_experiment(&build, domain, dynamics, hooks)?;
+    let experiment = build_experiment(&build, domain, data, dynamics, hooks)?;
     let runs: Vec<usize> = if args.no_run {
         Vec::new()
     } else {

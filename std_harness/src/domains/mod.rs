@@ -1,8 +1,9 @@
 //! The tasks the transfer experiments run on, behind one abstraction: a [`Domain`] is a
 //! target and its source MDPs ([`Task`]s, in `f64`), the action set, the horizon and
 //! discount, the evaluation start states, and the configuration the published experiments
-//! used ([`Published`]). The protocol, the algorithms and the result files
-//! (`crate::transfer`) are written once over `Domain<D>`, `D` the state dimension.
+//! used ([`Published`]). A domain knows nothing of the experiments run on it: the
+//! protocol, the algorithms, the source datasets and the result files are written above
+//! it, once over `Domain<D>`, `D` the state dimension.
 //!
 //! - [`puddle`]: the continuous Puddle World (spec §2), both dynamics variants, D = 2;
 //! - [`dam`]: the IWFQI paper's water reservoir, D = 2;
@@ -23,8 +24,6 @@ use awfqi::env::Transition;
 use awfqi::policy::Policy;
 use rand_chacha::ChaCha8Rng;
 
-use crate::transfer::gp::GpSpec;
-use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
 use crate::trees::TreeParams;
 
 /// One transition record `(s, a, r, s′, ω)` in `f64`.
@@ -107,19 +106,6 @@ pub struct Published {
     pub rbt_total: usize,
 }
 
-/// How IWFQI weighs the source records of a domain: the GP of the reward and, per state
-/// dimension, the GP of the next-state coordinate when that dimension is weighted.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Weighting<const D: usize> {
-    /// The reward GP.
-    pub reward: GpSpec,
-    /// Per state dimension: `Some(GP)` when the published runs weighed it.
-    pub transition: [Option<GpSpec>; D],
-    /// The GP of a dimension the published runs did not weigh, used when transition
-    /// weights are forced on (`--transition-weights true`).
-    pub transition_fallback: GpSpec,
-}
-
 /// A task with its experiment constants (see the [module docs](self)).
 #[derive(Debug, Clone)]
 pub struct Domain<const D: usize> {
@@ -147,16 +133,8 @@ pub struct Domain<const D: usize> {
     /// `true` when the evaluation also records the average reward per step
     /// (`perf_avg_greedy`, the Dam's second criterion).
     pub average_reward: bool,
-    /// The IWFQI weighting of the published runs.
-    pub weighting: Weighting<D>,
     /// The published configuration.
     pub published: Published,
-    /// The CSV layout of the domain's source files.
-    pub source_layout: SourceLayout,
-    /// The published source datasets (embedded).
-    pub load_published: fn() -> anyhow::Result<SourceSet<D>>,
-    /// How fresh source data are generated (`--sources generate`).
-    pub generation: Generation,
     /// The grid rows `(state, action)` of the score tables for a spacing (grid and both
     /// modes, spec §11.1).
     pub grid_rows: fn(f64) -> anyhow::Result<Rows<D>>,

@@ -10,9 +10,7 @@ use awfqi::env::{
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
-use crate::transfer::gp::GpSpec;
-use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
+use super::{Domain, IdealMeans, Published, Record, Task};
 use crate::trees::TreeParams;
 
 impl Task<2> for PuddleWorld<f64> {
@@ -44,15 +42,15 @@ impl Task<2> for PuddleWorld<f64> {
     }
 }
 
-/// Puddle World with `dynamics`: the target and sources 1–3 of spec §2.6; IWFQI's GPs are
-/// fitted by marginal likelihood (§4.2), transition weights on both coordinates in the
-/// puddle-based variant (§7.6).
+/// Grid spacing of the thesis's score tables (`dx = dy = 0.1`).
+pub const GRID_SPACING: f64 = 0.1;
+
+/// Puddle World with `dynamics`: the target and sources 1–3 of spec §2.6.
 pub fn domain(dynamics: Dynamics) -> Domain<2> {
     let sources: Vec<Arc<dyn Task<2>>> = PuddleWorld::<f64>::sources(dynamics)
         .into_iter()
         .map(|w| Arc::new(w) as Arc<dyn Task<2>>)
         .collect();
-    let weighted = (dynamics == Dynamics::PuddleBased).then_some(GpSpec::fitted());
     Domain {
         name: "puddle world",
         command: "puddle",
@@ -65,11 +63,6 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
         discount: PUDDLE_DISCOUNT,
         evaluation_starts: vec![PUDDLE_INITIAL_STATE; PUDDLE_EVALUATION_ROLLOUTS],
         average_reward: false,
-        weighting: Weighting {
-            reward: GpSpec::fitted(),
-            transition: [weighted.clone(), weighted],
-            transition_fallback: GpSpec::fitted(),
-        },
         published: Published {
             steps: 6,
             episodes_per_step: 10,
@@ -84,14 +77,8 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
             max_gp: crate::gp_large::MAX_GP,
             rbt_total: 500,
         },
-        source_layout: SourceLayout::puddle(dynamics),
-        load_published: match dynamics {
-            Dynamics::Shared => || SourceSet::published(Dynamics::Shared),
-            Dynamics::PuddleBased => || SourceSet::published(Dynamics::PuddleBased),
-        },
-        generation: Generation::puddle(),
         grid_rows,
-        grid_spacing: crate::transfer::score_tables::GRID_SPACING,
+        grid_spacing: GRID_SPACING,
     }
 }
 

@@ -79,6 +79,35 @@ impl GpSpec {
     }
 }
 
+/// How IWFQI weighs the source records of a domain: the GP of the reward and, per state
+/// dimension, the GP of the next-state coordinate when that dimension is weighted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Weighting<const D: usize> {
+    /// The reward GP.
+    pub reward: GpSpec,
+    /// Per state dimension: `Some(GP)` when the published runs weighed it.
+    pub transition: [Option<GpSpec>; D],
+    /// The GP of a dimension the published runs did not weigh, used when transition
+    /// weights are forced on (`--transition-weights true`).
+    pub transition_fallback: GpSpec,
+}
+
+impl<const D: usize> Weighting<D> {
+    /// The GP of `output`: the reward GP, the weighted dimension's GP, or the fallback for
+    /// an unweighted dimension.
+    pub fn gp_spec(&self, output: Output) -> GpSpec {
+        match output {
+            Output::Reward => self.reward.clone(),
+            Output::Next(d) => self
+                .transition
+                .get(d)
+                .cloned()
+                .flatten()
+                .unwrap_or_else(|| self.transition_fallback.clone()),
+        }
+    }
+}
+
 /// How the fitted GPs are fitted: restarts, the training cap and the search strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct GpOptions {
@@ -425,14 +454,14 @@ pub struct GrowingRecordGp {
 }
 
 impl GrowingRecordGp {
-    /// The domain's GP of `output`, to be predicted at `batches` of inputs (one per
-    /// source); `None` when that GP's kernel is fitted, not fixed.
+    /// The GP `spec` of `output` on `domain`, to be predicted at `batches` of inputs (one
+    /// per source); `None` when that GP's kernel is fitted, not fixed.
     pub fn new<const D: usize>(
-        domain: &Domain<D>,
+        _domain: &Domain<D>,
+        spec: &GpSpec,
         output: Output,
         batches: &[Vec<GpInput>],
     ) -> Option<anyhow::Result<Self>> {
-        let spec = domain.gp_spec(output);
         let KernelSpec::Fixed(kernel) = &spec.kernel else {
             return None;
         };
@@ -523,15 +552,16 @@ pub struct SourceGps {
 
 impl SourceGps {
     /// Fits one GP per output on all `records` of a source, in the order of `outputs`,
-    /// with the domain's GP of each output.
+    /// with `weighting`'s GP of each output.
     pub fn fit<const D: usize, R: Rng + ?Sized>(
         domain: &Domain<D>,
+        weighting: &Weighting<D>,
         records: &[Record<D>],
         outputs: &[Output],
         options: &GpOptions,
         rng: &mut R,
     ) -> anyhow::Result<Self> {
-        let specs: Vec<GpSpec> = outputs.iter().map(|&o| domain.gp_spec(o)).collect();
+        let specs: Vec<GpSpec> = outputs.iter().map(|&o| weighting.gp_spec(o)).collect();
         let gps = outputs
             .iter()
             .zip(&specs)
@@ -564,23 +594,6 @@ impl SourceGps {
     /// the realistic score table (§11.2), in batch.
     pub fn means_at(&self, zs: &[GpInput]) -> Vec<Vec<f64>> {
         self.gps.iter().map(|g| g.means(zs)).collect()
-    }
-}
-
-impl<const D: usize> Domain<D> {
-    /// The GP the domain uses for `output`: the weighting's reward GP, the weighted
-    /// dimension's GP, or the fallback for an unweighted dimension.
-    pub fn gp_spec(&self, output: Output) -> GpSpec {
-        match output {
-            Output::Reward => self.weighting.reward.clone(),
-            Output::Next(d) => self
-                .weighting
-                .transition
-                .get(d)
-                .cloned()
-                .flatten()
-                .unwrap_or_else(|| self.weighting.transition_fallback.clone()),
-        }
     }
 }
 

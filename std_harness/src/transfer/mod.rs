@@ -4,6 +4,8 @@
 //! dimension; the commands that run them are [`crate::commands::transfer`] and its
 //! per-domain front ends.
 //!
+//! - [`domain_data`]: each domain's published source data, their layout, their
+//!   generation and IWFQI's GPs;
 //! - [`sources`]: source datasets (the published ones, a user's own in the same CSV layout,
 //!   or freshly generated as each domain's paper says);
 //! - [`gp`]: the GP fits (§4.2, or the published fixed kernels) on records;
@@ -27,6 +29,7 @@
 //! as `--runs 0..10`.
 
 pub mod algorithms;
+pub mod domain_data;
 pub mod figures;
 pub mod gp;
 pub mod metrics;

@@ -13,7 +13,7 @@ use awfqi::score::{PointGrid, RowSet};
 use awfqi::{Real, Transition};
 use rand_chacha::ChaCha8Rng;
 
-use super::gp::{GpOptions, Output, SourceGps};
+use super::gp::{GpOptions, Output, SourceGps, Weighting};
 use super::sources::SourceSet;
 use crate::domains::{Domain, GpInput, Record};
 
@@ -40,9 +40,6 @@ impl Mode {
         }
     }
 }
-
-/// Grid spacing of the thesis (`dx = dy = 0.1`).
-pub const GRID_SPACING: f64 = 0.1;
 
 /// The grid part of a score table's rows (§11.1): a core point grid with its action count
 /// (the kernel's `f32` grid) or explicit `(state, action)` pairs (a domain's
@@ -218,6 +215,7 @@ impl<const D: usize> ScoreTableData<D> {
 /// parallel.
 pub fn fit_source_gps<const D: usize>(
     domain: &Domain<D>,
+    weighting: &Weighting<D>,
     sources: &SourceSet<D>,
     options: &GpOptions,
     seed: u64,
@@ -234,7 +232,14 @@ pub fn fit_source_gps<const D: usize>(
                 max_gp: usize::MAX,
                 ..*options
             };
-            SourceGps::fit(domain, &s.records, &[Output::Reward], &all, &mut rng)
+            SourceGps::fit(
+                domain,
+                weighting,
+                &s.records,
+                &[Output::Reward],
+                &all,
+                &mut rng,
+            )
         })
         .collect()
 }

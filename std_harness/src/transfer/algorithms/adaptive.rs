@@ -425,7 +425,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
                 }
             })
             .collect();
-        let spec = domain.gp_spec(Output::Reward);
+        let spec = self.experiment.data.weighting.gp_spec(Output::Reward);
         let residual = RecordGp::fit_records(
             domain,
             &residuals,
@@ -449,7 +449,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     ) -> anyhow::Result<(Vec<f64>, GpSummary, Vec<Posterior<f64>>)> {
         let domain = &*self.experiment.domain;
         let options = &self.experiment.options;
-        let spec = domain.gp_spec(Output::Reward);
+        let spec = self.experiment.data.weighting.gp_spec(Output::Reward);
         let noise = spec.noise(options.noise);
         let sources = &self.experiment.sources.sources;
         let mut wr = Vec::with_capacity(self.source_records);

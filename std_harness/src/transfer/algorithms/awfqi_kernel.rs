@@ -78,25 +78,24 @@ pub struct TreeKnobs {
 }
 
 impl KernelQFunction {
-    /// The approximator the options name.
+    /// A table of `cells` per axis ([`CELLS`] unless given).
     ///
-    /// Errors: a zero resolution or tiling count.
-    pub fn from_args(
-        q: crate::commands::transfer::KernelQ,
-        resolution: Option<usize>,
-        tilings: usize,
-    ) -> anyhow::Result<Self> {
-        use crate::commands::transfer::KernelQ;
-        let out = match q {
-            KernelQ::Tabular => Self::Tabular(resolution.unwrap_or(CELLS)),
-            KernelQ::Tiles => Self::Tiles(resolution.unwrap_or(TILES), tilings),
-        };
-        match out {
-            Self::Tabular(0) | Self::Tiles(0, _) => {
-                anyhow::bail!("--kernel-resolution must be at least 1")
-            }
-            Self::Tiles(_, 0) => anyhow::bail!("--kernel-tilings must be at least 1"),
-            _ => Ok(out),
+    /// Errors: zero cells.
+    pub fn tabular(cells: Option<usize>) -> anyhow::Result<Self> {
+        match cells.unwrap_or(CELLS) {
+            0 => anyhow::bail!("--kernel-resolution must be at least 1"),
+            n => Ok(Self::Tabular(n)),
+        }
+    }
+
+    /// Tile coding: `tilings` offset tilings of `tiles` per axis ([`TILES`] unless given).
+    ///
+    /// Errors: zero tiles or tilings.
+    pub fn tiles(tiles: Option<usize>, tilings: usize) -> anyhow::Result<Self> {
+        match (tiles.unwrap_or(TILES), tilings) {
+            (0, _) => anyhow::bail!("--kernel-resolution must be at least 1"),
+            (_, 0) => anyhow::bail!("--kernel-tilings must be at least 1"),
+            (n, k) => Ok(Self::Tiles(n, k)),
         }
     }
 

@@ -15,7 +15,7 @@
 //! 5. weighted FQI on target then sources 1..m: iteration 1 fits the reward model with the
 //!    reward weights, later iterations use its predictions and the transition weights.
 //!
-//! The GPs are the domain's ([`crate::domains::Weighting`]): fitted by marginal likelihood
+//! The GPs are the domain's ([`crate::transfer::gp::Weighting`]): fitted by marginal likelihood
 //! for Puddle World, the published fixed kernels for the Dam and Acrobot. The
 //! ideal-weights variant (§7.7) computes the weights once per experiment, from the true
 //! models, with the domain's ideal variances (Puddle World's true 0.01 and 0.04) and no
@@ -143,6 +143,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         rng: &mut ChaCha8Rng,
     ) -> anyhow::Result<(Vec<Vec<Posterior<f64>>>, GpSummary)> {
         let domain = &*self.experiment.domain;
+        let weighting = &self.experiment.data.weighting;
         let noise = self.experiment.options.noise;
         let target = &self.run.data;
         // The growing GP keeps no `K⁻¹`, so the explicit-inverse variance always refits.
@@ -150,7 +151,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         {
             let index = match self.growing.iter().position(|(o, _)| *o == output) {
                 Some(i) => Some(i),
-                None => GrowingRecordGp::new(domain, output, zs)
+                None => GrowingRecordGp::new(domain, &weighting.gp_spec(output), output, zs)
                     .transpose()?
                     .map(|gp| {
                         self.growing.push((output, gp));
@@ -166,7 +167,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
                 self.growing.remove(i);
             }
         }
-        let spec = domain.gp_spec(output);
+        let spec = weighting.gp_spec(output);
         let gp = RecordGp::fit_records(domain, target, output, &spec, &self.gp, rng)?;
         let posteriors = zs
             .iter()

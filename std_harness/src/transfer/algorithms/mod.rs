@@ -18,6 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use self::rbt::ComplianceSum;
+use super::domain_data::DomainData;
 use super::gp::{GpOptions, GpSearch};
 use super::protocol::{Learner, Protocol};
 use super::score_tables::ScoreTableData;
@@ -244,6 +245,8 @@ pub type ScopedLearner<const D: usize> = fn(
 pub struct Experiment<const D: usize = 2> {
     /// The domain.
     pub domain: Arc<Domain<D>>,
+    /// The domain's source data and weighting.
+    pub data: Arc<DomainData<D>>,
     /// The protocol.
     pub protocol: Protocol,
     /// The source datasets.
@@ -299,7 +302,7 @@ impl<const D: usize> Experiment<D> {
     /// The state coordinates IWFQI weighs transitions on: the domain's published ones, all
     /// of them with `--transition-weights true`, none with `false`.
     pub fn transition_dims(&self) -> Vec<usize> {
-        let published = &self.domain.weighting.transition;
+        let published = &self.data.weighting.transition;
         match self.options.transition_weights {
             None => (0..D).filter(|&d| published[d].is_some()).collect(),
             Some(true) => (0..D).collect(),
