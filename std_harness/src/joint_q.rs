@@ -22,7 +22,7 @@ use rand_core::Rng;
 use serde::{Deserialize, Serialize};
 
 /// How FQI represents its Q-function.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum QFunctionKind {
     /// One forest per action (spec §5).

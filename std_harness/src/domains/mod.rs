@@ -66,7 +66,7 @@ pub trait Task<const D: usize>: Send + Sync + Debug {
 }
 
 /// How the ideal weights (spec §7.7) get the models' mean next states.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum IdealMeans {
     /// The exact mean functions ([`Task::mean_next_state`]).

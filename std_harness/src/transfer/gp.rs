@@ -137,17 +137,7 @@ pub struct GpOptions {
 
 /// How a fixed-kernel target GP (the Dam's and Acrobot's) follows the target data, which
 /// only grows from step to step.
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FixedGpUpdate {
     /// Append each step's records to the factor and to the posterior at the source
@@ -188,17 +178,7 @@ pub fn search_checks() -> Vec<SearchCheck> {
 }
 
 /// How the hyperparameter optimisations are spent.
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum GpSearch {
     /// Spec §4.2: every start optimised on all the data.

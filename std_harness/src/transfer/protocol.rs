@@ -52,7 +52,7 @@ pub struct Protocol {
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum FirstStep {
     /// Each action with probability 1/n (spec §3.2).

@@ -18,7 +18,7 @@ use super::sources::SourceSet;
 use crate::domains::{Domain, GpInput, Record};
 
 /// Which rows a table has (§11.1); the thesis's settings 1–3.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// The `(s, a)` of every source record (setting 1).

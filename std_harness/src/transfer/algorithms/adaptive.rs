@@ -137,7 +137,7 @@ pub struct AdaptiveOptions {
 /// Oracle diagnostics of `awfqi-adaptive`: what its loop reaches when FQI's rewards or
 /// weights come from the target's true mean reward (they read the instance, which the
 /// algorithm never does), to tell how much a better reward model could still gain.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AdaptiveOracle {
     /// No oracle: the algorithm.

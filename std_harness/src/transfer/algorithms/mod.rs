@@ -25,8 +25,9 @@ use super::score_tables::ScoreTableData;
 use super::sources::SourceSet;
 use crate::domains::{Domain, IdealMeans};
 
-/// The algorithms of issue 5, in the order the outputs list them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
+/// The algorithms compared, in the order the outputs list them; their names, seed ids,
+/// plot colours and descriptions are one table ([`Algorithm::row`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 pub enum Algorithm {
     /// Plain FQI on target episodes (§5).
     Fqi,
@@ -47,11 +48,25 @@ pub enum Algorithm {
     /// The core's embedded AWFQI (fixed-capacity f32 GP, tabular FQI) on the same protocol.
     AwfqiKernel,
     /// AWFQI with a query distribution recomputed from the target's answers within every
-    /// step (issue 11; not a thesis algorithm).
+    /// step (not a thesis algorithm).
     AwfqiAdaptive,
     /// The core's adaptive AWFQI (`awfqi::AdaptiveAwfqi`, f32, fixed memory) on the same
     /// protocol as `awfqi-adaptive`.
     AwfqiAdaptiveKernel,
+}
+
+/// One row of the algorithm table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AlgorithmRow {
+    /// The name in file names, tables, plots and on the command line.
+    pub name: &'static str,
+    /// The seed stream's identifier: never changed, never reused.
+    pub id: u64,
+    /// Colour index in the plot palette (9 colours; the yellow one, 6, is left for the
+    /// source states of the scatter plots).
+    pub color: usize,
+    /// One line on what it is (the command line's help).
+    pub description: &'static str,
 }
 
 impl Algorithm {
@@ -70,38 +85,85 @@ impl Algorithm {
         Algorithm::AwfqiAdaptiveKernel,
     ];
 
+    /// The algorithm table. Colours: the kernel shares IWFQI's blue and the adaptive
+    /// kernel IWFQI-ideal's sky blue (the learning curves draw the kernels in their own
+    /// panel, where IWFQI and IWFQI-ideal are absent); the heuristic IWFQI shares IWFQI's
+    /// (not in the default set).
+    pub const fn row(self) -> AlgorithmRow {
+        let (name, id, color, description) = match self {
+            Algorithm::Fqi => ("fqi", 1, 7, "FQI on the target's episodes alone (spec §5)"),
+            Algorithm::Iwfqi => ("iwfqi", 2, 0, "IWFQI, mean estimator (spec §7)"),
+            Algorithm::IwfqiHeuristic => (
+                "iwfqi-heuristic",
+                3,
+                0,
+                "IWFQI, heuristic estimator (spec §7.5)",
+            ),
+            Algorithm::IwfqiIdeal => (
+                "iwfqi-ideal",
+                4,
+                5,
+                "IWFQI with the ideal weights from the true models (spec §7.7)",
+            ),
+            Algorithm::Rbt => ("rbt", 5, 4, "Relevance-based transfer (spec §8)"),
+            Algorithm::Sdt => ("sdt", 6, 3, "Shared-dynamics transfer (spec §9)"),
+            Algorithm::Awfqi => (
+                "awfqi",
+                7,
+                1,
+                "The thesis's AWFQI: queries drawn from the realistic score table (spec §12)",
+            ),
+            Algorithm::AwfqiOracle => (
+                "awfqi-oracle",
+                8,
+                2,
+                "AWFQI with the oracle score table (spec §12)",
+            ),
+            Algorithm::AwfqiKernel => (
+                "awfqi-kernel",
+                9,
+                0,
+                "The core's AWFQI in f32 and fixed memory (tile-coded FQI)",
+            ),
+            Algorithm::AwfqiAdaptive => (
+                "awfqi-adaptive",
+                10,
+                8,
+                "AWFQI with queries re-planned from the target's answers within every step",
+            ),
+            Algorithm::AwfqiAdaptiveKernel => (
+                "awfqi-adaptive-kernel",
+                11,
+                5,
+                "The core's adaptive AWFQI in f32 and fixed memory",
+            ),
+        };
+        AlgorithmRow {
+            name,
+            id,
+            color,
+            description,
+        }
+    }
+
     /// The name used in file names, tables and on the command line.
     pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Fqi => "fqi",
-            Algorithm::Iwfqi => "iwfqi",
-            Algorithm::IwfqiHeuristic => "iwfqi-heuristic",
-            Algorithm::IwfqiIdeal => "iwfqi-ideal",
-            Algorithm::Rbt => "rbt",
-            Algorithm::Sdt => "sdt",
-            Algorithm::Awfqi => "awfqi",
-            Algorithm::AwfqiOracle => "awfqi-oracle",
-            Algorithm::AwfqiKernel => "awfqi-kernel",
-            Algorithm::AwfqiAdaptive => "awfqi-adaptive",
-            Algorithm::AwfqiAdaptiveKernel => "awfqi-adaptive-kernel",
-        }
+        self.row().name
     }
 
     /// Stable identifier used in seeding (never reorder).
     pub fn id(self) -> u64 {
-        match self {
-            Algorithm::Fqi => 1,
-            Algorithm::Iwfqi => 2,
-            Algorithm::IwfqiHeuristic => 3,
-            Algorithm::IwfqiIdeal => 4,
-            Algorithm::Rbt => 5,
-            Algorithm::Sdt => 6,
-            Algorithm::Awfqi => 7,
-            Algorithm::AwfqiOracle => 8,
-            Algorithm::AwfqiKernel => 9,
-            Algorithm::AwfqiAdaptive => 10,
-            Algorithm::AwfqiAdaptiveKernel => 11,
-        }
+        self.row().id
+    }
+
+    /// Colour index in the plot palette.
+    pub fn color(self) -> usize {
+        self.row().color
+    }
+
+    /// One line on what the algorithm is.
+    pub fn description(self) -> &'static str {
+        self.row().description
     }
 
     /// `true` for the algorithms whose target data are generative-model queries.
@@ -138,28 +200,10 @@ impl Algorithm {
         Algorithm::AwfqiAdaptive,
         Algorithm::AwfqiAdaptiveKernel,
     ];
-
-    /// Colour index in the plot palette (9 colours; the yellow one is left for the source
-    /// states of the scatter plots, the crimson one is awfqi-adaptive's). The kernel shares the blue of IWFQI: the learning
-    /// curves draw it in a separate panel, next to AWFQI, where IWFQI is absent; the
-    /// heuristic IWFQI shares it too (not in the default set). The adaptive kernel, also in
-    /// that panel only, shares IWFQI-ideal's sky blue (the kernels in blues).
-    pub fn color(self) -> usize {
-        match self {
-            Algorithm::Fqi => 7,
-            Algorithm::Iwfqi | Algorithm::IwfqiHeuristic | Algorithm::AwfqiKernel => 0,
-            Algorithm::IwfqiIdeal | Algorithm::AwfqiAdaptiveKernel => 5,
-            Algorithm::Rbt => 4,
-            Algorithm::Sdt => 3,
-            Algorithm::Awfqi => 1,
-            Algorithm::AwfqiOracle => 2,
-            Algorithm::AwfqiAdaptive => 8,
-        }
-    }
 }
 
 /// IWFQI's estimator variances (§7.1, §14.6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Variances {
     /// The published runs' values: Puddle World's `v_r = 0.1`, `v_s = 0.2` (standard
