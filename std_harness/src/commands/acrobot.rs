@@ -7,15 +7,7 @@
 
 use crate::domains::acrobot;
 
-use super::transfer::{Args, Config, Defaults};
-
-/// The command's defaults (the published configuration).
-pub const DEFAULTS: Defaults = Defaults {
-    episodes_per_step: 10,
-    steps: 20,
-    runs: 20,
-    threshold: -50.0,
-};
+use super::transfer::{Args, BASELINES_AND_AWFQI, Config};
 
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -23,7 +15,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         anyhow::bail!("--dynamics applies to Puddle World only");
     }
     let domain = acrobot::domain();
-    let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
+    let config = Config::resolve(args, &domain, &BASELINES_AND_AWFQI, false)?;
     let data = crate::transfer::domain_data::acrobot::data();
     super::transfer::run(&config, domain, data, None, None)
 }

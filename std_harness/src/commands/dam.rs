@@ -6,15 +6,7 @@
 
 use crate::domains::dam;
 
-use super::transfer::{Args, Config, Defaults};
-
-/// The command's defaults (the published configuration).
-pub const DEFAULTS: Defaults = Defaults {
-    episodes_per_step: 1,
-    steps: 10,
-    runs: 20,
-    threshold: -1000.0,
-};
+use super::transfer::{Args, BASELINES_AND_AWFQI, Config};
 
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -22,7 +14,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         anyhow::bail!("--dynamics applies to Puddle World only");
     }
     let domain = dam::domain();
-    let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
+    let config = Config::resolve(args, &domain, &BASELINES_AND_AWFQI, false)?;
     let data = crate::transfer::domain_data::dam::data();
     super::transfer::run(&config, domain, data, None, None)
 }

@@ -1,25 +1,27 @@
 //! `awfqi-harness puddle`: the Puddle World transfer experiments (spec §3–§9, §11–§13) —
 //! every algorithm on the common protocol ([`super::transfer`]), including the core's
-//! embedded AWFQI (`awfqi-kernel`). Defaults: thesis setting 2, sub-setting (b): shared
-//! dynamics, 1 episode per step, 6 steps, 10 runs.
+//! embedded ones. Defaults: thesis setting 2, sub-setting (b): shared dynamics, 1 episode
+//! per step, 6 steps, 10 runs of the headline comparison ([`HEADLINE`]);
+//! `--algorithms all` runs every algorithm.
 
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::puddle;
-use crate::transfer::algorithms::adaptive_kernel;
 use crate::transfer::algorithms::awfqi_kernel::{self, KernelConfig, KernelSetup};
+use crate::transfer::algorithms::{Algorithm, adaptive_kernel};
 use crate::transfer::sources::SourceSet;
 
 pub use super::transfer::{Args, DynamicsArg, NoiseArg};
-use super::transfer::{Config, Defaults, KernelHooks};
+use super::transfer::{Config, KernelHooks};
 
-/// The command's defaults (thesis setting 2 (b), spec §13.2).
-pub const DEFAULTS: Defaults = Defaults {
-    episodes_per_step: 1,
-    steps: 6,
-    runs: 10,
-    threshold: -25.0,
-};
+/// The command's default algorithms, the headline comparison: FQI on the target alone,
+/// IWFQI, the thesis's AWFQI and the adaptive AWFQI.
+pub const HEADLINE: [Algorithm; 4] = [
+    Algorithm::Fqi,
+    Algorithm::Iwfqi,
+    Algorithm::Awfqi,
+    Algorithm::AwfqiAdaptiveKernel,
+];
 
 fn kernel_setup(
     sources: &SourceSet<2>,
@@ -33,7 +35,7 @@ fn kernel_setup(
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let dynamics = args.dynamics.unwrap_or(DynamicsArg::Shared).dynamics();
     let domain = puddle::domain(dynamics);
-    let config = Config::resolve(args, &domain, &DEFAULTS, true)?;
+    let config = Config::resolve(args, &domain, &HEADLINE, true)?;
     let hooks = KernelHooks {
         setup: kernel_setup,
         learner: awfqi_kernel::with_learner,

@@ -3,8 +3,8 @@
 //! a summary, transfer metrics, learning curves and sample scatters.
 //!
 //! The three commands share their options ([`Args`]); an option left out takes the
-//! domain's default ([`Defaults`]: Puddle World's thesis setting 2 (b), the Dam's and
-//! Acrobot's published configurations). Runs of all algorithms go in parallel (rayon,
+//! domain's default ([`crate::domains::Published`]: Puddle World's thesis setting 2 (b),
+//! the Dam's and Acrobot's published configurations). Runs of all algorithms go in parallel (rayon,
 //! `--threads`), each run seeded from (`--seed`, algorithm, run index), so the same seed
 //! gives the same numbers whatever the scheduling, and `--runs A..B` computes a slice of
 //! runs whose results merge into the `<algorithm>.json` files already in `--out`
@@ -104,6 +104,42 @@ pub enum AdaptiveKernelQ {
     Trees,
 }
 
+/// One value of `--algorithms`: an algorithm, or `all` of those the domain runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AlgorithmChoice {
+    /// Every algorithm that runs on the domain.
+    All,
+    /// One algorithm.
+    One(Algorithm),
+}
+
+/// `all`, then every algorithm in the table's order.
+const ALGORITHM_CHOICES: [AlgorithmChoice; Algorithm::ALL.len() + 1] = {
+    let mut out = [AlgorithmChoice::All; Algorithm::ALL.len() + 1];
+    let mut i = 0;
+    while i < Algorithm::ALL.len() {
+        out[i + 1] = AlgorithmChoice::One(Algorithm::ALL[i]);
+        i += 1;
+    }
+    out
+};
+
+impl ValueEnum for AlgorithmChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &ALGORITHM_CHOICES
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        match self {
+            AlgorithmChoice::All => Some(
+                clap::builder::PossibleValue::new("all")
+                    .help("Every algorithm that runs on the domain"),
+            ),
+            AlgorithmChoice::One(a) => a.to_possible_value(),
+        }
+    }
+}
+
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
 /// the domain's default (see each command's help).
 #[derive(Debug, Clone, ClapArgs)]
@@ -123,10 +159,11 @@ pub struct Args {
     /// Default: Puddle World 10, Dam and Acrobot 20.
     #[arg(long)]
     pub runs: Option<RunRange>,
-    /// Algorithms to run. Default: all but iwfqi-heuristic (and, on the Dam and Acrobot,
-    /// awfqi-kernel (Puddle World only) and awfqi-adaptive (by name there)).
+    /// Algorithms to run, or `all` of those the domain runs. Default: Puddle World
+    /// fqi, iwfqi, awfqi, awfqi-adaptive-kernel; the Dam and Acrobot fqi, iwfqi,
+    /// iwfqi-ideal, rbt, sdt, awfqi, awfqi-oracle.
     #[arg(long, value_enum, value_delimiter = ',')]
-    pub algorithms: Vec<Algorithm>,
+    pub algorithms: Vec<AlgorithmChoice>,
     /// Puddle World's dynamics variant (puddle only). Default: shared.
     #[arg(long, value_enum)]
     pub dynamics: Option<DynamicsArg>,
@@ -422,18 +459,18 @@ impl Args {
     }
 }
 
-/// A command's defaults for the options left out.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Defaults {
-    /// Episodes per step.
-    pub episodes_per_step: usize,
-    /// Steps.
-    pub steps: usize,
-    /// Runs.
-    pub runs: usize,
-    /// Metric threshold.
-    pub threshold: f64,
-}
+/// The Dam's and Acrobot's default algorithms: the baselines and the thesis's AWFQI (the
+/// adaptive algorithm's re-planning multiplies their large FQI fits, so it is asked for by
+/// name there).
+pub const BASELINES_AND_AWFQI: [Algorithm; 7] = [
+    Algorithm::Fqi,
+    Algorithm::Iwfqi,
+    Algorithm::IwfqiIdeal,
+    Algorithm::Rbt,
+    Algorithm::Sdt,
+    Algorithm::Awfqi,
+    Algorithm::AwfqiOracle,
+];
 
 /// The core kernel's hooks on a domain: its set-up and its learner (Puddle World only
 /// until the kernel is generic over the state dimension).
@@ -494,50 +531,46 @@ pub const MAX_GP_RESTARTS: usize = 10_000;
 pub const MAX_RUN_INDEX: usize = 1 << 32;
 
 impl Config {
-    /// Resolves `args` for `domain` with the command's `defaults`.
+    /// Resolves `args` for `domain`: the options left out take the domain's published
+    /// values, `--algorithms` left out takes `defaults`, and `all` every algorithm the
+    /// domain runs (the embedded ones only `with_embedded`).
     pub fn resolve<const D: usize>(
         args: &Args,
         domain: &Domain<D>,
-        defaults: &Defaults,
-        kernel_available: bool,
+        defaults: &[Algorithm],
+        with_embedded: bool,
     ) -> anyhow::Result<Self> {
         let p = &domain.published;
-        let mut algorithms = if args.algorithms.is_empty() {
-            // awfqi-kernel and awfqi-adaptive: Puddle World's default set only (see
-            // `Algorithm::DEFAULT`).
-            Algorithm::DEFAULT
-                .into_iter()
-                .filter(|&a| {
-                    kernel_available
-                        || !matches!(
-                            a,
-                            Algorithm::AwfqiKernel
-                                | Algorithm::AwfqiAdaptive
-                                | Algorithm::AwfqiAdaptiveKernel
-                        )
+        let runs_here = |a: &Algorithm| with_embedded || !a.is_embedded();
+        let mut algorithms: Vec<Algorithm> = if args.algorithms.is_empty() {
+            defaults.to_vec()
+        } else if args.algorithms.contains(&AlgorithmChoice::All) {
+            Algorithm::ALL.into_iter().filter(runs_here).collect()
+        } else {
+            args.algorithms
+                .iter()
+                .filter_map(|c| match c {
+                    AlgorithmChoice::One(a) => Some(*a),
+                    AlgorithmChoice::All => None,
                 })
                 .collect()
-        } else {
-            args.algorithms.clone()
         };
         algorithms.sort();
         algorithms.dedup();
-        for kernel in [Algorithm::AwfqiKernel, Algorithm::AwfqiAdaptiveKernel] {
-            if algorithms.contains(&kernel) && !kernel_available {
-                bail!(
-                    "{} runs on Puddle World only until the harness's kernel path is generic over the state dimension",
-                    kernel.name()
-                );
-            }
+        if let Some(a) = algorithms.iter().find(|a| !runs_here(a)) {
+            bail!(
+                "{} runs on Puddle World only until the harness's embedded path is generic over the state dimension",
+                a.name()
+            );
         }
         let config = Self {
             args: args.clone(),
             setting: args.setting.unwrap_or(Mode::Grid),
-            episodes_per_step: args.episodes_per_step.unwrap_or(defaults.episodes_per_step),
-            steps: args.steps.unwrap_or(defaults.steps),
+            episodes_per_step: args.episodes_per_step.unwrap_or(p.episodes_per_step),
+            steps: args.steps.unwrap_or(p.steps),
             runs: args.runs.unwrap_or(RunRange {
                 start: 0,
-                end: defaults.runs,
+                end: p.runs,
             }),
             algorithms,
             out: args
@@ -549,7 +582,7 @@ impl Config {
             max_gp: args.max_gp.unwrap_or(p.max_gp),
             rbt_total: args.rbt_total.unwrap_or(p.rbt_total),
             spacing: args.spacing.unwrap_or(domain.grid_spacing),
-            threshold: args.threshold.unwrap_or(defaults.threshold),
+            threshold: args.threshold.unwrap_or(p.threshold),
         };
         config.check_ranges()?;
         Ok(config)
@@ -1358,4 +1391,72 @@ fn summarise_search_checks(out: &std::path::Path) -> anyhow::Result<()> {
         totals[0], totals[1], totals[2], totals[3]
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+    use crate::domains::{dam, puddle};
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn args(words: &[&str]) -> Args {
+        Cli::parse_from(std::iter::once("transfer").chain(words.iter().copied())).args
+    }
+
+    #[test]
+    fn algorithms_default_to_the_command_s_set_and_all_means_what_the_domain_runs() {
+        let puddle = puddle::domain(Dynamics::Shared);
+        let dam = dam::domain();
+        let resolve = |words: &[&str], domain_is_puddle: bool| {
+            let a = args(words);
+            if domain_is_puddle {
+                Config::resolve(&a, &puddle, &super::super::puddle::HEADLINE, true)
+            } else {
+                Config::resolve(&a, &dam, &BASELINES_AND_AWFQI, false)
+            }
+            .map(|c| c.algorithms)
+        };
+        assert_eq!(
+            resolve(&[], true).unwrap(),
+            super::super::puddle::HEADLINE.to_vec()
+        );
+        assert_eq!(
+            resolve(&["--algorithms", "all"], true).unwrap(),
+            Algorithm::ALL
+        );
+        let on_dam = resolve(&["--algorithms", "all"], false).unwrap();
+        assert_eq!(on_dam.len(), Algorithm::ALL.len() - 2);
+        assert!(on_dam.iter().all(|a| !a.is_embedded()));
+        assert_eq!(resolve(&[], false).unwrap(), BASELINES_AND_AWFQI.to_vec());
+        // Named algorithms keep the table's order, once each.
+        assert_eq!(
+            resolve(&["--algorithms", "awfqi,fqi,awfqi"], false).unwrap(),
+            [Algorithm::Fqi, Algorithm::Awfqi]
+        );
+        let embedded = resolve(&["--algorithms", "awfqi-kernel"], false).unwrap_err();
+        assert!(
+            embedded.to_string().contains("Puddle World only"),
+            "{embedded}"
+        );
+    }
+
+    #[test]
+    fn options_left_out_take_the_domain_s_published_values() {
+        let dam = dam::domain();
+        let c = Config::resolve(&args(&[]), &dam, &BASELINES_AND_AWFQI, false).unwrap();
+        let p = &dam.published;
+        assert_eq!(
+            (c.steps, c.episodes_per_step, c.runs.end, c.threshold),
+            (p.steps, p.episodes_per_step, p.runs, p.threshold)
+        );
+        let c = Config::resolve(&args(&["--steps", "3"]), &dam, &[], false).unwrap();
+        assert_eq!(c.steps, 3);
+    }
 }

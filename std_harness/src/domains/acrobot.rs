@@ -110,6 +110,7 @@ pub fn domain() -> Domain<4> {
             steps: 20,
             episodes_per_step: 10,
             runs: 20,
+            threshold: -50.0,
             epsilon: 0.1,
             iterations: 50,
             trees: 50,

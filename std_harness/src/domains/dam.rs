@@ -76,6 +76,7 @@ pub fn domain() -> Domain<2> {
             steps: 10,
             episodes_per_step: 1,
             runs: 20,
+            threshold: -1000.0,
             epsilon: 0.3,
             iterations: 60,
             trees: 100,

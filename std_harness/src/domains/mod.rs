@@ -77,7 +77,8 @@ pub enum IdealMeans {
     Sampled,
 }
 
-/// The configuration of a domain's published experiments: the defaults of its command.
+/// The configuration of a domain's published experiments: the defaults of its command,
+/// owned here once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Published {
     /// Steps `K`.
@@ -86,6 +87,8 @@ pub struct Published {
     pub episodes_per_step: usize,
     /// Runs.
     pub runs: usize,
+    /// The discounted return the "time to threshold" metric waits for.
+    pub threshold: f64,
     /// ε of the ε-greedy collection after the first step.
     pub epsilon: f64,
     /// FQI iterations.

@@ -183,23 +183,14 @@ impl Algorithm {
         matches!(self, Algorithm::Awfqi)
     }
 
-    /// The default set of the command: every algorithm but the heuristic-estimator IWFQI
-    /// (a variant of the shared-dynamics reference runs only, §13.1). `awfqi-kernel`,
-    /// `awfqi-adaptive` and `awfqi-adaptive-kernel` are in Puddle World's default set only
-    /// (the kernels run nowhere else yet; the adaptive algorithm's re-planning multiplies the Dam's and Acrobot's
-    /// large FQI fits, so there it is asked for by name).
-    pub const DEFAULT: [Algorithm; 10] = [
-        Algorithm::Fqi,
-        Algorithm::Iwfqi,
-        Algorithm::IwfqiIdeal,
-        Algorithm::Rbt,
-        Algorithm::Sdt,
-        Algorithm::Awfqi,
-        Algorithm::AwfqiOracle,
-        Algorithm::AwfqiKernel,
-        Algorithm::AwfqiAdaptive,
-        Algorithm::AwfqiAdaptiveKernel,
-    ];
+    /// `true` for the core's algorithms, which run on Puddle World only until the
+    /// harness's embedded path is generic over the state dimension.
+    pub fn is_embedded(self) -> bool {
+        matches!(
+            self,
+            Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel
+        )
+    }
 }
 
 /// IWFQI's estimator variances (§7.1, §14.6).
