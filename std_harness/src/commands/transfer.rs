@@ -12,6 +12,7 @@
 //! writers locked).
 
 use std::collections::BTreeMap;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -1017,8 +1018,10 @@ fn run_in_pool<const D: usize>(
     }
     jobs.sort_by_key(|&(a, r)| (cost_rank(a), r));
 
+    // Progress: bars on a terminal, else one line per finished run (a log, a pipe, CI).
+    let lines = !args.quiet && !std::io::stderr().is_terminal();
     let multi = MultiProgress::new();
-    if args.quiet {
+    if args.quiet || lines {
         multi.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
     let style = ProgressStyle::with_template(
@@ -1045,6 +1048,12 @@ fn run_in_pool<const D: usize>(
             // invocation keeps every finished run.
             let mut done = finished.lock().map_err(|_| anyhow!("poisoned"))?;
             store.save_run(algorithm, record.clone())?;
+            if lines {
+                eprintln!(
+                    "{}",
+                    progress_line(done.len() + 1, jobs.len(), algorithm, &record, wall)
+                );
+            }
             if args.check_gp_search {
                 // The fits checked so far (this run's and, with several threads, some of
                 // the runs still going), kept even if the invocation is interrupted.
@@ -1102,21 +1111,10 @@ fn run_in_pool<const D: usize>(
                 .map(|(a, rows)| (a.name().to_string(), a.color(), rows.clone()))
                 .collect()
         };
-        let std_path =
-            curve(&|a| !matches!(a, Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel));
-        let embedded = curve(&|a| {
-            matches!(
-                a,
-                Algorithm::Fqi
-                    | Algorithm::Awfqi
-                    | Algorithm::AwfqiOracle
-                    | Algorithm::AwfqiKernel
-                    | Algorithm::AwfqiAdaptive
-                    | Algorithm::AwfqiAdaptiveKernel
-            )
-        });
+        let every = curve(&|_| true);
+        let active = curve(&|a| a == Algorithm::Fqi || a.is_active());
         let clip = experiment.protocol.dynamics.map(|_| figures::PUDDLE_CLIP);
-        figures::learning_curves(&title, &std_path, &embedded, clip)
+        figures::learning_curves(&title, &every, &active, clip)
             .save(&out.join("learning_curves"))?;
         let samples: Vec<(Algorithm, String, usize, Vec<[f64; 3]>)> = files
             .iter()
@@ -1141,19 +1139,10 @@ fn run_in_pool<const D: usize>(
             )
             .save(&dir.join(a.name()))?;
         }
+        // FQI's and IWFQI's episodes against every active algorithm's queries.
         let overview: Vec<(String, usize, Vec<[f64; 3]>)> = samples
             .iter()
-            .filter(|(a, ..)| {
-                matches!(
-                    a,
-                    Algorithm::Fqi
-                        | Algorithm::Iwfqi
-                        | Algorithm::AwfqiOracle
-                        | Algorithm::Awfqi
-                        | Algorithm::AwfqiKernel
-                        | Algorithm::AwfqiAdaptive
-                )
-            })
+            .filter(|(a, ..)| matches!(a, Algorithm::Fqi | Algorithm::Iwfqi) || a.is_active())
             .map(|(_, name, color, pts)| (name.clone(), *color, pts.clone()))
             .collect();
         if !overview.is_empty() {
@@ -1168,6 +1157,30 @@ fn run_in_pool<const D: usize>(
     }
     println!("outputs in {}", out.display());
     Ok(())
+}
+
+/// `[ 3/40] iwfqi run 2: last step -21.35 (6 steps, 5.3 s); 12 s elapsed`: one finished
+/// run, for output that is not a terminal.
+fn progress_line(
+    done: usize,
+    total: usize,
+    algorithm: Algorithm,
+    record: &RunRecord,
+    start: Instant,
+) -> String {
+    let width = total.to_string().len();
+    let last = record
+        .steps
+        .last()
+        .map_or(f64::NAN, |s| s.perf_disc_greedy_mean);
+    format!(
+        "[{done:>width$}/{total}] {} run {}: last step {last:.2} ({} steps, {:.1} s); {:.0} s elapsed",
+        algorithm.name(),
+        record.run,
+        record.steps.len(),
+        record.seconds,
+        start.elapsed().as_secs_f64()
+    )
 }
 
 /// "Kept 3 run(s) already in OUT (fqi: 0, 1; iwfqi: 0) …": the runs skipped because a

@@ -106,6 +106,7 @@ pub fn domain() -> Domain<4> {
             .map(|&t| [t, 0.0, 0.0, 0.0])
             .collect(),
         average_reward: false,
+        target_regions: Vec::new(),
         published: Published {
             steps: 20,
             episodes_per_step: 10,

@@ -72,6 +72,7 @@ pub fn domain() -> Domain<2> {
         discount: DAM_DISCOUNT,
         evaluation_starts: vec![DAM_EVALUATION_STATE; 10],
         average_reward: true,
+        target_regions: Vec::new(),
         published: Published {
             steps: 10,
             episodes_per_step: 1,

@@ -109,6 +109,18 @@ pub struct Published {
     pub rbt_total: usize,
 }
 
+/// A disc in the first two state coordinates worth marking on a map of the states (Puddle
+/// World's puddles and goal).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Region {
+    /// What it is (`puddle`, `goal`).
+    pub name: &'static str,
+    /// Its centre.
+    pub centre: [f64; 2],
+    /// Its radius.
+    pub radius: f64,
+}
+
 /// A task with its experiment constants (see the [module docs](self)).
 #[derive(Debug, Clone)]
 pub struct Domain<const D: usize> {
@@ -136,6 +148,9 @@ pub struct Domain<const D: usize> {
     /// `true` when the evaluation also records the average reward per step
     /// (`perf_avg_greedy`, the Dam's second criterion).
     pub average_reward: bool,
+    /// The target's regions worth marking on a map of its states (none where the first two
+    /// coordinates are no map).
+    pub target_regions: Vec<Region>,
     /// The published configuration.
     pub published: Published,
     /// The grid rows `(state, action)` of the score tables for a spacing (grid and both

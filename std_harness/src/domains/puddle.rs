@@ -6,12 +6,12 @@
 use std::sync::Arc;
 
 use awfqi::env::{
-    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON,
-    PUDDLE_INITIAL_STATE, PuddleWorld,
+    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_GOAL_RADIUS,
+    PUDDLE_HORIZON, PUDDLE_INITIAL_STATE, PuddleWorld,
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{Domain, IdealMeans, Published, Record, Task};
+use super::{Domain, IdealMeans, Published, Record, Region, Task};
 use crate::trees::TreeParams;
 
 impl Task<2> for PuddleWorld<f64> {
@@ -64,6 +64,7 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
         discount: PUDDLE_DISCOUNT,
         evaluation_starts: vec![PUDDLE_INITIAL_STATE; PUDDLE_EVALUATION_ROLLOUTS],
         average_reward: false,
+        target_regions: target_regions(dynamics),
         published: Published {
             // The thesis's Chapter 5, setting 2 (b): one episode per step, 10 runs (the
             // IWFQI reference configuration has 10 episodes and 20 runs, spec §13.1).
@@ -84,6 +85,25 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
         grid_rows,
         grid_spacing: GRID_SPACING,
     }
+}
+
+/// The target's puddles, each a disc of one standard deviation around its centre, and its
+/// goal region.
+fn target_regions(dynamics: Dynamics) -> Vec<Region> {
+    let target = PuddleWorld::<f64>::target(dynamics);
+    target
+        .puddles()
+        .map(|p| Region {
+            name: "puddle",
+            centre: p.mean,
+            radius: p.variance.sqrt(),
+        })
+        .chain(std::iter::once(Region {
+            name: "goal",
+            centre: target.goal(),
+            radius: PUDDLE_GOAL_RADIUS,
+        }))
+        .collect()
 }
 
 /// Spec §11.1's grid rows: `(0.1 i, 0.1 j)` for `i, j ∈ 0..=10/spacing`, borders included,

@@ -62,8 +62,8 @@ pub struct AlgorithmRow {
     pub name: &'static str,
     /// The seed stream's identifier: never changed, never reused.
     pub id: u64,
-    /// Colour index in the plot palette (9 colours; the yellow one, 6, is left for the
-    /// source states of the scatter plots).
+    /// Colour index in the plot palette ([`crate::plot::PALETTE`]; the yellow one, 6, is
+    /// left for the source states of the scatter plots).
     pub color: usize,
     /// One line on what it is (the command line's help).
     pub description: &'static str,
@@ -85,10 +85,9 @@ impl Algorithm {
         Algorithm::AwfqiAdaptiveKernel,
     ];
 
-    /// The algorithm table. Colours: the kernel shares IWFQI's blue and the adaptive
-    /// kernel IWFQI-ideal's sky blue (the learning curves draw the kernels in their own
-    /// panel, where IWFQI and IWFQI-ideal are absent); the heuristic IWFQI shares IWFQI's
-    /// (not in the default set).
+    /// The algorithm table. Each algorithm has a colour of its own (the headline, the
+    /// adaptive AWFQI, the crimson) but the heuristic IWFQI, which shares the std
+    /// adaptive algorithm's grey.
     pub const fn row(self) -> AlgorithmRow {
         let (name, id, color, description) = match self {
             Algorithm::Fqi => ("fqi", 1, 7, "FQI on the target's episodes alone (spec §5)"),
@@ -96,7 +95,7 @@ impl Algorithm {
             Algorithm::IwfqiHeuristic => (
                 "iwfqi-heuristic",
                 3,
-                0,
+                10,
                 "IWFQI, heuristic estimator (spec §7.5)",
             ),
             Algorithm::IwfqiIdeal => (
@@ -122,19 +121,19 @@ impl Algorithm {
             Algorithm::AwfqiKernel => (
                 "awfqi-kernel",
                 9,
-                0,
+                9,
                 "The core's AWFQI in f32 and fixed memory (tile-coded FQI)",
             ),
             Algorithm::AwfqiAdaptive => (
                 "awfqi-adaptive",
                 10,
-                8,
+                10,
                 "AWFQI with queries re-planned from the target's answers within every step",
             ),
             Algorithm::AwfqiAdaptiveKernel => (
                 "awfqi-adaptive-kernel",
                 11,
-                5,
+                8,
                 "The core's adaptive AWFQI in f32 and fixed memory",
             ),
         };
