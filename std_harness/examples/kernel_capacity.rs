@@ -67,7 +67,7 @@ fn run<const N: usize>(
         for (k, r) in out.iter_mut().enumerate() {
             learner.step(k, &mut rng)?;
             let greedy = |s: &[f64; 2]| learner.greedy_action(s);
-            *r = domain.evaluate(&greedy, &mut rng)?.mean_return;
+            *r = domain.evaluate(&greedy, &mut rng)?.returns.mean_return;
         }
     }
 

@@ -8,7 +8,7 @@ use clap::builder::PossibleValue;
 use crate::domains::IdealMeans;
 use crate::gp_large::fixed::PredictiveVariance;
 use crate::identification::{CriterionName, Design, PolicyName};
-use crate::joint_q::QFunctionKind;
+use crate::joint_q::ForestLayout;
 use crate::transfer::algorithms::adaptive::AdaptiveOracle;
 use crate::transfer::algorithms::rbt::ComplianceSum;
 use crate::transfer::algorithms::{Algorithm, Variances};
@@ -69,9 +69,9 @@ choices! {
         PredictiveVariance::ExplicitInverse => "explicit-inverse":
             "K** − k*ᵀK⁻¹k* with K⁻¹ formed, negatives set to 0 (scikit-learn ≤ 0.23's)",
     }
-    QFunctionKind {
-        QFunctionKind::PerAction => "per-action": "One forest per action (spec §5)",
-        QFunctionKind::Joint => "joint":
+    ForestLayout {
+        ForestLayout::PerAction => "per-action": "One forest per action (spec §5)",
+        ForestLayout::Joint => "joint":
             "One forest over (state, action value); 2-D states only, an ablation",
     }
     FirstStep {

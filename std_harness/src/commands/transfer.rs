@@ -257,7 +257,7 @@ pub struct Args {
     /// over (state, action value) as the reference code fits on the Dam (whose action
     /// space it leaves undeclared). An ablation; FQI on 2-D states (Dam, Puddle World) only.
     #[arg(long, value_enum)]
-    pub q_function: Option<crate::joint_q::QFunctionKind>,
+    pub q_function: Option<crate::joint_q::ForestLayout>,
     /// Grid spacing of the score tables. Default: Puddle World 0.1 (both coordinates), Dam
     /// 10 (storage; every day), Acrobot π/6 (angles; 9 values per velocity).
     #[arg(long)]

@@ -16,7 +16,7 @@ use super::{Domain, IdealMeans, Published, Record, Task};
 use crate::trees::TreeParams;
 
 impl Task<2> for Dam<f64> {
-    fn step(
+    fn query(
         &self,
         state: [f64; 2],
         action: usize,

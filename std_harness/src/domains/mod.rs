@@ -21,6 +21,7 @@ use std::fmt::Debug;
 use std::sync::Arc;
 
 use awfqi::env::Transition;
+use awfqi::evaluation::Evaluation;
 use awfqi::policy::Policy;
 use rand_chacha::ChaCha8Rng;
 
@@ -39,12 +40,15 @@ pub const GP_INPUT: usize = 5;
 /// A GP input `z = (s, value(a), 0, …)`.
 pub type GpInput = [f64; GP_INPUT];
 
-/// One MDP of an experiment (the target or a source), as the harness drives it.
+/// One MDP of an experiment (the target or a source), as the harness drives it: the core
+/// plant's [`GenerativeModel::query`](awfqi::env::GenerativeModel::query), its mean
+/// functions and its first state, under the same names, behind one object-safe trait in
+/// `f64` with the harness's generator.
 pub trait Task<const D: usize>: Send + Sync + Debug {
     /// One sampled transition from `state` under `action` (the generative model).
     ///
     /// Errors: the core's, for a state or action outside the task's spaces.
-    fn step(
+    fn query(
         &self,
         state: [f64; D],
         action: usize,
@@ -53,12 +57,12 @@ pub trait Task<const D: usize>: Send + Sync + Debug {
 
     /// The noise-free mean reward `r̄(s, a)`.
     ///
-    /// Errors: as [`Task::step`].
+    /// Errors: as [`Task::query`].
     fn mean_reward(&self, state: [f64; D], action: usize) -> awfqi::Result<f64>;
 
     /// The mean next state `s̄′(s, a)`.
     ///
-    /// Errors: as [`Task::step`].
+    /// Errors: as [`Task::query`].
     fn mean_next_state(&self, state: [f64; D], action: usize) -> awfqi::Result<[f64; D]>;
 
     /// The first state of an episode (drawn from `rng` when the start is random).
@@ -160,17 +164,12 @@ pub struct Domain<const D: usize> {
     pub grid_spacing: f64,
 }
 
-/// What the evaluation rollouts of one step produced (spec §3.3).
+/// What the evaluation rollouts of one step produced (spec §3.3): the core's
+/// [`Evaluation`] and, where the domain records it, the average reward per step.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Evaluation {
-    /// Mean discounted return.
-    pub mean_return: f64,
-    /// Population std of the returns / √rollouts.
-    pub standard_error: f64,
-    /// Mean rollout length.
-    pub mean_steps: f64,
-    /// Rollouts whose last step was absorbing.
-    pub reached_goal: usize,
+pub struct StepEvaluation {
+    /// Discounted returns: mean, standard error, mean length, absorbed rollouts.
+    pub returns: Evaluation<f64>,
     /// Mean and standard error of the average reward per step, when the domain records it.
     pub average_reward: Option<(f64, f64)>,
 }
@@ -235,7 +234,7 @@ impl<const D: usize> Domain<D> {
         let mut state = start;
         for t in 0..self.horizon {
             let action = policy.action(&state, rng)?;
-            let record = task.step(state, action, rng)?;
+            let record = task.query(state, action, rng)?;
             visit(t, record)?;
             if record.absorbing {
                 return Ok(t + 1);
@@ -254,7 +253,7 @@ impl<const D: usize> Domain<D> {
         &self,
         greedy: &dyn Fn(&[f64; D]) -> usize,
         rng: &mut ChaCha8Rng,
-    ) -> awfqi::Result<Evaluation> {
+    ) -> awfqi::Result<StepEvaluation> {
         if self.evaluation_starts.is_empty() {
             return Err(awfqi::Error::EmptyData);
         }
@@ -285,11 +284,13 @@ impl<const D: usize> Domain<D> {
             (mean, (variance / n).sqrt())
         };
         let (mean_return, standard_error) = stats(sum, sum_sq);
-        Ok(Evaluation {
-            mean_return,
-            standard_error,
-            mean_steps: steps / n,
-            reached_goal: goals,
+        Ok(StepEvaluation {
+            returns: Evaluation {
+                mean_return,
+                standard_error,
+                mean_steps: steps / n,
+                absorbed: goals,
+            },
             average_reward: self.average_reward.then(|| stats(avg_sum, avg_sq)),
         })
     }

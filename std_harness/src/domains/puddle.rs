@@ -15,7 +15,7 @@ use super::{Domain, IdealMeans, Published, Record, Region, Task};
 use crate::trees::TreeParams;
 
 impl Task<2> for PuddleWorld<f64> {
-    fn step(
+    fn query(
         &self,
         state: [f64; 2],
         action: usize,

@@ -154,7 +154,7 @@ pub struct Outcome {
 
 /// Everything about one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunRecord {
+pub struct IdentificationRun {
     /// Run index.
     pub run: usize,
     /// True candidate θ*.
@@ -248,7 +248,7 @@ pub struct Study {
     /// Aggregated rows (criterion × policy × budget).
     pub rows: Vec<Row>,
     /// Per-run records (re-plot or merge from these).
-    pub records: Vec<RunRecord>,
+    pub records: Vec<IdentificationRun>,
 }
 
 /// What every run shares: candidates, optimal Q tables, MAP returns, fixed scores.
@@ -413,7 +413,7 @@ fn evaluate(
 }
 
 /// One run: θ*, then every criterion and budget.
-fn run_one(config: &StudyConfig, shared: &Shared, run: usize) -> anyhow::Result<RunRecord> {
+fn run_one(config: &StudyConfig, shared: &Shared, run: usize) -> anyhow::Result<IdentificationRun> {
     let mut truth_rng = stream(config.seed, &[TRUTH, run as u64]);
     let theta_star = ((rng::uniform_f64(&mut truth_rng) * K as f64) as usize).min(K - 1);
     let truth = &shared.candidates[theta_star];
@@ -471,7 +471,7 @@ fn run_one(config: &StudyConfig, shared: &Shared, run: usize) -> anyhow::Result<
             }
         }
     }
-    Ok(RunRecord {
+    Ok(IdentificationRun {
         run,
         theta_star,
         optimal_return: shared.optimal[theta_star],
@@ -490,7 +490,7 @@ fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
 }
 
 /// Aggregates per-run records into criterion × policy × budget rows.
-pub fn aggregate(config: &StudyConfig, records: &[RunRecord]) -> Vec<Row> {
+pub fn aggregate(config: &StudyConfig, records: &[IdentificationRun]) -> Vec<Row> {
     let optimal = mean_and_stderr(&records.iter().map(|r| r.optimal_return).collect::<Vec<_>>()).0;
     let mut rows = Vec::new();
     for &criterion in &config.criteria {
@@ -537,7 +537,7 @@ pub fn study(config: &StudyConfig, progress: bool) -> anyhow::Result<Study> {
 
 /// The study of `config` over `records` (any order, distinct runs): records by run index,
 /// `config.runs` their hull, and the aggregated rows.
-pub fn assemble(mut config: StudyConfig, mut records: Vec<RunRecord>) -> Study {
+pub fn assemble(mut config: StudyConfig, mut records: Vec<IdentificationRun>) -> Study {
     records.sort_by_key(|r| r.run);
     if let (Some(first), Some(last)) = (records.first(), records.last()) {
         config.runs = RunRange {
@@ -558,7 +558,7 @@ pub fn run_records(
     config: &StudyConfig,
     runs: &[usize],
     progress: bool,
-) -> anyhow::Result<Vec<RunRecord>> {
+) -> anyhow::Result<Vec<IdentificationRun>> {
     if config.budgets.is_empty() || config.criteria.is_empty() || config.policies.is_empty() {
         bail!(
             "the study needs at least one budget, criterion and policy (--budgets, --criteria, --policy)"

@@ -13,24 +13,8 @@ use crate::gp_large::fixed::{FixedGp, FixedKernel, PredictiveVariance};
 use crate::gp_large::growing::GrowingFixedGp;
 use crate::gp_large::{self, FitOptions, LargeGp};
 
-/// Which value of a record a GP models.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Output {
-    /// The reward `r`.
-    Reward,
-    /// Next-state coordinate `d`.
-    Next(usize),
-}
-
-impl Output {
-    /// The modelled value of `r`.
-    pub fn of<const D: usize>(self, r: &Record<D>) -> f64 {
-        match self {
-            Output::Reward => r.reward,
-            Output::Next(d) => r.next_state.get(d).copied().unwrap_or(f64::NAN),
-        }
-    }
-}
+/// Which value of a record a GP models: the core's.
+pub use awfqi::record_gp::Output;
 
 /// How a GP's kernel is obtained.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -98,7 +82,7 @@ impl<const D: usize> Weighting<D> {
     pub fn gp_spec(&self, output: Output) -> GpSpec {
         match output {
             Output::Reward => self.reward.clone(),
-            Output::Next(d) => self
+            Output::NextState(d) => self
                 .transition
                 .get(d)
                 .cloned()
@@ -321,7 +305,10 @@ impl RecordGp {
         rng: &mut R,
     ) -> anyhow::Result<Self> {
         let inputs: Vec<GpInput> = records.iter().map(|r| domain.input(r)).collect();
-        let targets: Vec<f64> = records.iter().map(|r| output.of(r)).collect();
+        let targets = records
+            .iter()
+            .map(|r| output.of(r))
+            .collect::<awfqi::Result<Vec<f64>>>()?;
         Self::fit(&inputs, &targets, spec, options, Some(D), rng)
     }
 
@@ -480,7 +467,10 @@ impl GrowingRecordGp {
         }
         let new = &records[known..];
         let inputs: Vec<GpInput> = new.iter().map(|r| domain.input(r)).collect();
-        let targets: Vec<f64> = new.iter().map(|r| self.output.of(r)).collect();
+        let targets = new
+            .iter()
+            .map(|r| self.output.of(r))
+            .collect::<awfqi::Result<Vec<f64>>>()?;
         self.gp.extend(&inputs, &targets)?;
         Ok(true)
     }

@@ -619,7 +619,7 @@ pub fn generate_source<const D: usize>(
                 let s: [f64; D] = std::array::from_fn(|d| s.get(d).copied().unwrap_or(0.0));
                 let a = awfqi::rng::uniform_index(rng, n);
                 times.push(0);
-                records.push(env.step(s, a, rng)?);
+                records.push(env.query(s, a, rng)?);
             }
         }
     }
@@ -647,7 +647,7 @@ impl SourceLayout {
     /// next-state coordinate.
     pub fn posterior_outputs(&self) -> Vec<Output> {
         std::iter::once(Output::Reward)
-            .chain((0..self.posterior_dims).map(Output::Next))
+            .chain((0..self.posterior_dims).map(Output::NextState))
             .collect()
     }
 }

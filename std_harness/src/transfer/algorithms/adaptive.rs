@@ -32,7 +32,7 @@ use super::episodic::Episodic;
 use super::nearest_model::NearestModel;
 use crate::domains::{GpInput, Record, Rows};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::joint_q::QFunction;
+use crate::joint_q::ForestQ;
 use crate::transfer::gp::{GpOptions, GpSearch, GpSummary, Output, RecordGp, SourceGps};
 use crate::transfer::protocol::{Diagnostics, Learner};
 
@@ -722,7 +722,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
                 } else {
                     self.run.greedy_action(&state)
                 };
-                let record = domain.target.step(state, action, rng)?;
+                let record = domain.target.query(state, action, rng)?;
                 let surprised = self.options.surprise_stop
                     && (record.reward - self.predict(&record)).abs() > threshold;
                 self.run.data.push(record);
@@ -761,11 +761,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
     /// [`AdaptiveOptions::select`] simulated rollouts from the target's initial state is
     /// highest (the latest on ties), in the nearest-record model of the last refit's
     /// records and rewards (relabelled ones included).
-    fn select_plan(
-        &mut self,
-        plans: Vec<QFunction<D>>,
-        rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<()> {
+    fn select_plan(&mut self, plans: Vec<ForestQ<D>>, rng: &mut ChaCha8Rng) -> anyhow::Result<()> {
         let domain = self.run.domain;
         let model = NearestModel::new(
             &self.run.data,
@@ -773,7 +769,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
             self.rewards.as_deref(),
             domain.state_bounds,
         );
-        let mut best: Option<(f64, QFunction<D>)> = None;
+        let mut best: Option<(f64, ForestQ<D>)> = None;
         for plan in plans {
             let greedy = |s: &[f64; D]| plan.greedy_action(s);
             let mut total = 0.0;
@@ -884,7 +880,7 @@ impl<'e, const D: usize> Adaptive<'e, D> {
         let alias = AliasTable::build(probabilities, &mut storage)?;
         for _ in 0..n {
             let (state, action) = setup.rows[picks[alias.sample(rng)]];
-            let record = self.run.domain.target.step(state, action, rng)?;
+            let record = self.run.domain.target.query(state, action, rng)?;
             self.run.data.push(record);
         }
         Ok(())

@@ -127,7 +127,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         let rows = table.draw(self.experiment.budget(), rng)?;
         for r in rows {
             let (state, action) = table.rows[r];
-            let record = self.run.domain.target.step(state, action, rng)?;
+            let record = self.run.domain.target.query(state, action, rng)?;
             self.run.data.push(record);
         }
         Ok(())
@@ -208,7 +208,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         }
         let mut ws = vec![1.0; self.sources.len()];
         for d in transition_dims {
-            let output = Output::Next(d);
+            let output = Output::NextState(d);
             let (posteriors, _) = self.target_posteriors(output, &zs, rng)?;
             let mut offset = 0;
             for (k, (s, post)) in sources.iter().zip(&posteriors).enumerate() {
@@ -218,7 +218,11 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
                         k + 1
                     )
                 })?;
-                let ys: Vec<f64> = s.records.iter().map(|r| output.of(r)).collect();
+                let ys = s
+                    .records
+                    .iter()
+                    .map(|r| output.of(r))
+                    .collect::<awfqi::Result<Vec<f64>>>()?;
                 let mut out = vec![0.0; ys.len()];
                 transition.weights_into(&ys, post, stored, &mut out)?;
                 for (w, o) in ws[offset..offset + out.len()].iter_mut().zip(out) {
@@ -264,8 +268,8 @@ pub fn ideal_weights<const D: usize>(
                     model.mean_next_state(r.state, r.action)?,
                 ),
                 IdealMeans::Sampled => (
-                    target.step(r.state, r.action, rng)?.next_state,
-                    model.step(r.state, r.action, rng)?.next_state,
+                    target.query(r.state, r.action, rng)?.next_state,
+                    model.query(r.state, r.action, rng)?.next_state,
                 ),
             };
             let mut w = 1.0;

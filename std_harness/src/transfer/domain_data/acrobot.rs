@@ -90,7 +90,7 @@ mod tests {
             // The records are the model's steps (noise-free dynamics).
             for r in s.records.iter().step_by(53) {
                 let mut rng = crate::transfer::stream(0, &[]);
-                let t = model.step(r.state, r.action, &mut rng).unwrap();
+                let t = model.query(r.state, r.action, &mut rng).unwrap();
                 assert!((t.reward - r.reward).abs() < 1e-12);
                 for d in 0..4 {
                     assert!(

@@ -14,7 +14,7 @@ fn target_records(n: usize) -> Vec<Record<4>> {
     let mut state = domain.target.initial_state(&mut rng);
     while records.len() < n {
         let action = (rng.next_u32() % 2) as usize;
-        let r = domain.target.step(state, action, &mut rng).unwrap();
+        let r = domain.target.query(state, action, &mut rng).unwrap();
         state = r.next_state;
         if r.absorbing || records.len() % 100 == 99 {
             state = domain.target.initial_state(&mut rng);
@@ -54,10 +54,10 @@ fn appended_batches_stay_within_the_refits_own_rounding() {
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     for output in [
         Output::Reward,
-        Output::Next(0),
-        Output::Next(1),
-        Output::Next(2),
-        Output::Next(3),
+        Output::NextState(0),
+        Output::NextState(1),
+        Output::NextState(2),
+        Output::NextState(3),
     ] {
         let spec = data.weighting.gp_spec(output);
         let refit = |records: &[Record<4>], rng: &mut ChaCha8Rng| {
