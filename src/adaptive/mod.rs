@@ -1,8 +1,7 @@
 //! Adaptive AWFQI (not a thesis algorithm): the query distribution is recomputed
 //! from what the target has answered, several times per step, and aims at what decides the
-//! greedy policy. The harness's `awfqi-adaptive` (`docs/active-budget.md`) in fixed memory,
-//! for any plant with a `D`-dimensional state; the harness runs it as
-//! `awfqi-adaptive-kernel`.
+//! greedy policy, in fixed memory, for any plant with a `D`-dimensional state; the harness
+//! runs it as `awfqi-adaptive` (`docs/active-budget.md`).
 //!
 //! Each step's budget `n` is spent in [`AdaptiveConfig::sub_batches`] sub-batches; in each:
 //!

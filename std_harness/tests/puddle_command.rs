@@ -108,34 +108,34 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     let summary = read(&a, "summary.csv");
     assert!(summary.starts_with("algorithm,step,n_episodes,n_target_samples,mean,stderr,runs\n"));
     assert_eq!(summary.lines().count(), 1 + 2 * algorithms.len());
-    // IWFQI and the kernel report their weight diagnostics, RBT its compliances.
+    // IWFQI and the core's algorithms report their weight diagnostics, RBT its compliances.
     let d = base.join("d");
     // (3 streamed trees per action instead of the default 50: a debug build.)
-    let few_trees = ["--kernel-trees", "3"];
+    let few_trees = ["--adaptive-trees", "3"];
     run(&args_with(
         &d,
         "1",
-        "iwfqi,awfqi-kernel,awfqi-adaptive-kernel",
+        "iwfqi,awfqi-embedded,awfqi-adaptive",
         &few_trees,
     ))
     .unwrap();
-    for name in ["iwfqi", "awfqi-kernel", "awfqi-adaptive-kernel"] {
+    for name in ["iwfqi", "awfqi-embedded", "awfqi-adaptive"] {
         let json: serde_json::Value =
             serde_json::from_str(&read(&d, &format!("{name}.json"))).unwrap();
         let step = &json["runs"][0]["steps"][1];
         assert!(step["wr_eff"].as_f64().unwrap() > 0.0, "{name}");
         assert!(step["reward_gp"]["noise_variance"].is_number(), "{name}");
     }
-    // The adaptive kernel spends 50 queries per step and names its own approximator.
+    // The adaptive AWFQI spends 50 queries per step and names its own approximator.
     let adaptive: serde_json::Value =
-        serde_json::from_str(&read(&d, "awfqi-adaptive-kernel.json")).unwrap();
+        serde_json::from_str(&read(&d, "awfqi-adaptive.json")).unwrap();
     let steps = &adaptive["runs"][0]["steps"];
     assert_eq!(steps[0]["n_target_samples"].as_f64(), Some(50.0));
     assert_eq!(steps[1]["n_target_samples"].as_f64(), Some(100.0));
-    let kernel = &adaptive["runs"][0]["parameters"]["kernel"];
-    assert_eq!(kernel["fqi_trees"], serde_json::json!(3), "{kernel}");
-    assert_eq!(kernel["fqi_trees_streamed"], serde_json::json!(true));
-    assert_eq!(kernel["fqi_tree_nodes"], serde_json::json!(1023));
+    let embedded = &adaptive["runs"][0]["parameters"]["embedded"];
+    assert_eq!(embedded["fqi_trees"], serde_json::json!(3), "{embedded}");
+    assert_eq!(embedded["fqi_trees_streamed"], serde_json::json!(true));
+    assert_eq!(embedded["fqi_tree_nodes"], serde_json::json!(1023));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
         .as_array()

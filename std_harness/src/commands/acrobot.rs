@@ -7,15 +7,21 @@
 
 use crate::domains::acrobot;
 
-use super::transfer::{Args, BASELINES_AND_AWFQI, Config};
+use super::transfer::{BASELINES_AND_AWFQI, Config, PaperArgs};
+
+/// Arguments of `awfqi-harness acrobot`.
+pub type Args = PaperArgs;
 
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    if args.dynamics.is_some() {
-        anyhow::bail!("--dynamics applies to Puddle World only");
-    }
     let domain = acrobot::domain();
-    let config = Config::resolve(args, &domain, &BASELINES_AND_AWFQI, false)?;
+    let config = Config::resolve(
+        &args.common,
+        args.fixed_gp,
+        &domain,
+        &BASELINES_AND_AWFQI,
+        false,
+    )?;
     let data = crate::transfer::domain_data::acrobot::data();
     super::transfer::run(&config, domain, data, None, None)
 }

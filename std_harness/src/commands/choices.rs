@@ -9,7 +9,6 @@ use crate::domains::IdealMeans;
 use crate::gp_large::fixed::PredictiveVariance;
 use crate::identification::{CriterionName, Design, PolicyName};
 use crate::joint_q::ForestLayout;
-use crate::transfer::algorithms::adaptive::AdaptiveOracle;
 use crate::transfer::algorithms::rbt::ComplianceSum;
 use crate::transfer::algorithms::{Algorithm, Variances};
 use crate::transfer::gp::{FixedGpUpdate, GpSearch};
@@ -82,13 +81,6 @@ choices! {
     ComplianceSum {
         ComplianceSum::Means => "means": "Means over a source's records (spec §8)",
         ComplianceSum::Sums => "sums": "Sums, as the published Acrobot RBT runs computed",
-    }
-    AdaptiveOracle {
-        AdaptiveOracle::None => "none": "No oracle: the algorithm",
-        AdaptiveOracle::Rewards => "rewards":
-            "Every record relabelled with the target's mean reward, all weights 1",
-        AdaptiveOracle::Validity => "validity":
-            "A source record keeps weight 1 where its source's mean reward is the target's",
     }
     CriterionName {
         CriterionName::Uniform => "uniform": "Uniform over all state-action pairs",

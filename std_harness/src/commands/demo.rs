@@ -1,4 +1,4 @@
-//! `awfqi-harness demo`: the kernel in thirty seconds.
+//! `awfqi-harness demo`: the core in thirty seconds.
 //!
 //! Runs one Puddle World episode on the target task, then spends a small budget of
 //! generative-model queries on the target, fits the core's fixed-capacity `f32` GP to the

@@ -227,8 +227,8 @@ struct Recorded {
 #[derive(Subcommand)]
 enum Experiment {
     Puddle(super::puddle::Args),
-    Dam(super::transfer::Args),
-    Acrobot(super::transfer::Args),
+    Dam(super::dam::Args),
+    Acrobot(super::acrobot::Args),
 }
 
 /// Regenerates OUT's summary, metrics and plots: the shards' command with `--no-run`.

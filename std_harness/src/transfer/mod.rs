@@ -12,7 +12,8 @@
 //! - [`protocol`]: the common experiment protocol of §3 (episodic collection, evaluation,
 //!   per-step records);
 //! - [`algorithms`]: FQI, IWFQI (mean, heuristic, ideal weights), RBT, SDT, AWFQI and
-//!   AWFQI_oracle on the faithful std path, and `awfqi-kernel`, the core's embedded path;
+//!   AWFQI_oracle on the faithful std path, and `awfqi-embedded` and `awfqi-adaptive`, the
+//!   core's algorithms;
 //! - [`score_tables`]: the oracle and realistic score tables (§11), built once per
 //!   experiment and shared by all runs;
 //! - [`results`]: result files in the reference's layout, summaries, merging of run ranges;

@@ -42,7 +42,7 @@ impl Mode {
 }
 
 /// The grid part of a score table's rows (§11.1): a core point grid with its action count
-/// (the kernel's `f32` grid) or explicit `(state, action)` pairs (a domain's
+/// (the embedded path's `f32` grid) or explicit `(state, action)` pairs (a domain's
 /// [`grid_rows`](crate::domains::Domain::grid_rows)).
 #[derive(Debug, Clone, Copy)]
 pub enum GridRows<'a, T, const D: usize> {

@@ -201,7 +201,7 @@ pub type Storage32k = AwfqiStorage<f32, 2, 3, 24, 300, 1033, 324, 484>;
 
 /// The main job's AWFQI on the device in the 32 KiB configuration: the builder over the
 /// flash tables, 6 steps of 50 queries (thesis configuration, §4.2 search), the greedy
-/// policy's evaluation. `std_harness/examples/kernel_capacity.rs` (`24 11 1.25`) measures
+/// policy's evaluation. `std_harness/examples/embedded_capacity.rs` (`24 11 1.25`) measures
 /// the return of this configuration on the host.
 pub fn awfqi_puddle_32k(
     storage: &mut Storage32k,
@@ -615,7 +615,7 @@ pub fn adaptive_puddle<
 }
 
 /// The recommended Puddle World configuration of adaptive AWFQI (the one the harness
-/// measures as `awfqi-adaptive-kernel`): the sources' 64-point mean functions and the
+/// measures as `awfqi-adaptive`): the sources' 64-point mean functions and the
 /// kernel's memory — a 64-point target GP, 6 steps × 50 target records, one weight per
 /// published source record, 4 000 candidate slots (and their alias table), 50 verified
 /// states, 3 beliefs — and streamed Extra-Trees FQI: one record slot per target and source

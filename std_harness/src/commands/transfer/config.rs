@@ -12,7 +12,7 @@ use crate::transfer::algorithms::Algorithm;
 use crate::transfer::gp::GpOptions;
 use crate::transfer::score_tables::Mode;
 
-use super::Args;
+use super::{CommonArgs, FixedGpArgs};
 
 /// One value of `--algorithms`: an algorithm, or `all` of those the domain runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -67,7 +67,9 @@ pub const BASELINES_AND_AWFQI: [Algorithm; 7] = [
 #[derive(Debug, Clone)]
 pub struct Config {
     /// The raw arguments.
-    pub args: Args,
+    pub args: CommonArgs,
+    /// The fixed-kernel GPs' options (the Dam's and Acrobot's; defaults elsewhere).
+    pub fixed_gp: FixedGpArgs,
     /// Setting.
     pub setting: Mode,
     /// Episodes per step.
@@ -114,7 +116,8 @@ impl Config {
     /// values, `--algorithms` left out takes `defaults`, and `all` every algorithm the
     /// domain runs (the embedded ones only `with_embedded`).
     pub fn resolve<const D: usize>(
-        args: &Args,
+        args: &CommonArgs,
+        fixed_gp: FixedGpArgs,
         domain: &Domain<D>,
         defaults: &[Algorithm],
         with_embedded: bool,
@@ -144,6 +147,7 @@ impl Config {
         }
         let config = Self {
             args: args.clone(),
+            fixed_gp,
             setting: args.setting.unwrap_or(Mode::Grid),
             episodes_per_step: args.episodes_per_step.unwrap_or(p.episodes_per_step),
             steps: args.steps.unwrap_or(p.steps),
@@ -215,8 +219,8 @@ impl Config {
             max_gp: self.max_gp,
             search: self.args.gp_search,
             check: self.args.check_gp_search,
-            fixed_update: self.args.fixed_gp,
-            fixed_variance: self.args.fixed_gp_variance,
+            fixed_update: self.fixed_gp.fixed_gp,
+            fixed_variance: self.fixed_gp.fixed_gp_variance,
         }
     }
 }
@@ -233,10 +237,10 @@ mod tests {
     #[derive(Parser)]
     struct Cli {
         #[command(flatten)]
-        args: Args,
+        args: CommonArgs,
     }
 
-    fn args(words: &[&str]) -> Args {
+    fn args(words: &[&str]) -> CommonArgs {
         Cli::parse_from(std::iter::once("transfer").chain(words.iter().copied())).args
     }
 
@@ -247,9 +251,21 @@ mod tests {
         let resolve = |words: &[&str], domain_is_puddle: bool| {
             let a = args(words);
             if domain_is_puddle {
-                Config::resolve(&a, &puddle, &crate::commands::puddle::HEADLINE, true)
+                Config::resolve(
+                    &a,
+                    FixedGpArgs::default(),
+                    &puddle,
+                    &crate::commands::puddle::HEADLINE,
+                    true,
+                )
             } else {
-                Config::resolve(&a, &dam, &BASELINES_AND_AWFQI, false)
+                Config::resolve(
+                    &a,
+                    FixedGpArgs::default(),
+                    &dam,
+                    &BASELINES_AND_AWFQI,
+                    false,
+                )
             }
             .map(|c| c.algorithms)
         };
@@ -270,7 +286,7 @@ mod tests {
             resolve(&["--algorithms", "awfqi,fqi,awfqi"], false).unwrap(),
             [Algorithm::Fqi, Algorithm::Awfqi]
         );
-        let embedded = resolve(&["--algorithms", "awfqi-kernel"], false).unwrap_err();
+        let embedded = resolve(&["--algorithms", "awfqi-embedded"], false).unwrap_err();
         assert!(
             embedded.to_string().contains("Puddle World only"),
             "{embedded}"
@@ -280,13 +296,27 @@ mod tests {
     #[test]
     fn options_left_out_take_the_domain_s_published_values() {
         let dam = dam::domain();
-        let c = Config::resolve(&args(&[]), &dam, &BASELINES_AND_AWFQI, false).unwrap();
+        let c = Config::resolve(
+            &args(&[]),
+            FixedGpArgs::default(),
+            &dam,
+            &BASELINES_AND_AWFQI,
+            false,
+        )
+        .unwrap();
         let p = &dam.published;
         assert_eq!(
             (c.steps, c.episodes_per_step, c.runs.end, c.threshold),
             (p.steps, p.episodes_per_step, p.runs, p.threshold)
         );
-        let c = Config::resolve(&args(&["--steps", "3"]), &dam, &[], false).unwrap();
+        let c = Config::resolve(
+            &args(&["--steps", "3"]),
+            FixedGpArgs::default(),
+            &dam,
+            &[],
+            false,
+        )
+        .unwrap();
         assert_eq!(c.steps, 3);
     }
 }

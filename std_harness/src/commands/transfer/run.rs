@@ -20,14 +20,13 @@ use crate::transfer::metrics::{TransferMetrics, transfer_metrics};
 use crate::transfer::protocol;
 use crate::transfer::result_dir::{ResultDir, recorded_command};
 use crate::transfer::results::{ResultFile, RunRecord, SAMPLE_RUNS, SummaryRow, write_summary};
-use crate::transfer::sources::SourceSet;
 use crate::transfer::{RUN, figures, stream};
 
 use super::report::{
     kept_note, progress_line, report_markdown, summarise_search_checks, timing_report, title,
     write_search_checks,
 };
-use super::{Config, KernelHooks, build_experiment};
+use super::{Config, EmbeddedPath, build_experiment};
 
 /// The configuration every run of a file shares (runs merge only when it is equal).
 fn experiment_json<const D: usize>(
@@ -48,45 +47,6 @@ fn experiment_json<const D: usize>(
         json["dynamics"] = protocol::dynamics_name::name(d).into();
     }
     json
-}
-
-pub(super) fn load_sources<const D: usize>(
-    config: &Config,
-    domain: &Domain<D>,
-    data: &DomainData<D>,
-) -> anyhow::Result<SourceSet<D>> {
-    let args = &config.args;
-    match args.sources.as_str() {
-        "published" => (data.published)(),
-        "generate" => {
-            let generation = data.generation.with_budget(config.iterations, config.trees);
-            eprintln!("generating source data ({generation:?})…");
-            let start = Instant::now();
-            let set = crate::transfer::sources::generate(
-                domain,
-                &data.weighting,
-                &data.layout,
-                &generation,
-                &config.gp(),
-                args.seed,
-            )?;
-            let dir = config.out.join("sources");
-            set.write_dir(&dir, &data.layout)?;
-            eprintln!(
-                "source data: {:?} records, written to {} ({:.1} s)",
-                set.sources.iter().map(|s| s.len()).collect::<Vec<_>>(),
-                dir.display(),
-                start.elapsed().as_secs_f64()
-            );
-            Ok(set)
-        }
-        dir => SourceSet::read_layout(
-            Path::new(dir),
-            &data.layout,
-            domain.sources.len(),
-            domain.num_actions(),
-        ),
-    }
 }
 
 /// One run of one algorithm.
@@ -135,11 +95,11 @@ pub fn run_one<const D: usize>(
 /// Rough cost order, so the longest runs start first.
 fn cost_rank(a: Algorithm) -> usize {
     match a {
-        Algorithm::Awfqi | Algorithm::AwfqiOracle | Algorithm::AwfqiAdaptive => 0,
-        Algorithm::Iwfqi | Algorithm::IwfqiHeuristic => 1,
+        Algorithm::Iwfqi | Algorithm::IwfqiHeuristic | Algorithm::AwfqiAdaptive => 0,
+        Algorithm::Awfqi | Algorithm::AwfqiOracle => 1,
         Algorithm::Sdt | Algorithm::IwfqiIdeal | Algorithm::Rbt => 2,
         Algorithm::Fqi => 3,
-        Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => 4,
+        Algorithm::AwfqiEmbedded => 4,
     }
 }
 
@@ -150,13 +110,13 @@ pub fn run<const D: usize>(
     domain: Domain<D>,
     data: DomainData<D>,
     dynamics: Option<Dynamics>,
-    hooks: Option<KernelHooks<D>>,
+    embedded: Option<EmbeddedPath<D>>,
 ) -> anyhow::Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(config.args.threads)
         .build()
         .context("building the thread pool")?;
-    pool.install(|| run_in_pool(config, Arc::new(domain), Arc::new(data), dynamics, hooks))
+    pool.install(|| run_in_pool(config, Arc::new(domain), Arc::new(data), dynamics, embedded))
 }
 
 /// Creates `out` and checks that a file can be written in it, before any run starts.
@@ -181,7 +141,7 @@ fn run_in_pool<const D: usize>(
     domain: Arc<Domain<D>>,
     data: Arc<DomainData<D>>,
     dynamics: Option<Dynamics>,
-    hooks: Option<KernelHooks<D>>,
+    embedded: Option<EmbeddedPath<D>>,
 ) -> anyhow::Result<()> {
     let args = &config.args;
     let out = &config.out;
@@ -199,7 +159,7 @@ fn run_in_pool<const D: usize>(
         },
         ..config.clone()
     };
-    let experiment = build_experiment(&build, domain, data, dynamics, hooks)?;
+    let experiment = build_experiment(&build, domain, data, dynamics, embedded)?;
     let runs: Vec<usize> = if args.no_run {
         Vec::new()
     } else {

@@ -1,12 +1,9 @@
 //! The algorithms compared on the protocol of §3, one module each, and the experiment
 //! context they share ([`Experiment`]).
 
-pub mod adaptive;
-pub mod adaptive_kernel;
-pub mod awfqi_kernel;
+pub mod embedded;
 pub mod episodic;
 pub mod iwfqi;
-pub mod nearest_model;
 pub mod plain_fqi;
 pub mod rbt;
 pub mod sdt;
@@ -45,14 +42,12 @@ pub enum Algorithm {
     Awfqi,
     /// AWFQI with the oracle score table (§12).
     AwfqiOracle,
-    /// The core's embedded AWFQI (fixed-capacity f32 GP, tabular FQI) on the same protocol.
-    AwfqiKernel,
-    /// AWFQI with a query distribution recomputed from the target's answers within every
-    /// step (not a thesis algorithm).
+    /// The thesis's AWFQI as the core runs it (`awfqi::Awfqi`: f32, fixed memory).
+    AwfqiEmbedded,
+    /// The adaptive AWFQI as the core runs it (`awfqi::AdaptiveAwfqi`: f32, fixed memory):
+    /// queries re-planned from the target's answers within every step (not a thesis
+    /// algorithm).
     AwfqiAdaptive,
-    /// The core's adaptive AWFQI (`awfqi::AdaptiveAwfqi`, f32, fixed memory) on the same
-    /// protocol as `awfqi-adaptive`.
-    AwfqiAdaptiveKernel,
 }
 
 /// One row of the algorithm table.
@@ -71,7 +66,7 @@ pub struct AlgorithmRow {
 
 impl Algorithm {
     /// Every algorithm.
-    pub const ALL: [Algorithm; 11] = [
+    pub const ALL: [Algorithm; 10] = [
         Algorithm::Fqi,
         Algorithm::Iwfqi,
         Algorithm::IwfqiHeuristic,
@@ -80,14 +75,13 @@ impl Algorithm {
         Algorithm::Sdt,
         Algorithm::Awfqi,
         Algorithm::AwfqiOracle,
-        Algorithm::AwfqiKernel,
+        Algorithm::AwfqiEmbedded,
         Algorithm::AwfqiAdaptive,
-        Algorithm::AwfqiAdaptiveKernel,
     ];
 
     /// The algorithm table. Each algorithm has a colour of its own (the headline, the
-    /// adaptive AWFQI, the crimson) but the heuristic IWFQI, which shares the std
-    /// adaptive algorithm's grey.
+    /// adaptive AWFQI, the crimson). Seed id 10 belonged to a retired std version of the
+    /// adaptive AWFQI: never reuse it.
     pub const fn row(self) -> AlgorithmRow {
         let (name, id, color, description) = match self {
             Algorithm::Fqi => ("fqi", 1, 7, "FQI on the target's episodes alone (spec §5)"),
@@ -118,23 +112,18 @@ impl Algorithm {
                 2,
                 "AWFQI with the oracle score table (spec §12)",
             ),
-            Algorithm::AwfqiKernel => (
-                "awfqi-kernel",
+            Algorithm::AwfqiEmbedded => (
+                "awfqi-embedded",
                 9,
                 9,
-                "The core's AWFQI in f32 and fixed memory (tile-coded FQI)",
+                "The thesis's AWFQI as the core runs it: f32, fixed memory, tile-coded FQI",
             ),
             Algorithm::AwfqiAdaptive => (
                 "awfqi-adaptive",
-                10,
-                10,
-                "AWFQI with queries re-planned from the target's answers within every step",
-            ),
-            Algorithm::AwfqiAdaptiveKernel => (
-                "awfqi-adaptive-kernel",
                 11,
                 8,
-                "The core's adaptive AWFQI in f32 and fixed memory",
+                "AWFQI re-planning its queries from the target's answers within every step, \
+                 as the core runs it (f32, fixed memory)",
             ),
         };
         AlgorithmRow {
@@ -171,9 +160,8 @@ impl Algorithm {
             self,
             Algorithm::Awfqi
                 | Algorithm::AwfqiOracle
-                | Algorithm::AwfqiKernel
+                | Algorithm::AwfqiEmbedded
                 | Algorithm::AwfqiAdaptive
-                | Algorithm::AwfqiAdaptiveKernel
         )
     }
 
@@ -185,10 +173,7 @@ impl Algorithm {
     /// `true` for the core's algorithms, which run on Puddle World only until the
     /// harness's embedded path is generic over the state dimension.
     pub fn is_embedded(self) -> bool {
-        matches!(
-            self,
-            Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel
-        )
+        matches!(self, Algorithm::AwfqiEmbedded | Algorithm::AwfqiAdaptive)
     }
 }
 
@@ -264,10 +249,10 @@ impl Default for TransferOptions {
     }
 }
 
-/// A learner that borrows run-long storage (the core kernel's memory and source slices):
+/// A learner that borrows run-long storage (the core's memory and source slices):
 /// the hook allocates the storage in its own frame, builds the learner from the stream and
 /// hands it to the continuation, which runs the protocol on it. Puddle World only until the
-/// kernel is generic over the state dimension.
+/// embedded path is generic over the state dimension.
 pub type ScopedLearner<const D: usize> = fn(
     &Experiment<D>,
     &mut ChaCha8Rng,
@@ -293,16 +278,14 @@ pub struct Experiment<const D: usize = 2> {
     pub realistic_table: Option<Arc<ScoreTableData<D>>>,
     /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
     pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
-    /// The core kernel's own set-up (awfqi-kernel).
-    pub kernel: Option<Arc<awfqi_kernel::KernelSetup>>,
-    /// The kernel's learner on this domain (`None`: not available).
-    pub kernel_learner: Option<ScopedLearner<D>>,
-    /// The adaptive kernel's learner on this domain (`None`: not available).
-    pub adaptive_kernel_learner: Option<ScopedLearner<D>>,
-    /// The shared set-up of awfqi-adaptive (its rows and source GPs).
-    pub adaptive: Option<Arc<adaptive::AdaptiveSetup<D>>>,
-    /// awfqi-adaptive's options.
-    pub adaptive_options: adaptive::AdaptiveOptions,
+    /// The embedded algorithms' shared set-up.
+    pub embedded: Option<Arc<embedded::EmbeddedSetup>>,
+    /// `awfqi-embedded`'s learner on this domain (`None`: not available).
+    pub embedded_learner: Option<ScopedLearner<D>>,
+    /// `awfqi-adaptive`'s learner on this domain (`None`: not available).
+    pub adaptive_learner: Option<ScopedLearner<D>>,
+    /// `awfqi-adaptive`'s options.
+    pub adaptive_options: embedded::adaptive::AdaptiveOptions,
 }
 
 impl<const D: usize> Experiment<D> {
@@ -430,20 +413,15 @@ impl<const D: usize> Experiment<D> {
                     o["compliance"] = "sums".into();
                 }
             }
-            Algorithm::AwfqiKernel => {
-                if let Some(k) = &self.kernel {
-                    o["kernel"] = k.parameters();
+            Algorithm::AwfqiEmbedded => {
+                if let Some(e) = &self.embedded {
+                    o["embedded"] = e.parameters(e.config.q);
                 }
-            }
-            Algorithm::AwfqiAdaptiveKernel => {
-                if let Some(k) = &self.kernel {
-                    o["kernel"] = k.parameters_with(k.config.adaptive_q);
-                }
-                o["var_rw"] = v_r.into();
-                o["max_weight"] = self.options.max_weight.into();
-                o["adaptive"] = serde_json::to_value(self.adaptive_options).unwrap_or_default();
             }
             Algorithm::AwfqiAdaptive => {
+                if let Some(e) = &self.embedded {
+                    o["embedded"] = e.parameters(e.config.adaptive_q);
+                }
                 o["var_rw"] = v_r.into();
                 o["max_weight"] = self.options.max_weight.into();
                 o["adaptive"] = serde_json::to_value(self.adaptive_options).unwrap_or_default();
@@ -455,11 +433,11 @@ impl<const D: usize> Experiment<D> {
             let table = match algorithm {
                 Algorithm::AwfqiOracle => self.oracle_table.as_ref().map(|t| (t.mode, "oracle")),
                 Algorithm::Awfqi => self.realistic_table.as_ref().map(|t| (t.mode, "realistic")),
-                Algorithm::AwfqiAdaptive | Algorithm::AwfqiAdaptiveKernel => None,
-                _ => self
-                    .kernel
+                Algorithm::AwfqiEmbedded => self
+                    .embedded
                     .as_ref()
-                    .map(|k| (k.config.mode, "realistic (kernel GPs)")),
+                    .map(|e| (e.config.mode, "realistic (the core's f32 GPs)")),
+                _ => None,
             };
             if let Some((mode, kind)) = table {
                 o["score_table"] =
@@ -477,7 +455,7 @@ impl<const D: usize> Experiment<D> {
     }
 
     /// Hands a fresh learner of `algorithm` for one run to `f`, with the stream `rng`
-    /// (which the kernel's set-up draws from first): every algorithm, the kernel included,
+    /// (which an embedded set-up draws from first): every algorithm, the embedded ones included,
     /// through this one door.
     pub fn with_learner(
         &self,
@@ -485,16 +463,16 @@ impl<const D: usize> Experiment<D> {
         rng: &mut ChaCha8Rng,
         f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
-        if algorithm == Algorithm::AwfqiKernel {
-            let scoped = self.kernel_learner.ok_or_else(|| {
-                anyhow::anyhow!("awfqi-kernel is not available on {}", self.domain.name)
-            })?;
-            return scoped(self, rng, f);
-        }
-        if algorithm == Algorithm::AwfqiAdaptiveKernel {
-            let scoped = self.adaptive_kernel_learner.ok_or_else(|| {
+        let embedded = match algorithm {
+            Algorithm::AwfqiEmbedded => Some(self.embedded_learner),
+            Algorithm::AwfqiAdaptive => Some(self.adaptive_learner),
+            _ => None,
+        };
+        if let Some(scoped) = embedded {
+            let scoped = scoped.ok_or_else(|| {
                 anyhow::anyhow!(
-                    "awfqi-adaptive-kernel is not available on {}",
+                    "{} is not available on {}",
+                    algorithm.name(),
                     self.domain.name
                 )
             })?;
@@ -504,7 +482,7 @@ impl<const D: usize> Experiment<D> {
         f(learner.as_mut(), rng)
     }
 
-    /// A fresh learner of `algorithm` for one run (the kernel, which borrows its storage
+    /// A fresh learner of `algorithm` for one run (the embedded ones, which borrow their storage
     /// for the whole run, only through [`Experiment::with_learner`]).
     pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner<D> + '_>> {
         use awfqi::weights::Estimator::{Heuristic, Mean};
@@ -529,8 +507,7 @@ impl<const D: usize> Experiment<D> {
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
                 Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table), gp)?)
             }
-            Algorithm::AwfqiAdaptive => Box::new(adaptive::Adaptive::new(self)?),
-            Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => {
+            Algorithm::AwfqiEmbedded | Algorithm::AwfqiAdaptive => {
                 anyhow::bail!("{} runs through with_learner", algorithm.name())
             }
         })
