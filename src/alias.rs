@@ -10,7 +10,9 @@
 //! row: a `T` and a `u32`, 8 bytes in `f32`), and the set-up needs no other memory: Vose's
 //! two work lists are threaded through the entries' alias fields as linked lists.
 
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+
+use crate::float::Real;
 use rand_core::Rng;
 
 /// End-of-list marker of the work lists threaded through the alias fields.

@@ -68,13 +68,14 @@ pub(crate) mod transfer;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 
-use crate::env::{GenerativeModel, Transition};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::{Approximator, FqiConfig, QFunction};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
 use crate::score::{RowSampler, ScoreColumn};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 use transfer::{SourceValues, Transfer};
 

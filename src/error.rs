@@ -165,7 +165,7 @@ impl fmt::Display for Error {
 impl core::error::Error for Error {}
 
 /// Returns `Ok(value)` when `value` is finite, else the [`Error::NonFinite`] naming `parameter`.
-pub(crate) fn ensure_finite<T: crate::Real>(value: T, parameter: &'static str) -> Result<T> {
+pub(crate) fn ensure_finite<T: crate::float::Real>(value: T, parameter: &'static str) -> Result<T> {
     if value.is_finite() {
         Ok(value)
     } else {
@@ -174,7 +174,7 @@ pub(crate) fn ensure_finite<T: crate::Real>(value: T, parameter: &'static str) -
 }
 
 /// Checks that every value of `values` is finite.
-pub(crate) fn ensure_all_finite<T: crate::Real>(
+pub(crate) fn ensure_all_finite<T: crate::float::Real>(
     values: &[T],
     parameter: &'static str,
 ) -> Result<()> {

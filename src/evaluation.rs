@@ -7,10 +7,11 @@
 //! [`crate::env::PuddleWorld::evaluation_protocol`]: 5 rollouts from (0, 0), horizon 50,
 //! γ = 0.99).
 
-use crate::env::GenerativeModel;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::Greedy;
+use crate::model::GenerativeModel;
 use crate::policy::Policy;
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// What one evaluation rollout produced (spec §3.3).

@@ -21,6 +21,7 @@ pub mod float;
 pub mod fqi;
 pub mod gp;
 pub mod identify;
+pub mod model;
 pub mod planning;
 pub mod policy;
 pub mod record_gp;
@@ -41,7 +42,6 @@ pub use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
     ValidAwfqiConfig,
 };
-pub use env::{GenerativeModel, Transition};
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
@@ -49,6 +49,7 @@ pub use fqi::{
     Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+pub use model::{GenerativeModel, Transition};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use record_gp::{GpTraining, Output, SubsetRule};
 pub use score::{

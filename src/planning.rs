@@ -9,8 +9,9 @@
 //! Nothing here allocates or panics; the models are read through [`FiniteMdp`], so sparse
 //! models cost O(successors) per backup rather than O(|𝒮|).
 
-use crate::env::FiniteMdp;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::FiniteMdp;
 
 /// Stopping rule of value iteration and policy evaluation.
 ///

@@ -5,8 +5,10 @@
 //! A greedy policy is any closure `FnMut(&S) -> Result<usize>` (blanket implementation);
 //! it returns `Result` because evaluating a learned Q-function can fail.
 
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::rng;
 use crate::rng::uniform_index;
-use crate::{Error, Real, Result, rng};
 use rand_core::Rng;
 
 /// Chooses an action in a state, drawing any randomness from the caller's generator.

@@ -10,10 +10,11 @@
 //! `max_gp` records; with the small capacities of a microcontroller, **spread** (every
 //! `len/N`-th record) keeps every part of the dataset represented instead.
 
-use crate::env::Transition;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use crate::model::Transition;
 use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// Fails to compile unless `I == D + 1` (the GP input is the state followed by the action).

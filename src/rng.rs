@@ -5,7 +5,9 @@
 //! microcontroller. Each draw consumes a fixed, documented amount of the stream where
 //! possible, so `f32` and `f64` runs from the same seed stay in step.
 
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+
+use crate::float::Real;
 use rand_core::Rng;
 
 /// 2⁻⁵³: the spacing of the 53-bit uniform grid on [0, 1).

@@ -18,8 +18,9 @@
 //! principled alternative of §14.7. [`ideal_weight`] is the oracle weight of §7.7 and
 //! [`WeightSummary`] gives the diagnostics `w_mean` and `w_eff` of §7.2.
 
+use crate::error::{Error, Result};
 use crate::error::{ensure_all_finite, ensure_finite};
-use crate::{Error, Real, Result};
+use crate::float::Real;
 
 /// Which estimator of §7.3 turns two GP posteriors into a weight.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -6,7 +6,9 @@
 //! queries; its rows and their factors live in one [`Candidate`] per slot, so the scoring is
 //! two passes over the slots and the alias table a third.
 
-use crate::{Real, Result};
+use crate::error::Result;
+
+use crate::float::Real;
 
 /// One candidate row of a sub-batch and its score's factors. Size: one `usize` and 3 `T`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -134,7 +136,7 @@ mod tests {
         let (m, v) =
             weighted_spread([Ok((-100.0f32, 0.5)), Ok((-100.0, 0.5))].into_iter()).unwrap();
         assert_eq!((m, v), (-100.0, 0.0));
-        let e = crate::Error::EmptyData;
+        let e = crate::error::Error::EmptyData;
         assert_eq!(
             weighted_spread([Ok((1.0, 1.0)), Err(e)].into_iter()),
             Err(e)

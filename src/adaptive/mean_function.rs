@@ -7,10 +7,11 @@
 //! floats (1 048 bytes for `f32`, `N = 64`, `I = 3`). It is set-up data, like the stored
 //! posteriors: computed once per source (on the device, or on a host and kept in flash).
 
-use crate::env::Transition;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::Transition;
 use crate::record_gp::{GpTraining, Output, SubsetRule, fit_gp};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// The posterior mean `m(z) = Σᵢ k(z, xᵢ) αᵢ` of a fitted GP with room for `N` inputs of

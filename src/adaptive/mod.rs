@@ -61,13 +61,14 @@ use crate::alias::AliasTable;
 use crate::awfqi::builder::short;
 use crate::awfqi::transfer::{SourceValues, Transfer, for_each_source};
 use crate::awfqi::{AwfqiConfig, SourceData, StepReport};
-use crate::env::{GenerativeModel, Transition};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{InputDim, fit_gp_on, input, visit_posteriors};
 use crate::score::RowSet;
 use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// Settings of adaptive AWFQI for a `D`-dimensional plant (`I = D + 1`): the AWFQI
@@ -223,7 +224,7 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     /// `run.weights` holds the relabelled rewards the Q-function was last fitted on.
     relabelled: bool,
     slots: &'a mut [Candidate<T>],
-    alias: &'a mut [crate::AliasEntry<T>],
+    alias: &'a mut [crate::alias::AliasEntry<T>],
     path: &'a mut [[T; D]],
     path_len: usize,
     /// The Q-function has been fitted in this run.

@@ -7,8 +7,9 @@
 //! errors depend on the record and the (fixed) source means only, so each source keeps one
 //! running sum, updated once per query: O(sources) memory whatever the number of records.
 
-use crate::env::Transition;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::Transition;
 
 /// The clip of a squared reward error, in units of the estimator's reward variance `v_r`.
 pub const CLIP: f64 = 25.0;

@@ -3,11 +3,11 @@
 
 use super::candidates::Candidate;
 use super::plausibility::SourceBelief;
-use crate::Real;
 use crate::alias::AliasEntry;
-use crate::env::Transition;
+use crate::float::Real;
 use crate::fqi::{FqiEntry, QStorage};
 use crate::gp::Gp;
+use crate::model::Transition;
 
 /// All the memory an [`AdaptiveAwfqi`](super::AdaptiveAwfqi) run writes, as one block:
 /// the target GP (`N` points of dimension `I = D + 1`), `Q` target samples (steps ×

@@ -12,13 +12,14 @@
 
 use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
-use crate::env::{GenerativeModel, Transition};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{InputDim, Output, fit_gp, predict_posteriors};
 use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
 use crate::weights::{Posterior, WeightParams};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// All the memory an AWFQI run writes, as one block with const-generic capacities: the

@@ -1,9 +1,9 @@
 extern crate std;
 use super::*;
-use crate::TabularFqi;
 use crate::alias::AliasEntry;
 use crate::env::{Dynamics, PuddleWorld};
 use crate::fqi::SampleSet;
+use crate::fqi::TabularFqi;
 use crate::fqi::{CellGrid, FqiEntry};
 use crate::gp::SearchOptions;
 use crate::record_gp::{SubsetRule, predict_posteriors};

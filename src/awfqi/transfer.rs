@@ -6,12 +6,13 @@
 //! and transition weights, [`crate::AdaptiveAwfqi`] its adaptive query rule.
 
 use super::{Records, SourceData, StepReport};
-use crate::env::{GenerativeModel, Transition};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::{FqiConfig, QFunction, SampleSet};
 use crate::gp::{Gp, Hyperparameters};
+use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::visit_posteriors;
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// The state of a transfer run that every kernel has (module docs). Its fields are the

@@ -21,7 +21,9 @@
 //! steps, discounted by γ = 0.95.
 
 use super::{GenerativeModel, Transition};
-use crate::{Error, Real, Result, rng};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::rng;
 use rand_core::Rng;
 
 /// Number of actions; valid actions are `0..ACROBOT_ACTIONS`.

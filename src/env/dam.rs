@@ -24,7 +24,9 @@
 //! demand (in `f64`, as the reference does, then rounded to `T`).
 
 use super::{GenerativeModel, Transition};
-use crate::{Error, Real, Result, rng};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::rng;
 use rand_core::Rng;
 
 /// Number of actions (releases); valid actions are `0..DAM_ACTIONS`.

@@ -2,7 +2,9 @@
 //! differ only in where their single rewarding goal cell is.
 
 use super::{FiniteMdp, GenerativeModel, Transition};
-use crate::{Error, Real, Result, rng};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::rng;
 use rand_core::Rng;
 
 /// Number of actions: 0 = x+1, 1 = x−1, 2 = y+1, 3 = y−1 (the Puddle World encoding).

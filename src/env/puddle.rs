@@ -22,8 +22,11 @@ pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use episode::EpisodeRecord;
 
 use super::{GenerativeModel, Transition};
-use crate::score::{PointGrid, SourceMeans, SourceModel};
-use crate::{Error, Real, Result, rng};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::{SourceMeans, SourceModel};
+use crate::rng;
+use crate::score::PointGrid;
 use rand_core::Rng;
 
 /// Number of actions of Puddle World; valid actions are `0..PUDDLE_ACTIONS`.

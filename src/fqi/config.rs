@@ -2,7 +2,8 @@
 //! the minimum weight of "data", and what a table's pairs without data predict.
 
 use crate::error::ensure_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 
 /// What a (cell, action) pair with no sample of positive weight predicts.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,11 +3,8 @@
 
 use super::CellGrid;
 use super::config::EmptyCells;
-use super::table::FqiEntry;
-use crate::Real;
-
-/// "No donor" marker in [`FqiEntry`].
-pub(super) const NIL: u32 = u32::MAX;
+use super::entry::{FqiEntry, NIL};
+use crate::float::Real;
 
 /// Sets every entry's `donor` to the entry index of the nearest entry with the same action
 /// for which `has_data` holds (itself if it holds), or [`NIL`] when the action has none.

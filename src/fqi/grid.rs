@@ -2,7 +2,8 @@
 //! tabular FQI.
 
 use crate::error::ensure_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 
 /// A box `[lower, upper]` in `D` dimensions cut into `cells[0] × … × cells[D−1]` equal
 /// cells; cell `(i₀, i₁, …)` has index `i₀ + cells[0]·(i₁ + cells[1]·(i₂ + …))` (the first

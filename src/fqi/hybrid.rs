@@ -3,9 +3,11 @@
 //! records are sparse and the records' local ones where they are dense. Memory: that of
 //! both ([`TileFqi`]'s entries, [`KnnFqi`]'s records and links).
 
+use super::argmax::ArgMax;
 use super::iteration::{self, NoDraws, Regressor};
 use super::{FqiConfig, KnnFqi, SampleSet, TileFqi};
-use crate::{Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The mean of a tile-coding and a kernel-averaging Q-function, each fitted by weighted FQI
@@ -19,10 +21,10 @@ pub struct HybridFqi<'a, T, const D: usize> {
 impl<'a, T: Real, const D: usize> HybridFqi<'a, T, D> {
     /// The ensemble of `tiles` and `knn`, which must have the same action count.
     ///
-    /// Errors: different action counts ([`crate::Error::InvalidParameter`] `actions`).
+    /// Errors: different action counts ([`Error::InvalidParameter`] `actions`).
     pub fn new(tiles: TileFqi<'a, T, D>, knn: KnnFqi<'a, T, D>) -> Result<Self> {
         if tiles.actions() != knn.actions() {
-            return Err(crate::Error::InvalidParameter {
+            return Err(Error::InvalidParameter {
                 parameter: "actions",
             });
         }
@@ -91,16 +93,11 @@ impl<'a, T: Real, const D: usize> HybridFqi<'a, T, D> {
     ///
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
+        let mut best = ArgMax::new();
         for a in 0..self.actions() {
-            let q = self.value(state, a)?;
-            if a == 0 || q > best_q {
-                best = a;
-                best_q = q;
-            }
+            best.offer(a, self.value(state, a)?, true);
         }
-        Ok(best)
+        Ok(best.action())
     }
 }
 

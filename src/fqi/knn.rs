@@ -37,11 +37,13 @@
 //! 47 988 + 42 656 bytes. Fit cost: `O(records² · actions)` for the links (once), then
 //! `O(records · actions · k)` per iteration; a prediction scans the records, `O(records)`.
 
+use super::argmax::ArgMax;
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::load;
 use super::{FqiConfig, SampleSet};
+use crate::error::{Error, Result};
 use crate::error::{ensure_all_finite, ensure_finite};
-use crate::{Error, Real, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The largest `k` (the neighbour lists of a prediction live on the stack).
@@ -666,20 +668,11 @@ impl<'a, T: Real, const D: usize> KnnFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         ensure_all_finite(&state, "state")?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
-        let mut best_has_data = false;
+        let mut best = ArgMax::new();
         self.values(&state, |a, fitted| {
-            let has_data = fitted.is_some();
-            let q = fitted.unwrap_or(T::ZERO);
-            let better = a == 0 || q > best_q || (q == best_q && has_data && !best_has_data);
-            if better {
-                best = a;
-                best_q = q;
-                best_has_data = has_data;
-            }
+            best.offer(a, fitted.unwrap_or(T::ZERO), fitted.is_some());
         });
-        Ok(best)
+        Ok(best.action())
     }
 }
 

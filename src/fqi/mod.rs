@@ -35,8 +35,9 @@
 //! sets, counts them against the approximator's capacity, checks that no value can
 //! overflow, and runs the iterations. A new approximator is a file here with
 //! - a type holding borrowed storage, with the query methods every approximator has
-//!   (`actions`, `clear`, `value`, `max_value`, `greedy_action`; an error for a non-finite
-//!   state, never a panic), and `fit`/`fit_sets` that call `iteration::fit`;
+//!   (`actions`, `clear`, `value`, `max_value`, `greedy_action` with the common tie rule of
+//!   `argmax.rs`; an error for a non-finite state, never a panic), and `fit`/`fit_sets`
+//!   that call `iteration::fit`;
 //! - an `impl Regressor` (crate-private, in `iteration.rs`): `actions`, `capacity` (if it
 //!   keeps one record per sample), `fit_reward_model` (iteration 1), `bellman_iteration`
 //!   (iteration `k ≥ 2`; `k == 2` is where work done once per fit goes, such as the
@@ -47,7 +48,9 @@
 //!   `entries` and `as_tabular` aside), and its name in the `Greedy` macro there;
 //! - its public entry points in the no-panic image (`tests/on_target/src/bin/no_panic.rs`).
 
+mod argmax;
 mod config;
+mod entry;
 mod fill;
 mod grid;
 mod hybrid;
@@ -60,11 +63,12 @@ mod tiles;
 pub mod trees;
 
 pub use config::{EmptyCells, FqiConfig};
+pub use entry::FqiEntry;
 pub use grid::CellGrid;
 pub use hybrid::HybridFqi;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
-pub use table::{FqiEntry, TabularFqi};
+pub use table::TabularFqi;
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};

@@ -11,7 +11,8 @@ use super::{
     CellGrid, ExtraTrees, FqiConfig, FqiEntry, HybridFqi, KnnFqi, KnnRecord, Neighbours, SampleSet,
     TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord,
 };
-use crate::{Real, Result};
+use crate::error::Result;
+use crate::float::Real;
 use rand_core::Rng;
 
 /// The memory a [`QFunction`] is built in: FQI entries for a table or tiles, records and

@@ -3,9 +3,10 @@
 
 use super::FqiConfig;
 use super::config::EmptyCells;
-use crate::env::Transition;
 use crate::error::ensure_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::Transition;
 
 /// A slice of samples with optional per-sample weights (absent = all 1) and optional
 /// rewards that replace the samples' own (absent = their own).

@@ -45,64 +45,15 @@
 //! pair (index `cell·actions + action`): 4 `T` and a `u32` = 20 bytes in `f32`, 40 in
 //! `f64`. A 21 × 21 grid with 4 actions needs 1 764 entries = 35 280 bytes in `f32`.
 
-use super::fill::{NIL, fill_empty, nearest_donors};
+use super::argmax::ArgMax;
+use super::entry::{FqiEntry, NIL};
+use super::fill::{fill_empty, nearest_donors};
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::each;
 use super::{CellGrid, FqiConfig, SampleSet};
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
-
-/// One (cell, action) pair of the table: the Q-value and the working values of a fit.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FqiEntry<T> {
-    pub(super) q: T,
-    pub(super) reward: T,
-    pub(super) weight: T,
-    pub(super) next: T,
-    pub(super) donor: u32,
-}
-
-impl<T: Real> Default for FqiEntry<T> {
-    fn default() -> Self {
-        Self::EMPTY
-    }
-}
-
-impl<T: Real> FqiEntry<T> {
-    /// An entry of a fresh table (Q = 0, no data); `const` and all-zero, so storage can be
-    /// a zero-initialised `static` (`.bss`, no flash image):
-    /// `static mut TABLE: [FqiEntry<f32>; 484] = [FqiEntry::EMPTY; 484];`.
-    /// (The donor field is only read during a fit, after it has been computed.)
-    pub const EMPTY: Self = Self {
-        q: T::ZERO,
-        reward: T::ZERO,
-        weight: T::ZERO,
-        next: T::ZERO,
-        donor: 0,
-    };
-
-    /// The fitted Q-value.
-    pub fn q(&self) -> T {
-        self.q
-    }
-
-    /// The fitted reward model `R̂` (iteration 1).
-    pub fn reward_model(&self) -> T {
-        self.reward
-    }
-
-    /// Total transition weight `Σ w_s` of the pair's samples (0: no data after iteration 1).
-    pub fn transition_weight(&self) -> T {
-        self.weight
-    }
-
-    /// `true` when the last fit had a sample of positive transition weight for this pair
-    /// (its Q-value is fitted, not filled).
-    pub fn has_data(&self) -> bool {
-        self.weight > T::ZERO
-    }
-}
 
 /// A tabular Q-function on a [`CellGrid`] with `actions` actions, fitted by weighted FQI,
 /// over caller-provided [`FqiEntry`] storage.
@@ -248,19 +199,11 @@ impl<'a, T: Real, const D: usize> TabularFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         self.grid.cell_of(state)?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
-        let mut best_has_data = false;
+        let mut best = ArgMax::new();
         for (a, e) in self.row(state).iter().enumerate() {
-            let has_data = e.has_data();
-            let better = a == 0 || e.q > best_q || (e.q == best_q && has_data && !best_has_data);
-            if better {
-                best = a;
-                best_q = e.q;
-                best_has_data = has_data;
-            }
+            best.offer(a, e.q, e.has_data());
         }
-        Ok(best)
+        Ok(best.action())
     }
 }
 
@@ -282,23 +225,11 @@ impl<T: Real, const D: usize> Regressor<T, D> for TabularFqi<'_, T, D> {
         for (s, reward, w_r, w_s) in each(sets) {
             let i = self.index(s.state, s.action);
             if let Some(e) = self.entries.get_mut(i) {
-                // `next` holds Σ w_r while the reward model is being fitted.
-                e.reward += w_r * reward;
-                e.next += w_r;
-                e.weight += w_s;
+                e.add_reward(reward, w_r, w_s);
             }
         }
         for e in self.entries.iter_mut() {
-            // Totals below the minimum weight count as no data.
-            if e.next < config.min_weight() {
-                e.next = T::ZERO;
-            }
-            if e.weight < config.min_weight() {
-                e.weight = T::ZERO;
-            }
-            if e.next > T::ZERO {
-                e.reward /= e.next;
-            }
+            e.close_reward_model(config.min_weight());
         }
         nearest_donors(&self.grid, self.actions, self.entries, |e| e.next > T::ZERO);
         fill_empty(

@@ -28,13 +28,16 @@
 //! actions: 1 152 entries = 23 040 bytes in `f32`. Fit cost per iteration:
 //! `O(samples · k · actions)`.
 
-use super::fill::{NIL, fill_empty, nearest_donors};
+use super::argmax::ArgMax;
+use super::entry::NIL;
+use super::fill::{fill_empty, nearest_donors};
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::each;
 use super::{EmptyCells, FqiConfig, FqiEntry, SampleSet};
 use crate::error::ensure_finite;
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::fqi::CellGrid;
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// The geometry of `k` offset tilings of the box `[lower, upper]`, `n` tiles per axis each
@@ -303,20 +306,15 @@ impl<'a, T: Real, const D: usize> TileFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         crate::error::ensure_all_finite(&state, "state")?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
-        let mut best_has_data = false;
+        let mut best = ArgMax::new();
         for a in 0..self.actions {
-            let q = self.average(&state, a, |e| e.q);
-            let has_data = self.has_data(&state, a);
-            let better = a == 0 || q > best_q || (q == best_q && has_data && !best_has_data);
-            if better {
-                best = a;
-                best_q = q;
-                best_has_data = has_data;
-            }
+            best.offer(
+                a,
+                self.average(&state, a, |e| e.q),
+                self.has_data(&state, a),
+            );
         }
-        Ok(best)
+        Ok(best.action())
     }
 }
 
@@ -337,23 +335,12 @@ impl<T: Real, const D: usize> Regressor<T, D> for TileFqi<'_, T, D> {
             for t in 0..self.tilings.count {
                 let i = self.index(t, &s.state, s.action);
                 if let Some(e) = self.entries.get_mut(i) {
-                    // `next` holds Σ w_r while the reward model is being fitted.
-                    e.reward += w_r * reward;
-                    e.next += w_r;
-                    e.weight += w_s;
+                    e.add_reward(reward, w_r, w_s);
                 }
             }
         }
         for e in self.entries.iter_mut() {
-            if e.next < config.min_weight() {
-                e.next = T::ZERO;
-            }
-            if e.weight < config.min_weight() {
-                e.weight = T::ZERO;
-            }
-            if e.next > T::ZERO {
-                e.reward /= e.next;
-            }
+            e.close_reward_model(config.min_weight());
         }
         let empty = config.empty_cells();
         self.for_each_tiling(|grid, actions, entries| {
@@ -424,8 +411,8 @@ impl<T: Real, const D: usize> Regressor<T, D> for TileFqi<'_, T, D> {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::Transition;
     use crate::fqi::TabularFqi;
+    use crate::model::Transition;
     use rand_chacha::ChaCha8Rng;
     use rand_core::{Rng, SeedableRng};
     use std::vec;

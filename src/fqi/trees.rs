@@ -60,11 +60,13 @@
 //! records, 60 iterations, `examples/core_tree_timing.rs`): 50 streamed trees fit in about
 //! 2.5 s and decide in about 6 ms; 10 stored trees fit in 0.6 s and decide in 2 µs.
 
+use super::argmax::ArgMax;
 use super::iteration::{self, Regressor};
 use super::samples::load;
 use super::{FqiConfig, SampleSet};
 use crate::error::ensure_all_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// A node whose weighted impurity is at most this is a leaf (spec §4.1).
@@ -1201,16 +1203,11 @@ impl<'a, T: Real, const D: usize> TreeFqi<'a, T, D> {
     /// Errors: a non-finite state.
     pub fn greedy_action(&self, state: [T; D]) -> Result<usize> {
         ensure_all_finite(&state, "state")?;
-        let mut best = 0;
-        let mut best_q = T::NEG_INFINITY;
+        let mut best = ArgMax::new();
         for a in 0..self.actions {
-            let q = self.forest_value(&state, a);
-            if a == 0 || q > best_q {
-                best = a;
-                best_q = q;
-            }
+            best.offer(a, self.forest_value(&state, a), true);
         }
-        Ok(best)
+        Ok(best.action())
     }
 }
 

@@ -15,7 +15,7 @@
 //! bound from `n·ε` to about `(n/4 + 2)·ε`). No wider accumulator is used: on a Cortex-M4F an
 //! `f64` accumulator would be software floating point.
 
-use crate::Real;
+use crate::float::Real;
 
 /// `Σ aᵢ bᵢ` over the common length of `a` and `b` (callers pass equal lengths), summed as
 /// four interleaved partial sums plus a tail.

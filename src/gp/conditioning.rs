@@ -22,7 +22,9 @@
 //! (after trying the jitters the policy allows). Together with the Cholesky pivot guard this is
 //! what keeps a wrong `f32` answer from being returned as a success.
 
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+
+use crate::float::Real;
 
 /// Jitter always added to the training diagonal unless the policy omits it: `10⁻¹⁰`, the
 /// reference's `alpha` (spec §4.2).

@@ -5,7 +5,8 @@
 //! dimension; spec §4.2's isotropic kernel is the case of equal length scales).
 
 use crate::error::ensure_finite;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 
 /// Hyperparameters of the kernel: signal variance `c`, one length scale per input dimension
 /// and the noise variance `σ²ₙ`. Memory: `(D + 2) · size_of::<T>()` bytes.

@@ -4,7 +4,8 @@ use super::cholesky;
 use super::conditioning::{self, BASE_JITTER, Conditioning};
 use super::covariance::{self, Hyperparameters};
 use super::search::{self, HyperparameterBounds, LogBox, SearchOptions};
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// How many times the jitter is escalated after a failed factorisation.

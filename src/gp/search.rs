@@ -10,9 +10,10 @@
 //! equal share of what is left, and a start that converges early passes its unused
 //! evaluations on to the next one.
 
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::gp::covariance::Hyperparameters;
 use crate::rng::uniform;
-use crate::{Error, Real, Result};
 use rand_core::Rng;
 
 /// The most hyperparameters the search can tune at once: `D + 2` with one length scale per

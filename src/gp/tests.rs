@@ -7,7 +7,8 @@ extern crate std;
 
 use super::*;
 use crate::error::Number;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 use std::vec::Vec;

@@ -1,8 +1,9 @@
 //! The Bayesian belief over K known candidate MDPs (spec §10.2 step 4), kept in log space.
 
-use crate::env::{FiniteMdp, Transition};
+use crate::error::{Error, Result};
+use crate::float::Real;
 use crate::float::log_sum_exp;
-use crate::{Error, Real, Result};
+use crate::model::{FiniteMdp, Transition};
 
 /// ln of one observation's likelihood under `mdp`:
 /// ln p(s′ | s, a) + ln 𝒩(r; r(s, a), v(s, a)).

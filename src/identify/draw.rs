@@ -1,6 +1,10 @@
 //! Drawing state-action pairs from a score (spec §10.2 step 2).
 
-use crate::{Error, Real, Result, rng};
+use crate::error::{Error, Result};
+
+use crate::float::Real;
+
+use crate::rng;
 use rand_core::Rng;
 
 /// A state-action pair, the unit of a generative-model query.

@@ -57,8 +57,9 @@ pub use policy::{belief_weighted_policy, belief_weighted_q};
 pub use procedure::{Scoring, run_queries};
 pub use query_score::{Criterion, MAX_BINS, MiConfig, RewardEntropy, compute_score};
 
-use crate::env::FiniteMdp;
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::FiniteMdp;
 
 /// |𝒮|, |𝒜| and |𝒮|·|𝒜| shared by all `candidates`.
 ///

@@ -8,7 +8,9 @@
 //! once the belief is sharp, and hedges (heads for goals several candidates share, or
 //! between them) while it is not.
 
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+
+use crate::float::Real;
 
 /// Σ_θ b_θ Q_θ / Σ_θ b_θ into `out`.
 ///

@@ -1,8 +1,9 @@
 //! The query loop of spec §10.2 steps 1–4, fixed or adaptive.
 
 use super::{Belief, Criterion, compute_score, draw_pair};
-use crate::env::{FiniteMdp, GenerativeModel};
-use crate::{Error, Real, Result};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::{FiniteMdp, GenerativeModel};
 use rand_core::Rng;
 
 /// Where the scores of [`run_queries`] come from.

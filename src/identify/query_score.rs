@@ -13,8 +13,10 @@
 
 use super::belief::positive_variance;
 use super::{belief_total, dimensions};
-use crate::env::FiniteMdp;
-use crate::{Error, Real, Result, rng};
+use crate::error::{Error, Result};
+use crate::float::Real;
+use crate::model::FiniteMdp;
+use crate::rng;
 use rand_core::Rng;
 
 /// Largest number of histogram bins of the reward-entropy estimator (the histogram lives

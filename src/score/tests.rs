@@ -1,6 +1,10 @@
 extern crate std;
 use super::*;
+use crate::alias::AliasEntry;
 use crate::env::{Dynamics, PuddleWorld};
+use crate::error::Error;
+use crate::gp::Gp;
+use crate::model::Transition;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::vec;

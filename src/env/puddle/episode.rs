@@ -7,8 +7,9 @@
 
 use super::{PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON, Policy, PuddleWorld};
 use crate::env::Transition;
+use crate::error::{Error, Result};
 use crate::evaluation::{EvaluationProtocol, Rollout};
-use crate::{Error, Real, Result};
+use crate::float::Real;
 use rand_core::Rng;
 
 /// One record of an episode: spec §1's 8-tuple (t, s, a, r, s′, ω), i.e. the time index

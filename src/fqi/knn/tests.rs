@@ -1,7 +1,7 @@
 extern crate std;
 use super::*;
-use crate::Transition;
 use crate::fqi::EmptyCells;
+use crate::model::Transition;
 use rand_core::SeedableRng;
 use std::vec;
 use std::vec::Vec;

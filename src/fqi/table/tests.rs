@@ -1,8 +1,8 @@
 extern crate std;
 use super::*;
-use crate::env::Transition;
 use crate::fqi::fill::nearest_visited;
 use crate::fqi::{EmptyCells, TileFqi, Tilings};
+use crate::model::Transition;
 use std::vec;
 use std::vec::Vec;
 

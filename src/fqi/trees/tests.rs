@@ -1,7 +1,7 @@
 extern crate std;
 use super::*;
-use crate::Transition;
 use crate::fqi::{EmptyCells, QFunction, QStorage};
+use crate::model::Transition;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::vec;
