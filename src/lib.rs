@@ -45,8 +45,9 @@ pub use awfqi::{
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
-    KnnFqi, KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
-    Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+    KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
+    SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings,
+    TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use model::{GenerativeModel, Transition};

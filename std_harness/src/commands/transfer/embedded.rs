@@ -6,8 +6,8 @@ use clap::{Args, ValueEnum};
 
 use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
 use crate::transfer::algorithms::embedded::{
-    ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES, EmbeddedConfig,
-    EmbeddedQ, TILINGS, TreeKnobs,
+    ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
+    EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
 };
 use crate::transfer::score_tables::Mode;
 
@@ -36,6 +36,30 @@ pub enum AdaptiveQArg {
     /// `--adaptive-trees` trees, streamed through a scratch tree of `--adaptive-tree-nodes`
     /// nodes (or stored, each of at most that many, with `--adaptive-tree-streamed false`).
     Trees,
+    /// Value iteration on a grid model of the weighted records (the core's `SweepFqi`):
+    /// `--adaptive-sweep-cells` cells per axis, nodes at their corners.
+    Sweep,
+}
+
+/// Which records a model-sweep node's reward averages (the core's `RewardModel`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SweepRewardsArg {
+    /// The action's own records.
+    PerAction,
+    /// Every action's records.
+    Pooled,
+    /// The action's own where it has some, every action's elsewhere.
+    Backfilled,
+}
+
+impl From<SweepRewardsArg> for awfqi::RewardModel {
+    fn from(r: SweepRewardsArg) -> Self {
+        match r {
+            SweepRewardsArg::PerAction => Self::PerAction,
+            SweepRewardsArg::Pooled => Self::Pooled,
+            SweepRewardsArg::Backfilled => Self::Backfilled,
+        }
+    }
 }
 
 /// `awfqi-embedded`'s options.
@@ -59,8 +83,24 @@ pub struct EmbeddedArgs {
 #[command(next_help_heading = "awfqi-adaptive (the core's adaptive AWFQI)")]
 pub struct AdaptiveArgs {
     /// Q-function approximator of awfqi-adaptive's FQI.
-    #[arg(long, value_enum, default_value = "trees")]
+    #[arg(long, value_enum, default_value = "sweep")]
     pub adaptive_q: AdaptiveQArg,
+    /// Cells per axis of `--adaptive-q sweep` (its nodes: one more per axis).
+    #[arg(long, default_value_t = ADAPTIVE_SWEEP_CELLS)]
+    pub adaptive_sweep_cells: usize,
+    /// `--adaptive-q sweep`: which records a node's reward averages (`pooled`: every
+    /// action's, for rewards that depend on the state only; `backfilled`: the action's own
+    /// where it has some, every action's elsewhere).
+    #[arg(long, value_enum, default_value = "pooled")]
+    pub adaptive_sweep_rewards: SweepRewardsArg,
+    /// `--adaptive-q sweep`: the least reward weight of a node with data (a record at the
+    /// node weighs 1).
+    #[arg(long, default_value_t = 0.0)]
+    pub adaptive_sweep_min_mass: f64,
+    /// `--adaptive-q sweep`: decide by one step of lookahead at the state instead of
+    /// interpolating the node Q-values.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
+    pub adaptive_sweep_lookahead: bool,
     /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
     #[arg(long, default_value_t = ADAPTIVE_TILES)]
     pub adaptive_tiles: usize,
@@ -134,6 +174,17 @@ pub struct AdaptiveArgs {
     /// records.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().relabel)]
     pub adaptive_relabel: bool,
+    /// After a target GP's first fit in a run, start each later search from its last
+    /// hyperparameters with this many likelihood evaluations (the core's `Refit::Warm`); 0:
+    /// every fit searches as the thesis does.
+    #[arg(long, default_value_t = AdaptiveOptions::default().refit.map_or(0, |r| r.0))]
+    pub adaptive_refit_evaluations: usize,
+    /// Random restarts of those warm searches.
+    #[arg(long, default_value_t = AdaptiveOptions::default().refit.map_or(0, |r| r.1))]
+    pub adaptive_refit_restarts: usize,
+    /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
+    #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
+    pub adaptive_gp_points: usize,
 }
 
 impl AdaptiveArgs {
@@ -149,6 +200,11 @@ impl AdaptiveArgs {
             candidates: self.adaptive_candidates,
             relevance_width: self.adaptive_relevance_width,
             relabel: self.adaptive_relabel,
+            refit: (self.adaptive_refit_evaluations > 0).then_some((
+                self.adaptive_refit_evaluations,
+                self.adaptive_refit_restarts,
+            )),
+            gp_points: self.adaptive_gp_points,
         }
     }
 
@@ -181,6 +237,12 @@ impl AdaptiveArgs {
                 min_samples_leaf: self.adaptive_tree_min_samples_leaf,
                 max_depth: self.adaptive_tree_max_depth,
                 streamed: self.adaptive_tree_streamed,
+            })?,
+            AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
+                cells: self.adaptive_sweep_cells,
+                rewards: self.adaptive_sweep_rewards.into(),
+                min_mass: self.adaptive_sweep_min_mass,
+                lookahead: self.adaptive_sweep_lookahead,
             })?,
         })
     }

@@ -421,6 +421,16 @@ impl<const D: usize> Experiment<D> {
             Algorithm::AwfqiAdaptive => {
                 if let Some(e) = &self.embedded {
                     o["embedded"] = e.parameters(e.config.adaptive_q);
+                    // The adaptive algorithm's own GPs, not the set-up's.
+                    let a = self.adaptive_options;
+                    o["embedded"]["gp_capacity"] = a.gp_points.into();
+                    o["embedded"]["gp_search"] = match a.refit {
+                        Some((e, r)) => format!(
+                            "core Nelder-Mead, 10 restarts, then warm refits of {e} evaluations, {r} restarts"
+                        ),
+                        None => "core Nelder-Mead, 10 restarts".into(),
+                    }
+                    .into();
                 }
                 o["var_rw"] = v_r.into();
                 o["max_weight"] = self.options.max_weight.into();

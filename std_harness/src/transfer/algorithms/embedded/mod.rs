@@ -48,15 +48,17 @@ pub const ADAPTIVE_TREES: usize = 50;
 /// Nodes of the streamed trees' scratch tree by default (the FQI iterations' trees of the
 /// largest action are cut at this budget; the final trees are fully grown).
 pub const ADAPTIVE_TREE_NODES: usize = 1023;
-/// `awfqi-adaptive`'s default approximator: [`ADAPTIVE_TREES`] streamed Extra-Trees per
-/// action, a scratch tree of [`ADAPTIVE_TREE_NODES`] nodes, otherwise fully grown.
-pub const ADAPTIVE_Q: EmbeddedQ = EmbeddedQ::Trees(TreeKnobs {
-    trees: ADAPTIVE_TREES,
-    nodes: ADAPTIVE_TREE_NODES,
-    min_samples_split: 2,
-    min_samples_leaf: 1,
-    max_depth: None,
-    streamed: true,
+/// Cells per axis of `awfqi-adaptive`'s model sweep by default (13 × 13 nodes over
+/// `[0, 10]²`), chosen on the tuning runs (`docs/embedded-adaptive.md`).
+pub const ADAPTIVE_SWEEP_CELLS: usize = 12;
+/// `awfqi-adaptive`'s default approximator: a model sweep on [`ADAPTIVE_SWEEP_CELLS`] cells
+/// per axis with one reward model for every action (Puddle World's reward depends on the
+/// state only).
+pub const ADAPTIVE_Q: EmbeddedQ = EmbeddedQ::Sweep(SweepKnobs {
+    cells: ADAPTIVE_SWEEP_CELLS,
+    rewards: awfqi::RewardModel::Pooled,
+    min_mass: 0.0,
+    lookahead: false,
 });
 /// Tiles per axis of `awfqi-adaptive`'s tile coding by default: chosen on the tuning runs
 /// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
@@ -81,6 +83,21 @@ pub enum EmbeddedQ {
     Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
     /// Per-action Extra-Trees forests; `awfqi-adaptive` only.
     Trees(TreeKnobs),
+    /// Value iteration on a grid model of the records; `awfqi-adaptive` only.
+    Sweep(SweepKnobs),
+}
+
+/// The knobs of [`EmbeddedQ::Sweep`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepKnobs {
+    /// Cells per axis (nodes at their corners).
+    pub cells: usize,
+    /// Which records a node's reward averages.
+    pub rewards: awfqi::RewardModel,
+    /// The least reward weight of a node with data.
+    pub min_mass: f64,
+    /// Decide by one step of lookahead.
+    pub lookahead: bool,
 }
 
 /// The knobs of [`EmbeddedQ::Trees`].
@@ -147,6 +164,15 @@ impl EmbeddedQ {
         Ok(out)
     }
 
+    /// A model sweep.
+    ///
+    /// Errors: those of [`awfqi::ModelSweep::cube`] and [`awfqi::ModelSweep::with_min_mass`].
+    pub fn sweep(knobs: SweepKnobs) -> anyhow::Result<Self> {
+        let out = Self::Sweep(knobs);
+        out.approximator()?;
+        Ok(out)
+    }
+
     /// The core's approximator over Puddle World's `[0, 10]²`.
     fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
@@ -168,6 +194,11 @@ impl EmbeddedQ {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
+            Self::Sweep(k) => awfqi::ModelSweep::cube(0.0, 10.0, k.cells)?
+                .with_rewards(k.rewards)
+                .with_min_mass(k.min_mass as T)?
+                .with_lookahead(k.lookahead)
+                .into(),
         })
     }
 }
@@ -381,6 +412,12 @@ impl<const N: usize> EmbeddedSetup<N> {
                 out["fqi_min_samples_split"] = k.min_samples_split.into();
                 out["fqi_min_samples_leaf"] = k.min_samples_leaf.into();
                 out["fqi_tree_max_depth"] = k.max_depth.into();
+            }
+            EmbeddedQ::Sweep(k) => {
+                out["fqi_sweep_cells"] = k.cells.into();
+                out["fqi_sweep_rewards"] = format!("{:?}", k.rewards).into();
+                out["fqi_sweep_min_mass"] = k.min_mass.into();
+                out["fqi_sweep_lookahead"] = k.lookahead.into();
             }
         }
         out
