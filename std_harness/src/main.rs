@@ -22,7 +22,7 @@ enum Command {
     /// Finite-MDP identification on the Grid World (thesis Figs. 4.2 and 4.3).
     Identify(commands::identify::Args),
     /// Puddle World transfer experiments: every algorithm on the protocol of spec §3.
-    Puddle(commands::puddle::Args),
+    Puddle(Box<commands::puddle::Args>),
     /// The IWFQI paper's water reservoir (Dam): every algorithm on the protocol of spec §3.
     Dam(commands::dam::Args),
     /// The IWFQI paper's multitask Acrobot: every algorithm on the protocol of spec §3.

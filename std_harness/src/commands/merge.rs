@@ -226,7 +226,7 @@ struct Recorded {
 
 #[derive(Subcommand)]
 enum Experiment {
-    Puddle(super::puddle::Args),
+    Puddle(Box<super::puddle::Args>),
     Dam(super::dam::Args),
     Acrobot(super::acrobot::Args),
 }
