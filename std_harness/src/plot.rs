@@ -96,6 +96,8 @@ pub struct Panel {
     pub y_label: String,
     /// x-axis scale.
     pub x_scale: XScale,
+    /// Fixed x range (linear scale); computed from the data when `None`.
+    pub x_range: Option<(f64, f64)>,
     /// Fixed y range; computed from the data (with errors) when `None`.
     pub y_range: Option<(f64, f64)>,
     /// The series.
@@ -235,7 +237,10 @@ fn draw_panel<DB: DrawingBackend>(
     let (x_lo, x_hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
         (a.min(x), b.max(x))
     });
-    let (x_lo, x_hi) = padded(x_lo, x_hi);
+    let (x_lo, x_hi) = match panel.x_range {
+        Some((lo, hi)) => (transform(scale, lo), transform(scale, hi)),
+        None => padded(x_lo, x_hi),
+    };
     let (y_lo, y_hi) = match panel.y_range {
         Some(range) => range,
         None => {
@@ -379,6 +384,7 @@ mod tests {
             x_label: "budget".into(),
             y_label: "value".into(),
             x_scale: XScale::Log2,
+            x_range: None,
             y_range: None,
             series: vec![
                 Series {

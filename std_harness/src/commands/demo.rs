@@ -232,6 +232,7 @@ fn plot(
         x_label: "s_x".into(),
         y_label: "s_y".into(),
         x_scale: XScale::Linear,
+        x_range: None,
         y_range: Some((0.0, 10.0)),
         series: vec![
             Series {
@@ -265,6 +266,7 @@ fn plot(
         x_label: "s_x".into(),
         y_label: "reward".into(),
         x_scale: XScale::Linear,
+        x_range: None,
         y_range: None,
         series: vec![
             Series {

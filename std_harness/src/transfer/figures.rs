@@ -28,6 +28,7 @@ fn curve_panel(title: String, curves: &Curves) -> Panel {
         x_label: "episodes (equivalent episodes for the active algorithms)".into(),
         y_label: "discounted greedy return".into(),
         x_scale: XScale::Linear,
+        x_range: None,
         y_range: None,
         series,
         references: vec![],
@@ -204,6 +205,8 @@ pub fn sample_scatter<const D: usize>(
     let axis = |d: usize| domain.state_names.get(d).copied().unwrap_or("").to_string();
     let (lo, hi) = domain.state_bounds.get(1).copied().unwrap_or((0.0, 1.0));
     let pad = 0.05 * (hi - lo);
+    let (x_lo, x_hi) = domain.state_bounds.first().copied().unwrap_or((0.0, 1.0));
+    let x_pad = 0.05 * (x_hi - x_lo);
     let source_points: Vec<(f64, f64)> = sources
         .sources
         .iter()
@@ -217,6 +220,7 @@ pub fn sample_scatter<const D: usize>(
             x_label: axis(0),
             y_label: axis(1),
             x_scale: XScale::Linear,
+            x_range: Some((x_lo - x_pad, x_hi + x_pad)),
             y_range: Some((lo - pad, hi + pad)),
             series: [
                 Series {
@@ -350,6 +354,11 @@ mod tests {
         let (x, y) = goal.points[0];
         let [gx, gy] = target.goal();
         assert!(((x - gx).hypot(y - gy) - awfqi::env::PUDDLE_GOAL_RADIUS).abs() < 1e-9);
+        // The whole state space is shown, wherever one run's samples lie (here one point).
+        let (lo, hi) = figure.panels[0].x_range.unwrap();
+        assert!(lo < 0.0 && hi > 10.0, "{lo}..{hi}");
+        let (lo, hi) = figure.panels[0].y_range.unwrap();
+        assert!(lo < 0.0 && hi > 10.0, "{lo}..{hi}");
     }
 
     #[test]
