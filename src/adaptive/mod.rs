@@ -236,7 +236,7 @@ impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig
     }
 }
 
-/// The adaptive AWFQI kernel: configuration, borrowed storage and the state of a run.
+/// The adaptive AWFQI learner: configuration, borrowed storage and the state of a run.
 ///
 /// Generic like [`crate::Awfqi`]: scalar `T`, target model `G`, state dimension `D`, GP
 /// input dimension `I = D + 1`, GP capacity `N` (the target GP's and the sources' mean
@@ -269,7 +269,7 @@ where
     T: Real,
     G: GenerativeModel<T, State = [T; D]>,
 {
-    /// A kernel for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
+    /// A learner for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
     /// stored reward posteriors, one mean function per source (`means`, e.g.
     /// [`MeanFunction::fit_rewards`] on each source), the candidate `rows`, the FQI
     /// `approximator` and the `target` model.
@@ -330,7 +330,7 @@ where
         let beliefs = beliefs
             .get_mut(..m)
             .ok_or(Error::CapacityExceeded { capacity: m })?;
-        let mut kernel = Self {
+        let mut learner = Self {
             config,
             rows,
             means,
@@ -345,8 +345,8 @@ where
             last: None,
             run: Transfer::new(target, sources, samples, weights, gp, fqi),
         };
-        kernel.reset();
-        Ok(kernel)
+        learner.reset();
+        Ok(learner)
     }
 
     /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
@@ -430,7 +430,7 @@ where
     /// yet; [`AdaptiveAwfqi::step`] does it otherwise. It depends on the set-up only, so a
     /// firmware can run it at boot and keep it out of the first step's time.
     ///
-    /// Errors: those of FQI; the kernel is unchanged then.
+    /// Errors: those of FQI; the learner is unchanged then.
     pub fn plan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<()> {
         if !self.planned {
             self.replan(rng)?;

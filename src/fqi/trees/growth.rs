@@ -139,7 +139,7 @@ impl<T: Real> Sides<T> {
 /// pipeline). There, branch-free sums ([`Sides::add_both`]: a random threshold's branch
 /// is mispredicted half the time) and lockstep tree walks ([`predict_lanes`]) are faster;
 /// on an in-order microcontroller (a Cortex-M's 3-stage pipeline) they only add
-/// instructions (+25 % for a step of the adaptive kernel under QEMU). The values are the
+/// instructions (+25 % for a step of adaptive AWFQI under QEMU). The values are the
 /// same either way, to the bit.
 pub(super) const RUNS_AHEAD: bool = cfg!(target_pointer_width = "64");
 
