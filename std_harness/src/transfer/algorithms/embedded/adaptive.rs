@@ -21,7 +21,9 @@ use awfqi::{
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::{EmbeddedSetup, GP_POINTS, Record32, T, reward_gp_summary, row_set, to_f64};
+use super::{
+    EmbeddedSetup, GP_POINTS, Record32, T, print_warnings, reward_gp_summary, row_set, to_f64,
+};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
@@ -173,6 +175,7 @@ struct AdaptiveLearner<'a, const N: usize> {
 impl<const N: usize> Learner for AdaptiveLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.adaptive.step(rng)?;
+        print_warnings("awfqi-adaptive", &report);
         let new = &self.adaptive.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
         Ok(Diagnostics {

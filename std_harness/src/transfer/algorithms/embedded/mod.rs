@@ -459,6 +459,14 @@ fn row_set<'a>(
     Ok(config.mode.row_set(grid, slices)?)
 }
 
+/// Prints a step's warnings ([`awfqi::StepReport::warnings`]) to stderr, one line each,
+/// naming the algorithm and the step (shared by the embedded learners).
+fn print_warnings<const I: usize>(algorithm: &str, report: &awfqi::StepReport<T, I>) {
+    for warning in report.warnings() {
+        eprintln!("{algorithm}, step {}: warning: {warning}", report.step);
+    }
+}
+
 /// The target reward GP of an embedded step, as the result files record it.
 fn reward_gp_summary<const I: usize>(report: &awfqi::StepReport<T, I>) -> GpSummary {
     let hyper = &report.gp_hyperparameters;

@@ -12,7 +12,9 @@ use awfqi::{
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{EmbeddedSetup, GP_POINTS, Record32, T, reward_gp_summary, row_set, to_f64};
+use super::{
+    EmbeddedSetup, GP_POINTS, Record32, T, print_warnings, reward_gp_summary, row_set, to_f64,
+};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
@@ -125,6 +127,7 @@ impl<'a, const N: usize> EmbeddedLearner<'a, N> {
 impl<const N: usize> Learner for EmbeddedLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.awfqi.step(rng)?;
+        print_warnings("awfqi-embedded", &report);
         let new = &self.awfqi.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
         Ok(Diagnostics {
