@@ -379,7 +379,7 @@ mod reservoir;
 mod tables;
 
 /// The firmware example's controller, run on the host with the device's seed: the same
-/// code and f32 arithmetic, so this is what QEMU prints (README: −1221.9 against −1736.2).
+/// code and f32 arithmetic, so this is what QEMU prints (docs/footprint.md, examples/firmware: −1221.9 against −1736.2).
 /// The learned policy beats the baseline, every step reports consistent sizes, and the
 /// evaluation is the plant's protocol (10 one-year rollouts, no absorbing state).
 #[test]
