@@ -10,14 +10,14 @@
 //!
 //! - **Your plant** implements [`GenerativeModel`] (one sampled transition from any
 //!   state-action pair; states are `[T; D]` for any `D`) and, if you know them, its noise-free
-//!   means as [`SourceModel`]. Built-in plants: [`env`](mod@env) (Puddle World, Grid World, the Dam,
-//!   Acrobot).
+//!   means as [`SourceModel`]. Built-in plants: [`env`](mod@env) (Puddle World, Grid World,
+//!   the Dam, Acrobot).
 //! - **The kernel.** [`AdaptiveAwfqi`] is the recommended one: each step's queries in
 //!   sub-batches that verify the current greedy policy in the generative model, draw the rest
 //!   where the target surprised the sources, then re-plan ([`AdaptiveConfig::recommended`],
-//!   [`AdaptiveStorage`]). [`Awfqi`] is the thesis's algorithm as published: queries drawn once
-//!   per step from a score table of where the sources disagree ([`Awfqi::builder`],
-//!   [`AwfqiConfig::thesis`], [`AwfqiStorage`]).
+//!   [`AdaptiveStorage`]). [`Awfqi`] is the thesis's algorithm as published: each step's
+//!   queries drawn from a score table, computed once, of where the sources disagree
+//!   ([`Awfqi::builder`], [`AwfqiConfig::thesis`], [`AwfqiStorage`]).
 //! - **The Q-function** is a value, [`Approximator`]: a table over cells ([`CellGrid`]), tile
 //!   coding ([`Tilings`]), kernel averaging over the records ([`Kernel`]) or Extra-Trees
 //!   ([`ExtraTrees`]; [`ExtraTrees::streamed`] grows each tree in one scratch tree, so 50
