@@ -221,6 +221,11 @@ pub mod rng;
 pub mod score;
 pub mod weights;
 
+/// The README's examples, compiled and run as doctests (the crate docs are this file's own).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub use error::{Error, Result};
 pub use float::Real;
 
@@ -249,8 +254,3 @@ pub use score::{
     SourceModel,
 };
 pub use weights::{Estimator, NoiseSubtraction, Posterior, WeightParams};
-
-/// The README's code blocks, compiled and run as doctests.
-#[cfg(doctest)]
-#[doc = include_str!("../README.md")]
-pub struct ReadmeDoctests;
