@@ -37,6 +37,10 @@ struct Data {
     m4: BTreeMap<String, f64>,
     /// `(instructions, function)` over the six AWFQI steps on the Cortex-M4F, largest first.
     m4_profile: Vec<(f64, String)>,
+    /// The adaptive kernel's Cortex-M4F instructions of one repetition, by operation.
+    m4_adaptive: BTreeMap<String, f64>,
+    /// `(instructions, function)` over its six steps, largest first.
+    m4_adaptive_profile: Vec<(f64, String)>,
 }
 
 fn read_criterion(dir: &Path, data: &mut Data) {
@@ -508,6 +512,92 @@ fn m4_table(d: &Data) -> String {
     s
 }
 
+/// The adaptive kernel's budget per step: 1 s at 168 MHz and CPI 1.25.
+const M4_STEP_BUDGET: f64 = 134e6;
+
+fn m4_adaptive_table(d: &Data) -> String {
+    let at = |v: f64, cpi: f64| time(v * cpi / M4_HZ * 1e9);
+    let mut s = format!(
+        "| operation | instructions | at 168 MHz, CPI {M4_CPI} | at CPI {M4_CPI_SLOW} |\n|---|--:|--:|--:|\n"
+    );
+    let mut row = |what: &str, v: Option<f64>| {
+        let _ = writeln!(
+            s,
+            "| {what} | {} | {} | {} |",
+            opt(v, count),
+            opt(v, |v| at(v, M4_CPI)),
+            opt(v, |v| at(v, M4_CPI_SLOW))
+        );
+    };
+    let get = |k: &str| d.m4_adaptive.get(k).copied();
+    row(
+        "set-up (one-time): the 3 sources' mean functions fitted on the device, the kernel built",
+        get("setup"),
+    );
+    row(
+        "set-up (one-time): the plan on the sources alone (`AdaptiveAwfqi::plan`)",
+        get("plan"),
+    );
+    let steps: Vec<f64> = (1..=6).filter_map(|k| get(&format!("step{k}"))).collect();
+    for (k, v) in steps.iter().enumerate() {
+        row(
+            &format!(
+                "**step {}** (50 queries in 3 sub-batches: verification, scored draws, GP fits, weights, FQI)",
+                k + 1
+            ),
+            Some(*v),
+        );
+    }
+    let (one, sixty) = (get("fqi_1_iteration"), get("fqi_60_iterations"));
+    row("parts: FQI, the model fit and one iteration", one);
+    row("parts: FQI with 60 iterations", sixty);
+    row(
+        "parts: the target GP's training, thesis search",
+        get("gp_thesis_search"),
+    );
+    row(
+        "parts: the target GP's training, warm refit",
+        get("gp_warm_refit"),
+    );
+    row(
+        "parts: one GP prediction (mean + variance)",
+        get("gp_predict"),
+    );
+    row(
+        "parts: one source mean function's value",
+        get("mean_function"),
+    );
+    let largest = steps.iter().copied().fold(f64::NAN, f64::max);
+    if largest.is_finite() {
+        let verdict = if largest <= M4_STEP_BUDGET {
+            "within"
+        } else {
+            "over"
+        };
+        let _ = writeln!(
+            s,
+            "\nThe largest step executes {} instructions, {verdict} the budget of {} (1 s at \
+             168 MHz and CPI {M4_CPI}): {} at CPI {M4_CPI}, {} at CPI {M4_CPI_SLOW}.",
+            count(largest),
+            count(M4_STEP_BUDGET),
+            at(largest, M4_CPI),
+            at(largest, M4_CPI_SLOW),
+        );
+        let total: f64 = d.m4_adaptive_profile.iter().map(|(n, _)| n).sum();
+        if total > 0.0 {
+            s.push_str(
+                "\nWhere the six steps' instructions go (flat profile: each instruction counts \
+                 for the function holding it, inlined code for the function it was inlined into):\n\n\
+                 | function | instructions (6 steps) | share |\n|---|--:|--:|\n",
+            );
+            for (n, f) in d.m4_adaptive_profile.iter().take(10) {
+                let _ = writeln!(s, "| `{f}` | {} | {:.1} % |", count(*n), 100.0 * n / total);
+            }
+        }
+    }
+    s
+}
+
 fn conditions(d: &Data) -> String {
     let get = |k: &str| d.conditions.get(k).map_or(DASH, String::as_str);
     format!(
@@ -565,6 +655,8 @@ fn main() {
     let cpu_file = PathBuf::from("target/perf/cputime.tsv");
     let m4_file = PathBuf::from("target/perf/m4.tsv");
     let m4_profile_file = PathBuf::from("target/perf/m4-profile.tsv");
+    let m4_adaptive_file = PathBuf::from("target/perf/m4-adaptive.tsv");
+    let m4_adaptive_profile_file = PathBuf::from("target/perf/m4-adaptive-profile.tsv");
     let mut files = Vec::new();
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -622,6 +714,20 @@ fn main() {
             }
         }
     }
+    for row in read_tsv(&m4_adaptive_file) {
+        if let [op, k, total, ..] = row.as_slice() {
+            if let (Ok(k), Ok(total)) = (k.parse::<f64>(), total.parse::<f64>()) {
+                data.m4_adaptive.insert(op.clone(), total / k);
+            }
+        }
+    }
+    for row in read_tsv(&m4_adaptive_profile_file) {
+        if let [n, function, ..] = row.as_slice() {
+            if let Ok(n) = n.parse::<f64>() {
+                data.m4_adaptive_profile.push((n, function.clone()));
+            }
+        }
+    }
     // A block whose measurements are all missing (e.g. experiments skipped on a fresh
     // clone) keeps what the file already says.
     let (timed, counted) = (!data.times.is_empty(), !data.instructions.is_empty());
@@ -641,6 +747,11 @@ fn main() {
             experiments_table(&data),
         ),
         ("m4", !data.m4.is_empty(), m4_table(&data)),
+        (
+            "m4-adaptive",
+            !data.m4_adaptive.is_empty(),
+            m4_adaptive_table(&data),
+        ),
     ]
     .into_iter()
     .filter(|(_, measured, _)| *measured)

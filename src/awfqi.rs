@@ -460,7 +460,12 @@ where
         // Reward weights, one noise-subtraction batch per source.
         let mut wr = WeightSummary::new();
         wr.add_ones(target.len());
-        run.fit_reward_weights(&self.config.weights, self.config.noise_subtraction, &mut wr)?;
+        run.fit_reward_weights(
+            &self.config.weights,
+            self.config.noise_subtraction,
+            &mut wr,
+            false,
+        )?;
         // 5: weighted FQI on D₀ then the sources.
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
         run.fit_q(SourceValues::Weights, transition, &self.config.fqi, rng)?;

@@ -15,14 +15,17 @@
 //! - **The kernel.** [`AdaptiveAwfqi`] is the recommended one: each step's queries in
 //!   sub-batches that verify the current greedy policy in the generative model, draw the rest
 //!   where the target surprised the sources, then re-plan ([`AdaptiveConfig::recommended`],
-//!   [`AdaptiveStorage`]). [`Awfqi`] is the thesis's algorithm as published: each step's
+//!   [`AdaptiveStorage`]; on Puddle World 39 KB of RAM and about 10⁸ Cortex-M4F instructions
+//!   a step, the repository's `docs/embedded-adaptive.md`). [`Awfqi`] is the thesis's algorithm as published: each step's
 //!   queries drawn from a score table, computed once, of where the sources disagree
 //!   ([`Awfqi::builder`], [`AwfqiConfig::thesis`], [`AwfqiStorage`]).
-//! - **The Q-function** is a value, [`Approximator`]: a table over cells ([`CellGrid`]), tile
+//! - **The Q-function** is a value, [`Approximator`]: a model sweep ([`ModelSweep`]: value
+//!   iteration on the corners of a grid over a reward, step and absorption model of the
+//!   weighted records, so an iteration costs nodes × actions backups whatever the number of
+//!   records; the adaptive kernel's recommended one), a table over cells ([`CellGrid`]), tile
 //!   coding ([`Tilings`]), kernel averaging over the records ([`Kernel`]) or Extra-Trees
 //!   ([`ExtraTrees`]; [`ExtraTrees::streamed`] grows each tree in one scratch tree, so 50
-//!   trees take the memory of one). Trees put their splits where the values change (a
-//!   puddle's edge), which fixed cells cannot; cells are the cheapest in RAM and time.
+//!   trees take the memory of one, at the price of compute).
 //! - **Parts on their own:** [`gp`] (fixed-capacity Gaussian-process regression with a
 //!   conditioning policy), [`weights`] (importance weights), [`fqi`] (weighted FQI),
 //!   [`identify`] and [`planning`] (Bayesian identification among finite MDPs), [`evaluation`]
@@ -45,7 +48,8 @@
 //! | `E` | FQI entries | cells × actions for a table (other approximators: their own storage) |
 //!
 //! [`AdaptiveStorage`] adds candidate slots (rows scored per sub-batch), path states (the
-//! budget) and one belief per source. A buffer that is too short is
+//! budget) and one belief per source; a model sweep's nodes and entries are a
+//! [`SweepStorage`] of their own. A buffer that is too short is
 //! [`Error::CapacityExceeded`] when the kernel is built, never a write past its end.
 //! Measured footprints (flash, RAM, stack per configuration on a Cortex-M4F) are in the
 //! repository's `docs/footprint.md`; the recommended Puddle World configuration of
@@ -67,14 +71,17 @@
 //!
 //! ## Example: a room heater learned from two other heaters
 //!
-//! [`Awfqi`] end to end on a plant of your own: the builder performs the whole set-up once
-//! (source reward GPs → stored posteriors → score table → sampler), then each step queries,
-//! weights and solves.
+//! [`AdaptiveAwfqi`], the recommended kernel, on a plant of your own: each source's reward GP
+//! is fitted once and kept as a mean function and as stored posteriors; then every step
+//! verifies the current plan in the plant, queries where the plant surprised the sources, and
+//! re-plans by value iteration on a grid model of the records ([`ModelSweep`]).
 //!
 //! ```rust
+//! use awfqi::record_gp::predict_posteriors;
 //! use awfqi::{
-//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
-//!     Scores, SourceMeans, SourceModel, Transition,
+//!     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, GenerativeModel, MeanFunction, ModelSweep,
+//!     NoiseSubtraction, PointGrid, Posterior, RewardModel, RowSet, SourceData, SourceMeans,
+//!     SourceModel, SweepStorage, Transition,
 //! };
 //! use rand_chacha::ChaCha8Rng;
 //! use rand_core::{Rng, SeedableRng};
@@ -126,6 +133,102 @@
 //! }
 //! let records: [&[Transition<[f32; 1], f32>]; 2] = [&data[0], &data[1]];
 //!
+//! // 10 queries per step, verification rollouts of 20 steps from s = 0.2, the state box [0, 1].
+//! let mut config = AdaptiveConfig::recommended(10, [0.2], 20, 0.3, [(0.0, 1.0)]);
+//! config.awfqi.gp_training.search.restarts = 1;
+//! let config = config.validate()?;
+//!
+//! // All the memory the loop writes (`static`s in `.bss` on a device): a 16-point GP over
+//! // (s, a), 2 steps × 10 queries, 40 source records, 42 candidate slots, no table entries,
+//! // 10 verified states, 2 source beliefs; the FQI's 11 nodes × 2 actions; and the set-up's
+//! // reward mean function and stored posteriors of each source.
+//! let mut storage = AdaptiveStorage::<f32, 1, 2, 16, 20, 40, 42, 0, 10, 2>::new();
+//! let mut sweep = SweepStorage::<f32, 1, 22, 11>::new();
+//! let mut means = [MeanFunction::<f32, 16, 2>::EMPTY; 2];
+//! let mut posteriors = [Posterior::default(); 40];
+//!
+//! // Set-up: each source's reward GP, fitted in the kernel's GP, kept as its mean function
+//! // and as the posterior at each of its records.
+//! let mut buffers = storage.buffers();
+//! for ((mean, source), stored) in means.iter_mut().zip(records).zip(posteriors.chunks_mut(20)) {
+//!     mean.fit_rewards(buffers.gp, source, &config.awfqi.gp_training, config.awfqi.subset, &mut rng)?;
+//!     predict_posteriors(buffers.gp, source, NoiseSubtraction::Reference, stored)?;
+//! }
+//! buffers.fqi = sweep.storage();
+//! // FQI by value iteration on 11 nodes over [0, 1]; the reward depends on the state only.
+//! let q = ModelSweep::cube(0.0, 1.0, 10)?.with_rewards(RewardModel::Pooled);
+//! let candidates = RowSet::grid(PointGrid::spanning([0.0], [1.0], 0.05)?, 2)?;
+//! let data = SourceData::new(&records, &posteriors)?;
+//! let mut kernel =
+//!     AdaptiveAwfqi::new(config, q, data, &means, candidates, Heater { gain: 0.2 }, buffers)?;
+//! kernel.plan(&mut rng)?; // the plan on the sources alone: set-up, once
+//! for _ in 0..2 {
+//!     let report = kernel.step(&mut rng)?; // 10 queries in 3 sub-batches, each then re-planned
+//!     assert!(report.wr_eff > 0.0);
+//! }
+//! // The greedy policy heats when cold and not when hot.
+//! assert_eq!(kernel.q().greedy_action([0.2])?, 1);
+//! assert_eq!(kernel.q().greedy_action([0.9])?, 0);
+//!
+//! // Bad input is a typed error, never a panic.
+//! assert!(kernel.q().greedy_action([f32::NAN]).is_err());
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! The thesis's AWFQI ([`Awfqi`]) on the same plant: the builder performs its whole set-up
+//! once (source reward GPs → stored posteriors → score table over your candidate pairs →
+//! sampler → source data → FQI table).
+//!
+//! ```rust
+//! use awfqi::{
+//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
+//!     Scores, SourceMeans, SourceModel, Transition,
+//! };
+//! use rand_chacha::ChaCha8Rng;
+//! use rand_core::{Rng, SeedableRng};
+//! # #[derive(Clone, Copy)]
+//! # struct Heater {
+//! #     gain: f32,
+//! # }
+//! # impl SourceModel<f32, 1> for Heater {
+//! #     fn predict(&self, [s]: [f32; 1], action: usize) -> awfqi::Result<SourceMeans<f32, 1>> {
+//! #         if !(0.0..=1.0).contains(&s) || action > 1 {
+//! #             return Err(awfqi::Error::OutOfRange { parameter: "state" });
+//! #         }
+//! #         let next = s + self.gain * action as f32 - 0.1 * s;
+//! #         Ok(SourceMeans { reward: -(s - 0.5).abs(), next_state: [next.clamp(0.0, 1.0)] })
+//! #     }
+//! # }
+//! # impl GenerativeModel<f32> for Heater {
+//! #     type State = [f32; 1];
+//! #     fn num_actions(&self) -> usize {
+//! #         2
+//! #     }
+//! #     fn query<R: Rng + ?Sized>(
+//! #         &self,
+//! #         state: [f32; 1],
+//! #         action: usize,
+//! #         rng: &mut R,
+//! #     ) -> awfqi::Result<Transition<[f32; 1], f32>> {
+//! #         let mean = self.predict(state, action)?;
+//! #         let noise = (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.02;
+//! #         let next_state = [(mean.next_state[0] + noise).clamp(0.0, 1.0)];
+//! #         Ok(Transition { state, action, reward: mean.reward, next_state, absorbing: false })
+//! #     }
+//! # }
+//!
+//! # fn main() -> awfqi::Result<()> {
+//! let mut rng = ChaCha8Rng::seed_from_u64(7);
+//! let sources = [Heater { gain: 0.15 }, Heater { gain: 0.3 }];
+//! let mut data = [[Transition::EMPTY; 20]; 2];
+//! for (heater, records) in sources.iter().zip(&mut data) {
+//!     for (i, r) in records.iter_mut().enumerate() {
+//!         *r = heater.query([i as f32 / 19.0], i % 2, &mut rng)?;
+//!     }
+//! }
+//! let records: [&[Transition<[f32; 1], f32>]; 2] = [&data[0], &data[1]];
+//!
 //! // All the memory the loop writes: a 16-point GP over (s, a), 2 steps × 10 queries,
 //! // 40 source records, 42 candidate rows, 10 cells × 2 actions (`static` in `.bss` on a
 //! // device). Set-up memory: the fitted source posteriors and the score values.
@@ -147,9 +250,6 @@
 //! // The greedy policy heats when cold and not when hot.
 //! assert_eq!(kernel.q().greedy_action([0.2])?, 1);
 //! assert_eq!(kernel.q().greedy_action([0.9])?, 0);
-//!
-//! // Bad input is a typed error, never a panic.
-//! assert!(kernel.q().greedy_action([f32::NAN]).is_err());
 //! # Ok(())
 //! # }
 //! ```
@@ -242,8 +342,9 @@ pub use awfqi::{
 pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
-    KnnFqi, KnnRecord, KnnStorage, Neighbours, QFunction, QStorage, SampleSet, TabularFqi, TileFqi,
-    Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+    KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
+    SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings,
+    TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use model::{GenerativeModel, Transition};

@@ -241,6 +241,64 @@ pub fn visit_posteriors<T: Real, const N: usize, const D: usize, const I: usize>
     Ok(())
 }
 
+/// Writes `f(i, record, posterior)` into `out[i]` for every record, the posteriors as
+/// [`visit_posteriors`] gives them but with one prediction per record: for
+/// [`NoiseSubtraction::Reference`] the batch pass keeps each record's predictive variance in
+/// `out[i]`, and the second pass computes only the mean, `Σⱼ k(z, xⱼ) αⱼ` from the GP's
+/// mean weights, the same value up to rounding at `O(N·I)` instead of `O(N²)`. For
+/// `f32` and `N = 32` that halves the cost of a batch.
+///
+/// Errors: `out` of another length than `records` ([`Error::InvalidParameter`] naming
+/// `out`), no records ([`Error::EmptyData`]), those of [`Gp::predict`], of
+/// [`Gp::mean_weights`] and of `f`; `out` may hold variances then.
+pub fn map_posteriors<T: Real, const N: usize, const D: usize, const I: usize>(
+    gp: &Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
+    noise: NoiseSubtraction,
+    out: &mut [T],
+    mut f: impl FnMut(usize, &Transition<[T; D], T>, Posterior<T>) -> Result<T>,
+) -> Result<()> {
+    if out.len() != records.len() {
+        return Err(Error::InvalidParameter { parameter: "out" });
+    }
+    if records.is_empty() {
+        return Err(Error::EmptyData);
+    }
+    if noise != NoiseSubtraction::Reference {
+        let transform = StdTransform::new(noise, gp.hyperparameters().noise_variance, T::ZERO)?;
+        for (i, (r, o)) in records.iter().zip(out.iter_mut()).enumerate() {
+            let p = gp.predict(&input(r.state, r.action))?;
+            *o = f(
+                i,
+                r,
+                Posterior::new(p.mean, transform.apply(p.noisy_variance)),
+            )?;
+        }
+        return Ok(());
+    }
+    let mut smallest = T::INFINITY;
+    for (r, o) in records.iter().zip(out.iter_mut()) {
+        let p = gp.predict(&input(r.state, r.action))?;
+        smallest = smallest.min(p.noisy_variance);
+        *o = p.noisy_variance;
+    }
+    let hyper = gp.hyperparameters();
+    let transform = StdTransform::new(noise, hyper.noise_variance, smallest)?;
+    let mut alpha = [T::ZERO; N];
+    let n = gp.mean_weights(&mut alpha)?;
+    let (points, alpha) = (gp.inputs(), alpha.get(..n).unwrap_or(&[]));
+    for (i, (r, o)) in records.iter().zip(out.iter_mut()).enumerate() {
+        let z = input(r.state, r.action);
+        let mut mean = T::ZERO;
+        for (x, &a) in points.iter().zip(alpha) {
+            mean += hyper.covariance(&z, x) * a;
+        }
+        crate::error::ensure_finite(mean, "mean")?;
+        *o = f(i, r, Posterior::new(mean, transform.apply(*o)))?;
+    }
+    Ok(())
+}
+
 /// The [`StdTransform`] of `gp`'s predictions at the records' inputs as one batch (a pass of
 /// predictions for [`NoiseSubtraction::Reference`], none otherwise).
 ///
@@ -437,5 +495,53 @@ mod tests {
         }
         let mut short = vec![Posterior::default(); 2];
         assert!(predict_posteriors(&gp, batch, NoiseSubtraction::Off, &mut short).is_err());
+    }
+
+    #[test]
+    fn mapped_posteriors_are_the_visited_ones_with_one_prediction_each() {
+        let data = records(12);
+        let mut gp = Gp::<f64, 16, 3>::new(Hyperparameters::isotropic(2.0, 1.5, 0.05)).unwrap();
+        let xs: Vec<[f64; 3]> = data.iter().map(|r| input(r.state, r.action)).collect();
+        let ys: Vec<f64> = data.iter().map(|r| r.reward).collect();
+        gp.fit(&xs, &ys).unwrap();
+        let batch = &data[2..10];
+        for mode in [
+            NoiseSubtraction::Reference,
+            NoiseSubtraction::Principled,
+            NoiseSubtraction::Off,
+        ] {
+            let mut expected = vec![Posterior::default(); batch.len()];
+            predict_posteriors(&gp, batch, mode, &mut expected).unwrap();
+            let mut seen = Vec::new();
+            let mut out = vec![0.0; batch.len()];
+            map_posteriors(&gp, batch, mode, &mut out, |i, r, p| {
+                seen.push((i, r.reward, p));
+                Ok(p.mean + 10.0 * p.std)
+            })
+            .unwrap();
+            for (i, (e, r)) in expected.iter().zip(batch).enumerate() {
+                let (j, reward, p) = seen[i];
+                assert_eq!((j, reward), (i, r.reward));
+                assert!((p.mean - e.mean).abs() < 1e-10 * (1.0 + e.mean.abs()));
+                assert_eq!(p.std, e.std);
+                assert_eq!(out[i], p.mean + 10.0 * p.std);
+            }
+        }
+        let mut short = vec![0.0; 2];
+        let ok = |_: usize, _: &Transition<[f64; 2], f64>, _| Ok(0.0);
+        assert_eq!(
+            map_posteriors(&gp, batch, NoiseSubtraction::Off, &mut short, ok),
+            Err(Error::InvalidParameter { parameter: "out" })
+        );
+        assert_eq!(
+            map_posteriors(&gp, &[], NoiseSubtraction::Off, &mut [], ok),
+            Err(Error::EmptyData)
+        );
+        let fail = |_: usize, _: &Transition<[f64; 2], f64>, _| Err(Error::EmptyData);
+        let mut out = vec![0.0; batch.len()];
+        assert_eq!(
+            map_posteriors(&gp, batch, NoiseSubtraction::Reference, &mut out, fail),
+            Err(Error::EmptyData)
+        );
     }
 }

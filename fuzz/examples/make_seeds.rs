@@ -843,14 +843,26 @@ fn loop_seeds() {
 /// (shared dynamics, start (0, 0)): budget 6, horizon 10, ε = 0.3, 15 evaluations and 1
 /// restart per search, spread subset, 3 sub-batches, 70 % verification, floor ≈ 0.1, 15
 /// candidates, every factor on; two sources of 6 records with fitted mean functions; grid
-/// rows (`rows` 0) or source rows (2), the table (`tiles` false) or 2 × 2 tiles × 2; 2 steps.
+/// rows (`rows` 0) or source rows (2), the table (`tiles` false) or 2 × 2 tiles × 2, or a
+/// model sweep of 4 × 4 cells with pooled rewards (`sweep`); 2 steps.
 fn adaptive_seed(f32: bool, rows: u8, tiles: bool) -> Seed {
+    adaptive_seed_with(f32, rows, if tiles { Fqi::Tiles } else { Fqi::Table })
+}
+
+/// The FQI approximator of an [`adaptive_seed`].
+enum Fqi {
+    Table,
+    Tiles,
+    Sweep,
+}
+
+fn adaptive_seed_with(f32: bool, rows: u8, fqi: Fqi) -> Seed {
     let mut s = Seed::new();
     s.bool(f32).bool(false).bool(false).u8(1);
     s.u8(6).u8(10).u8(60).u8(15).u8(1).bool(false).bool(true);
     s.u8(3).u8(140).bool(false).u8(25).u8(15).u8(1);
     s.bool(true).bool(true).bool(true);
-    s.u8(2);
+    s.u8(2).bool(false);
     let mut k = 0u32;
     let mut coordinate = || {
         k += 1;
@@ -871,11 +883,11 @@ fn adaptive_seed(f32: bool, rows: u8, tiles: bool) -> Seed {
     s.u8(7).u8(2).bool(true).bool(true);
     s.u8(0).u8(coordinate()).u8(coordinate()).u8(1);
     s.u8(1).u8(rows);
-    if tiles {
-        s.bool(true).u8(2).u8(2);
-    } else {
-        s.bool(false).u8(3);
-    }
+    match fqi {
+        Fqi::Tiles => s.bool(true).u8(2).u8(2),
+        Fqi::Table => s.bool(false).u8(3),
+        Fqi::Sweep => s.u8(5).u8(1).bool(false).bool(false).u8(4),
+    };
     s.u8(1);
     for _ in 0..7 {
         s.u8(2);
@@ -896,6 +908,68 @@ fn adaptive_seeds() {
             &format!("sources_tiles_{p}"),
             &adaptive_seed(f32, 2, true),
         );
+        write(
+            "adaptive_loop",
+            &format!("grid_sweep_{p}"),
+            &adaptive_seed_with(f32, 0, Fqi::Sweep),
+        );
+    }
+}
+
+/// The model sweep (`fuzz_targets/model_sweep.rs`), in 2-D: a 4 × 4-cell grid over
+/// `[0, 10]²`, each reward model, 4 actions moving one unit, 12 records on a walk in two
+/// sets (the second weighted), γ = 0.9 and 8 iterations, then four probes (one NaN, one
+/// outside the box); also the same through `QFunction`, and short storage.
+fn sweep_seeds() {
+    let walk: Vec<([f64; 2], u8, f64, [f64; 2], bool)> = (0..12)
+        .map(|i| {
+            let x = f64::from(i % 4) * 2.5;
+            let y = f64::from(i / 4) * 2.5;
+            let a = (i % 4) as u8;
+            let next = [
+                (x + [1.0, -1.0, 0.0, 0.0][usize::from(a)]).clamp(0.0, 10.0),
+                (y + [0.0, 0.0, 1.0, -1.0][usize::from(a)]).clamp(0.0, 10.0),
+            ];
+            ([x, y], a, -1.0 - f64::from(i % 3), next, i == 11)
+        })
+        .collect();
+    for f32 in [true, false] {
+        let p = if f32 { "f32" } else { "f64" };
+        for (model, name) in [(0u8, "per_action"), (1, "pooled"), (2, "backfilled")] {
+            for (via_q, short, how) in [
+                (false, false, "direct"),
+                (true, false, "q"),
+                (false, true, "short"),
+            ] {
+                let mut s = Seed::new();
+                s.u8(u8::from(f32)).bool(false).u8(3);
+                s.u8(model).bool(false).bool(model == 2);
+                s.u8(4).u8(if short { 0xff } else { 0 }).u8(0).bool(via_q);
+                s.bool(false).u8(8);
+                s.u8(1);
+                for (k, part) in [&walk[..6], &walk[6..]].into_iter().enumerate() {
+                    s.u8(part.len() as u8);
+                    for &(st, a, r, n, end) in part {
+                        s.nums(&st).u8(a).num(r).nums(&n).bool(end);
+                    }
+                    if k == 1 {
+                        s.bool(true).u8(0).nums(&[0.5, 1.0, 2.0, 0.0, 1e-9, 3.0]);
+                    } else {
+                        s.bool(false);
+                    }
+                    s.bool(false).bool(false);
+                }
+                for (st, a) in [
+                    ([0.0, 0.0], 0u8),
+                    ([NAN, 1.0], 1),
+                    ([20.0, -5.0], 2),
+                    ([4.9, 7.3], 5),
+                ] {
+                    s.nums(&st).u8(a);
+                }
+                write("model_sweep", &format!("walk_{name}_{how}_{p}"), &s);
+            }
+        }
     }
 }
 
@@ -908,5 +982,6 @@ fn main() {
     weights_seeds();
     belief_seeds();
     adaptive_seeds();
+    sweep_seeds();
     println!("seeds written under fuzz/seeds/");
 }

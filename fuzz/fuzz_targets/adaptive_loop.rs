@@ -4,9 +4,11 @@
 //! posteriors from the fuzzer (NaN, ±∞ and huge values included); each source's
 //! `MeanFunction` fitted on its records (or left the zero function); candidate rows (grid,
 //! pairs or source rows); the approximator (table, tiles, kernel averaging with a fuzzed
-//! `k`, kernel, reach and common ball, the hybrid of tiles and kernel averaging, or
-//! Extra-Trees, stored or streamed, with fuzzed trees, node budget and growth limits);
-//! buffers of every size (one short of what is needed too); then steps and `reset`.
+//! `k`, kernel, reach and common ball, the hybrid of tiles and kernel averaging,
+//! Extra-Trees, stored or streamed, with fuzzed trees, node budget and growth limits, or a
+//! model sweep with fuzzed cells, reward model, minimum mass and lookahead); thesis or warm
+//! refits with fuzzed budgets; buffers of every size (one short of what is needed too); then
+//! the plan, steps and `reset`.
 //!
 //! Invariants: no panic; errors only of the documented kinds; a successful step spends the
 //! whole budget (`D₀` grows by it), reports finite diagnostics, leaves finite weights and
@@ -17,8 +19,8 @@ use awfqi::adaptive::{Candidate, SourceBelief};
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::record_gp::GpTraining;
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, CellGrid, EmptyCells, Error,
-    ExtraTrees, FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, Neighbours, PointGrid,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, CellGrid, EmptyCells, Error, ExtraTrees,
+    FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, ModelSweep, Neighbours, PointGrid,
     Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition, TreeNode,
     TreeRecord,
 };
@@ -117,6 +119,15 @@ fn run<T: Real>(b: &mut Bytes) {
     config.uncertainty = b.bool();
     config.decision = b.bool();
     config.relabel = b.bool();
+    config.refit = if b.bool() {
+        awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+            max_evaluations: b.index(12),
+            restarts: b.index(2),
+            isotropic: true,
+        })
+    } else {
+        awfqi::adaptive::Refit::Search
+    };
     // The published FQI settings (γ = 0.99, capped nearest, minimum weight 0.5) with 1 to 8
     // iterations instead of their 60: the same loop body, while 60 iterations per replan
     // took three quarters of the target's time (measured with perf).
@@ -203,7 +214,25 @@ fn run<T: Real>(b: &mut Bytes) {
             return;
         }
     };
-    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 5 {
+    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 6 {
+        5 => {
+            let rewards = [
+                awfqi::RewardModel::PerAction,
+                awfqi::RewardModel::Pooled,
+                awfqi::RewardModel::Backfilled,
+            ][usize::from(b.u8() % 3)];
+            let min_mass = if b.bool() { real(b) } else { T::ZERO };
+            let lookahead = b.bool();
+            match ModelSweep::cube(T::ZERO, T::from_f64(10.0), b.index(6))
+                .and_then(|s| s.with_min_mass(min_mass))
+            {
+                Ok(s) => s.with_rewards(rewards).with_lookahead(lookahead).into(),
+                Err(e) => {
+                    expect_kind("ModelSweep", &e, &[Kind::Invalid]);
+                    return;
+                }
+            }
+        }
         0 => match Tilings::cube(T::ZERO, T::from_f64(10.0), b.index(4), b.index(4)) {
             Ok(t) => t.into(),
             Err(e) => {
@@ -270,7 +299,6 @@ fn run<T: Real>(b: &mut Bytes) {
     let mut samples = vec![Transition::EMPTY; size(b, steps * budget)];
     let mut weights = vec![T::ZERO; size(b, total)];
     let mut candidates = vec![Candidate::EMPTY; size(b, slots)];
-    let mut alias = vec![AliasEntry::EMPTY; size(b, slots)];
     let mut fqi = vec![FqiEntry::EMPTY; size(b, needed)];
     // Kernel averaging: one record slot per target and source record, and their links;
     // trees: as many record slots, and their nodes.
@@ -291,6 +319,12 @@ fn run<T: Real>(b: &mut Bytes) {
         _ => (0, 0, 0),
     };
     let trees = matches!(approximator, awfqi::Approximator::Trees(_));
+    let (sweep_entries, sweep_nodes) = match approximator {
+        awfqi::Approximator::Sweep(s) => (s.required_entries(4).unwrap_or(0), s.nodes()),
+        _ => (0, 0),
+    };
+    let mut sweep_entries = vec![awfqi::SweepEntry::EMPTY; size(b, sweep_entries)];
+    let mut sweep_nodes = vec![awfqi::SweepNode::EMPTY; size(b, sweep_nodes)];
     let record_slots = size(b, records_needed);
     let mut records = vec![KnnRecord::EMPTY; if trees { 0 } else { record_slots }];
     let mut links = vec![0u16; size(b, links_needed)];
@@ -303,13 +337,14 @@ fn run<T: Real>(b: &mut Bytes) {
         samples: &mut samples,
         weights: &mut weights,
         candidates: &mut candidates,
-        alias: &mut alias,
         fqi: QStorage {
             entries: &mut fqi,
             records: &mut records,
             links: &mut links,
             tree_records: &mut tree_records,
             nodes: &mut nodes,
+            sweep_entries: &mut sweep_entries,
+            sweep_nodes: &mut sweep_nodes,
         },
         path: &mut path,
         beliefs: &mut beliefs,
@@ -323,6 +358,12 @@ fn run<T: Real>(b: &mut Bytes) {
             }
         };
     trace!("built: {} rows, {} source records", rows.len(), total);
+    if b.bool() {
+        if let Err(e) = kernel.plan(&mut rng) {
+            expect_kind("plan", &e, ANY);
+            assert_eq!(kernel.steps(), 0);
+        }
+    }
     for round in 0..2 {
         for _ in 0..steps + 1 {
             let done = kernel.steps();

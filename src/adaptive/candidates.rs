@@ -4,7 +4,7 @@
 //! coverage floor: `p = (1 − floor)·score/Σscore + floor·relevance/Σrelevance` (module
 //! docs of [`crate::adaptive`]). The subset is drawn afresh before each sub-batch's
 //! queries; its rows and their factors live in one [`Candidate`] per slot, so the scoring is
-//! two passes over the slots and the alias table a third.
+//! two passes over the slots, and each drawn query a scan of their probabilities.
 
 use crate::error::Result;
 
@@ -93,7 +93,7 @@ pub fn finish_scores<T: Real>(
     (total, relevance)
 }
 
-/// The drawing probability of a slot (unnormalised: the alias table normalises): the
+/// The drawing probability of a slot (unnormalised: the draw normalises): the
 /// score's share mixed with the floor's relevance share; without any score, the relevance
 /// share alone, and uniform if even that is 0.
 pub fn probability<T: Real>(c: &Candidate<T>, totals: (T, T), floor: T, slots: usize) -> T {

@@ -58,16 +58,15 @@ pub use mean_function::MeanFunction;
 pub use plausibility::SourceBelief;
 pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
-use crate::alias::AliasTable;
 use crate::awfqi::builder::short;
 use crate::awfqi::transfer::{SourceValues, Transfer, for_each_source};
 use crate::awfqi::{AwfqiConfig, SourceData, StepReport};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};
-use crate::gp::{Gp, Hyperparameters};
+use crate::gp::{Gp, Hyperparameters, SearchOptions};
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::{InputDim, fit_gp_on, input, visit_posteriors};
+use crate::record_gp::{GpTraining, InputDim, fit_gp_on, input, visit_posteriors};
 use crate::score::RowSet;
 use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
 use rand_core::Rng;
@@ -112,17 +111,38 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     /// `(lower, upper)` of every state coordinate (`lower < upper`): the relevance kernel's
     /// and the nearest-record distances' units.
     pub bounds: [(T, T); D],
+    /// How the target GPs' hyperparameters are searched after their first fit of a run.
+    pub refit: Refit,
+}
+
+/// How a re-plan searches the hyperparameters of the weights' reward GP and of the residual
+/// GP once each has been fitted in the run: the search is most of a step's cost, and the
+/// data change by a few records between two fits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refit {
+    /// Every fit searches from [`AwfqiConfig::gp_training`]'s initial values with its
+    /// search options (the thesis's training).
+    Search,
+    /// Every fit after the first of its GP starts from that GP's last hyperparameters and
+    /// searches with these options (the first fit of each is the thesis's).
+    Warm(SearchOptions),
 }
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
-    /// The harness's default configuration (`docs/active-budget.md`): 3 sub-batches, 70 %
-    /// verification, surprise, uncertainty and decision relevance on, floor 0.1, 4 000
-    /// candidates, relevance width 0.1, relabelling off (on the tuning runs it helped the
-    /// harness's Extra-Trees FQI but neither the core's tile coding nor, measured again
-    /// with them, the core's streamed trees), on the thesis's AWFQI
-    /// settings for `budget` ([`AwfqiConfig::thesis`]), for a plant that starts in
-    /// `start`, with episodes of `horizon` steps, exploration `epsilon` (the protocol's
-    /// 0.3) and state `bounds`.
+    /// The recommended configuration (`docs/embedded-adaptive.md`, the harness's
+    /// `awfqi-adaptive-kernel`): 3 sub-batches, 70 % verification, surprise, uncertainty
+    /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
+    /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
+    /// each GP's first fit), on the thesis's AWFQI settings for `budget`
+    /// ([`AwfqiConfig::thesis`]), for a plant that starts in `start`, with episodes of
+    /// `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state `bounds`.
+    ///
+    /// With it, on Puddle World: 32-point GPs (`N = 32`) and FQI by a model sweep on 12
+    /// cells per axis with pooled rewards
+    /// (`ModelSweep::cube(0.0, 10.0, 12)?.with_rewards(RewardModel::Pooled)`), in 47 KB of
+    /// RAM and about 10⁸ Cortex-M4F instructions per step. `RewardModel::Pooled` assumes a
+    /// reward that depends on the state only; otherwise `RewardModel::Backfilled`.
     pub fn recommended(
         budget: usize,
         start: [T; D],
@@ -139,12 +159,17 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
             decision: true,
             floor: T::from_f64(0.1),
             relabel: false,
-            candidates: 4000,
+            candidates: 250,
             relevance_width: T::from_f64(0.1),
             start,
             horizon,
             epsilon,
             bounds,
+            refit: Refit::Warm(SearchOptions {
+                max_evaluations: 30,
+                restarts: 0,
+                isotropic: true,
+            }),
         }
     }
 
@@ -156,6 +181,9 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// `lower ≥ upper` ([`Error::OutOfRange`] / [`Error::NonFinite`] naming it).
     pub fn validate(self) -> Result<ValidAdaptiveConfig<T, D, I>> {
         self.awfqi.validate()?;
+        if let Refit::Warm(options) = self.refit {
+            options.validate()?;
+        }
         for (value, parameter) in [
             (self.sub_batches, "sub_batches"),
             (self.candidates, "candidates"),
@@ -224,8 +252,10 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     residual: bool,
     /// `run.weights` holds the relabelled rewards the Q-function was last fitted on.
     relabelled: bool,
+    /// The last hyperparameters of the weights' reward GP and of the residual GP in this
+    /// run (the warm starts of [`Refit::Warm`]).
+    last_hyper: [Option<Hyperparameters<T, I>>; 2],
     slots: &'a mut [Candidate<T>],
-    alias: &'a mut [crate::alias::AliasEntry<T>],
     path: &'a mut [[T; D]],
     path_len: usize,
     /// The Q-function has been fitted in this run.
@@ -250,7 +280,7 @@ where
     /// ([`Error::OutOfRange`] `actions`); no sources ([`Error::EmptyData`]), a mean-function
     /// count other than the source count ([`Error::InvalidParameter`] `means`); a buffer
     /// too short ([`Error::CapacityExceeded`] with its length): `samples` for one budget,
-    /// `weights` for the source records, `candidates` or `alias` for
+    /// `weights` for the source records, `candidates` for
     /// `min(candidates, rows)`, `path` for the budget, `beliefs` for the sources, `fqi`
     /// for the approximator.
     pub fn new(
@@ -268,7 +298,6 @@ where
             samples,
             weights,
             candidates,
-            alias,
             fqi,
             path,
             beliefs,
@@ -296,7 +325,6 @@ where
         short(samples.len(), budget)?;
         short(weights.len(), sources.len())?;
         short(candidates.len(), slots)?;
-        short(alias.len(), slots)?;
         short(path.len(), budget)?;
         short(beliefs.len(), m)?;
         let fqi = approximator.into().build(actions, fqi)?;
@@ -310,8 +338,8 @@ where
             beliefs,
             residual: false,
             relabelled: false,
+            last_hyper: [None; 2],
             slots: candidates,
-            alias,
             path,
             path_len: 0,
             planned: false,
@@ -330,6 +358,7 @@ where
         self.planned = false;
         self.residual = false;
         self.relabelled = false;
+        self.last_hyper = [None; 2];
         self.last = None;
         plausibility::reset(self.beliefs);
     }
@@ -393,6 +422,23 @@ where
         &self.run.target
     }
 
+    /// The sources' reward mean functions.
+    pub fn means(&self) -> &'a [MeanFunction<T, N, I>] {
+        self.means
+    }
+
+    /// Plans on the sources alone (the plan the first step starts from), if no plan exists
+    /// yet; [`AdaptiveAwfqi::step`] does it otherwise. It depends on the set-up only, so a
+    /// firmware can run it at boot and keep it out of the first step's time.
+    ///
+    /// Errors: those of FQI; the kernel is unchanged then.
+    pub fn plan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<()> {
+        if !self.planned {
+            self.replan(rng)?;
+        }
+        Ok(())
+    }
+
     /// Runs one step (module docs): `sub_batches` × (verification, drawn queries,
     /// re-plan). The report's GP fields describe the weights' reward GP of the last
     /// re-plan.
@@ -404,9 +450,7 @@ where
         let n = self.config.awfqi.budget;
         self.run.ensure_room(n)?;
         self.path_len = 0;
-        if !self.planned {
-            self.replan(rng)?;
-        }
+        self.plan(rng)?;
         let s = self.config.sub_batches;
         let mut report = None;
         for b in 0..s {
@@ -538,22 +582,27 @@ where
             }
             _ => candidates::finish_scores(slots, None),
         };
-        // Pass 3: the alias table, then the queries.
+        // Pass 3: the queries, each drawn by a scan of the slots' probabilities (a few
+        // queries per sub-batch: cheaper in memory than a table, and as fast).
         let floor = config.floor;
-        let table = AliasTable::build(
-            slots
-                .iter()
-                .map(|s| candidates::probability(s, totals, floor, c)),
-            &mut *self.alias,
-        )?;
+        let probability = |s: &Candidate<T>| candidates::probability(s, totals, floor, c);
+        let total = slots.iter().map(probability).fold(T::ZERO, |a, p| a + p);
         let mut evidence = Evidence {
             config: &self.config,
             means: self.means,
             beliefs: self.beliefs,
         };
         for _ in 0..n {
-            let j = table.sample(rng);
-            let row = self.slots.get(j).map_or(0, |s| s.row);
+            let u = crate::rng::uniform::<T, R>(rng) * total;
+            let mut row = slots.last().map_or(0, |s| s.row);
+            let mut sum = T::ZERO;
+            for s in slots.iter() {
+                sum += probability(s);
+                if u < sum {
+                    row = s.row;
+                    break;
+                }
+            }
             let (state, action) = self
                 .rows
                 .row(row)
@@ -568,6 +617,8 @@ where
     /// sources unweighted before any target data), then the plausibilities and the
     /// residual GP.
     fn replan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
+        let (reward_training, residual_training) =
+            (self.training(REWARD_GP), self.training(RESIDUAL_GP));
         let config = &self.config.awfqi;
         let run = &mut self.run;
         let mut wr = WeightSummary::new();
@@ -591,9 +642,10 @@ where
             target,
             |r| Ok(r.reward - centre),
             config.subset,
-            &config.gp_training,
+            &reward_training,
             rng,
         )?;
+        self.last_hyper[REWARD_GP] = Some(*run.gp.hyperparameters());
         let (hyper, points) = (*run.gp.hyperparameters(), run.gp.len());
         self.relabelled = false;
         let values = if relabel {
@@ -609,7 +661,7 @@ where
             wr.add_ones(run.sources.len());
             SourceValues::Rewards
         } else {
-            run.fit_reward_weights(&config.weights, config.noise_subtraction, &mut wr)?;
+            run.fit_reward_weights(&config.weights, config.noise_subtraction, &mut wr, true)?;
             SourceValues::Weights
         };
         run.fit_q(values, None, &config.fqi, rng)?;
@@ -628,13 +680,35 @@ where
                 Ok(r.reward - prior)
             },
             config.subset,
-            &config.gp_training,
+            &residual_training,
             rng,
         )?;
+        self.last_hyper[RESIDUAL_GP] = Some(*run.gp.hyperparameters());
         self.residual = true;
         Ok(run.report(&wr, lml, hyper, points))
     }
+
+    /// The training of GP `which` ([`REWARD_GP`], [`RESIDUAL_GP`]) by [`Refit`].
+    fn training(&self, which: usize) -> GpTraining<T, I> {
+        let thesis = self.config.awfqi.gp_training;
+        match (
+            self.config.refit,
+            self.last_hyper.get(which).copied().flatten(),
+        ) {
+            (Refit::Warm(search), Some(initial)) => GpTraining {
+                initial,
+                search,
+                ..thesis
+            },
+            _ => thesis,
+        }
+    }
 }
+
+/// Index of the weights' reward GP in [`AdaptiveAwfqi`]'s warm starts.
+const REWARD_GP: usize = 0;
+/// Index of the residual GP.
+const RESIDUAL_GP: usize = 1;
 
 /// What a query changes besides `D₀`: the sources' running errors.
 struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {

@@ -3,7 +3,6 @@
 
 use super::candidates::Candidate;
 use super::plausibility::SourceBelief;
-use crate::alias::AliasEntry;
 use crate::float::Real;
 use crate::fqi::{FqiEntry, QStorage};
 use crate::gp::Gp;
@@ -11,8 +10,8 @@ use crate::model::Transition;
 
 /// All the memory an [`AdaptiveAwfqi`](super::AdaptiveAwfqi) run writes, as one block:
 /// the target GP (`N` points of dimension `I = D + 1`), `Q` target samples (steps ×
-/// budget), `W` reward weights (one per source record), `C` candidate slots and as many
-/// alias entries (the candidates scored per sub-batch, at most the number of rows), `E`
+/// budget), `W` reward weights (one per source record), `C` candidate slots (the candidates
+/// scored per sub-batch, at most the number of rows), `E`
 /// FQI entries, `B` path states (the budget) and `M` source beliefs (one per source).
 ///
 /// [`AdaptiveStorage::new`] is `const` and all-zero, so the block can be a `static` in
@@ -35,7 +34,6 @@ pub struct AdaptiveStorage<
     samples: [Transition<[T; D], T>; Q],
     weights: [T; W],
     candidates: [Candidate<T>; C],
-    alias: [AliasEntry<T>; C],
     fqi: [FqiEntry<T>; E],
     path: [[T; D]; B],
     beliefs: [SourceBelief<T>; M],
@@ -61,7 +59,6 @@ impl<
             samples: [Transition::EMPTY; Q],
             weights: [T::ZERO; W],
             candidates: [Candidate::EMPTY; C],
-            alias: [AliasEntry::EMPTY; C],
             fqi: [FqiEntry::EMPTY; E],
             path: [[T::ZERO; D]; B],
             beliefs: [SourceBelief::EMPTY; M],
@@ -75,7 +72,6 @@ impl<
             samples: &mut self.samples,
             weights: &mut self.weights,
             candidates: &mut self.candidates,
-            alias: &mut self.alias,
             fqi: QStorage::from(&mut self.fqi[..]),
             path: &mut self.path,
             beliefs: &mut self.beliefs,
@@ -114,8 +110,6 @@ pub struct AdaptiveBuffers<'a, T, const D: usize, const I: usize, const N: usize
     pub weights: &'a mut [T],
     /// The candidate slots of a sub-batch (at least `min(candidates, rows)`).
     pub candidates: &'a mut [Candidate<T>],
-    /// The alias table of the slots (as many entries).
-    pub alias: &'a mut [AliasEntry<T>],
     /// Room for the approximator: FQI entries (table, tiles) or records and links (kernel
     /// averaging: one record slot per target and source record).
     pub fqi: QStorage<'a, T, D>,

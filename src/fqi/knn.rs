@@ -750,11 +750,9 @@ impl<T: Real, const D: usize, const R: usize, const L: usize> KnnStorage<T, D, R
     /// The block as the [`QStorage`](super::QStorage) a Q-function is built in.
     pub fn storage(&mut self) -> super::QStorage<'_, T, D> {
         super::QStorage {
-            entries: &mut [],
             records: &mut self.records,
             links: &mut self.links,
-            tree_records: &mut [],
-            nodes: &mut [],
+            ..super::QStorage::default()
         }
     }
 }

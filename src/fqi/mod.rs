@@ -26,6 +26,7 @@
 //! | [`KnnFqi`] | [`Neighbours`] | [`KnnRecord`] per sample, `u16` links | kernel mean of the `k` nearest records |
 //! | [`HybridFqi`] | [`Approximator::Hybrid`] | both of the above | the mean of tiles and kNN |
 //! | [`TreeFqi`] | [`ExtraTrees`] | [`TreeRecord`] per sample, [`TreeNode`]s | Extra-Trees forests, stored or streamed |
+//! | [`SweepFqi`] | [`ModelSweep`] | [`SweepEntry`] per (node, action), [`SweepNode`] per node | none: value iteration on a grid model fitted once per fit |
 //!
 //! [`Approximator`] is the choice before storage exists; [`Approximator::build`] makes the
 //! [`QFunction`] that AWFQI and adaptive AWFQI hold. Only the trees draw random numbers,
@@ -58,6 +59,7 @@ mod iteration;
 pub mod knn;
 mod q_function;
 mod samples;
+pub mod sweep;
 mod table;
 mod tiles;
 pub mod trees;
@@ -69,6 +71,7 @@ pub use hybrid::HybridFqi;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
+pub use sweep::{ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
 pub use table::TabularFqi;
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};

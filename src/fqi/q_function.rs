@@ -1,15 +1,17 @@
 //! The Q-function approximators of weighted FQI behind one type, so the AWFQI loop (and a
 //! user) picks one by configuration: the table of [`CellGrid`] cells, tile coding
 //! ([`Tilings`]), kernel averaging over the records ([`Neighbours`]), both averaged, or
-//! Extra-Trees ([`ExtraTrees`]). The table and tiles keep their values in [`FqiEntry`]
-//! storage, kernel averaging in [`KnnRecord`]s and links, the trees in [`TreeRecord`]s and
-//! [`TreeNode`]s ([`QStorage`] lends any of them). Only the trees draw random numbers, from
-//! the caller's generator.
+//! Extra-Trees ([`ExtraTrees`]), or a model sweep ([`ModelSweep`]). The table and tiles keep
+//! their values in [`FqiEntry`] storage, kernel averaging in [`KnnRecord`]s and links, the
+//! trees in [`TreeRecord`]s and [`TreeNode`]s, the sweep in [`SweepEntry`]s and
+//! [`SweepNode`]s ([`QStorage`] lends any of them). Only the trees draw random numbers,
+//! from the caller's generator.
 
 use super::iteration;
 use super::{
-    CellGrid, ExtraTrees, FqiConfig, FqiEntry, HybridFqi, KnnFqi, KnnRecord, Neighbours, SampleSet,
-    TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord,
+    CellGrid, ExtraTrees, FqiConfig, FqiEntry, HybridFqi, KnnFqi, KnnRecord, ModelSweep,
+    Neighbours, SampleSet, SweepEntry, SweepFqi, SweepNode, TabularFqi, TileFqi, Tilings, TreeFqi,
+    TreeNode, TreeRecord,
 };
 use crate::error::Result;
 use crate::float::Real;
@@ -30,16 +32,32 @@ pub struct QStorage<'a, T, const D: usize> {
     pub tree_records: &'a mut [TreeRecord<T, D>],
     /// The trees' nodes ([`ExtraTrees::required_nodes`]).
     pub nodes: &'a mut [TreeNode<T>],
+    /// A model sweep's entries ([`ModelSweep::required_entries`]).
+    pub sweep_entries: &'a mut [SweepEntry<T, D>],
+    /// A model sweep's nodes ([`ModelSweep::nodes`]).
+    pub sweep_nodes: &'a mut [SweepNode<T>],
+}
+
+impl<T, const D: usize> Default for QStorage<'_, T, D> {
+    /// No memory at all (fill in what the approximator uses).
+    fn default() -> Self {
+        Self {
+            entries: &mut [],
+            records: &mut [],
+            links: &mut [],
+            tree_records: &mut [],
+            nodes: &mut [],
+            sweep_entries: &mut [],
+            sweep_nodes: &mut [],
+        }
+    }
 }
 
 impl<'a, T, const D: usize> From<&'a mut [FqiEntry<T>]> for QStorage<'a, T, D> {
     fn from(entries: &'a mut [FqiEntry<T>]) -> Self {
         Self {
             entries,
-            records: &mut [],
-            links: &mut [],
-            tree_records: &mut [],
-            nodes: &mut [],
+            ..Self::default()
         }
     }
 }
@@ -60,6 +78,14 @@ pub enum Approximator<T, const D: usize> {
     Hybrid(Tilings<T, D>, Neighbours<T, D>),
     /// Per-action Extra-Trees forests ([`TreeFqi`]).
     Trees(ExtraTrees),
+    /// Value iteration on a grid model of the records ([`SweepFqi`]).
+    Sweep(ModelSweep<T, D>),
+}
+
+impl<T: Real, const D: usize> From<ModelSweep<T, D>> for Approximator<T, D> {
+    fn from(sweep: ModelSweep<T, D>) -> Self {
+        Approximator::Sweep(sweep)
+    }
 }
 
 impl<T: Real, const D: usize> From<ExtraTrees> for Approximator<T, D> {
@@ -95,7 +121,7 @@ impl<T: Real, const D: usize> Approximator<T, D> {
             Approximator::Tiles(tilings) => TileFqi::required_entries(tilings, actions),
             Approximator::Knn(_) => Some(0),
             Approximator::Hybrid(tilings, _) => TileFqi::required_entries(tilings, actions),
-            Approximator::Trees(_) => Some(0),
+            Approximator::Trees(_) | Approximator::Sweep(_) => Some(0),
         }
     }
 
@@ -133,6 +159,12 @@ impl<T: Real, const D: usize> Approximator<T, D> {
                 storage.tree_records,
                 storage.nodes,
             )?),
+            Approximator::Sweep(sweep) => QFunction::Sweep(SweepFqi::new(
+                sweep,
+                actions,
+                storage.sweep_entries,
+                storage.sweep_nodes,
+            )?),
         })
     }
 }
@@ -148,6 +180,7 @@ macro_rules! each {
             QFunction::Knn($q) => $body,
             QFunction::Hybrid($q) => $body,
             QFunction::Trees($q) => $body,
+            QFunction::Sweep($q) => $body,
         }
     };
 }
@@ -165,6 +198,8 @@ pub enum QFunction<'a, T, const D: usize> {
     Hybrid(HybridFqi<'a, T, D>),
     /// Per-action Extra-Trees forests.
     Trees(TreeFqi<'a, T, D>),
+    /// A model sweep.
+    Sweep(SweepFqi<'a, T, D>),
 }
 
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
@@ -181,7 +216,7 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.entries(),
             QFunction::Tiles(q) => q.entries(),
             QFunction::Hybrid(q) => q.tiles().entries(),
-            QFunction::Knn(_) | QFunction::Trees(_) => &[],
+            QFunction::Knn(_) | QFunction::Trees(_) | QFunction::Sweep(_) => &[],
         }
     }
 
@@ -192,7 +227,8 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tiles(_)
             | QFunction::Knn(_)
             | QFunction::Hybrid(_)
-            | QFunction::Trees(_) => None,
+            | QFunction::Trees(_)
+            | QFunction::Sweep(_) => None,
         }
     }
 
@@ -271,4 +307,6 @@ macro_rules! greedy_by_greedy_action {
     )*};
 }
 
-greedy_by_greedy_action!(TabularFqi, TileFqi, KnnFqi, HybridFqi, TreeFqi, QFunction);
+greedy_by_greedy_action!(
+    TabularFqi, TileFqi, KnnFqi, HybridFqi, TreeFqi, SweepFqi, QFunction
+);

@@ -1335,11 +1335,9 @@ impl<T: Real, const D: usize, const R: usize, const N: usize> TreeStorage<T, D, 
     /// The block as the [`QStorage`](super::QStorage) a Q-function is built in.
     pub fn storage(&mut self) -> super::QStorage<'_, T, D> {
         super::QStorage {
-            entries: &mut [],
-            records: &mut [],
-            links: &mut [],
             tree_records: &mut self.records,
             nodes: &mut self.nodes,
+            ..super::QStorage::default()
         }
     }
 }

@@ -21,22 +21,24 @@ use crate::float::Real;
 /// four interleaved partial sums plus a tail.
 #[inline]
 pub(crate) fn dot<T: Real>(a: &[T], b: &[T]) -> T {
-    let n = a.len().min(b.len());
-    let (a, b) = (a.get(..n).unwrap_or(&[]), b.get(..n).unwrap_or(&[]));
-    let mut acc = [T::ZERO; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for ((s, &p), &q) in acc.iter_mut().zip(x).zip(y) {
-            *s += p * q;
-        }
+    // Slice patterns rather than `chunks_exact().zip()`: the same sums in the same order,
+    // without the iterator adapters a size-optimised build leaves as calls (most of the
+    // cost of the short products of a prediction on a Cortex-M4F).
+    let (mut a, mut b) = (a, b);
+    let [mut s0, mut s1, mut s2, mut s3] = [T::ZERO; 4];
+    while let ([p0, p1, p2, p3, ra @ ..], [q0, q1, q2, q3, rb @ ..]) = (a, b) {
+        s0 += *p0 * *q0;
+        s1 += *p1 * *q1;
+        s2 += *p2 * *q2;
+        s3 += *p3 * *q3;
+        (a, b) = (ra, rb);
     }
     let mut tail = T::ZERO;
-    for (&p, &q) in ra.iter().zip(rb) {
-        tail += p * q;
+    while let ([p, ra @ ..], [q, rb @ ..]) = (a, b) {
+        tail += *p * *q;
+        (a, b) = (ra, rb);
     }
-    let [a0, a1, a2, a3] = acc;
-    ((a0 + a1) + (a2 + a3)) + tail
+    ((s0 + s1) + (s2 + s3)) + tail
 }
 
 /// Row `i` of the buffer, columns `0..=i` (the stored part of a lower triangle).

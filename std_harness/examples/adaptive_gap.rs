@@ -18,8 +18,8 @@
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::evaluation::{EvaluationProtocol, evaluate};
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, GpTraining,
-    MeanFunction, Posterior, RowSet, SourceData, SubsetRule, Tilings, Transition,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, GpTraining, MeanFunction,
+    Posterior, RowSet, SourceData, SubsetRule, Tilings, Transition,
 };
 use awfqi_harness::domains::puddle::domain;
 use awfqi_harness::forest_fqi::{Dataset, FqiOptions, fqi};
@@ -95,7 +95,6 @@ fn main() -> anyhow::Result<()> {
         let mut samples = vec![Transition::EMPTY; 300];
         let mut weights = vec![0.0; posteriors.len()];
         let mut candidates = vec![awfqi::adaptive::Candidate::EMPTY; 4000];
-        let mut alias = vec![AliasEntry::EMPTY; 4000];
         let mut fqi_entries = vec![FqiEntry::EMPTY; entries];
         let mut path = vec![[0.0; 2]; 50];
         let mut beliefs = vec![awfqi::adaptive::SourceBelief::EMPTY; slices.len()];
@@ -111,7 +110,6 @@ fn main() -> anyhow::Result<()> {
                 samples: &mut samples,
                 weights: &mut weights,
                 candidates: &mut candidates,
-                alias: &mut alias,
                 fqi: (&mut fqi_entries[..]).into(),
                 path: &mut path,
                 beliefs: &mut beliefs,

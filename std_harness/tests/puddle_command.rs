@@ -110,15 +110,7 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     assert_eq!(summary.lines().count(), 1 + 2 * algorithms.len());
     // IWFQI and the kernel report their weight diagnostics, RBT its compliances.
     let d = base.join("d");
-    // (3 streamed trees per action instead of the default 50: a debug build.)
-    let few_trees = ["--kernel-trees", "3"];
-    run(&args_with(
-        &d,
-        "1",
-        "iwfqi,awfqi-kernel,awfqi-adaptive-kernel",
-        &few_trees,
-    ))
-    .unwrap();
+    run(&args(&d, "1", "iwfqi,awfqi-kernel,awfqi-adaptive-kernel")).unwrap();
     for name in ["iwfqi", "awfqi-kernel", "awfqi-adaptive-kernel"] {
         let json: serde_json::Value =
             serde_json::from_str(&read(&d, &format!("{name}.json"))).unwrap();
@@ -126,16 +118,24 @@ fn outputs_are_complete_deterministic_and_mergeable() {
         assert!(step["wr_eff"].as_f64().unwrap() > 0.0, "{name}");
         assert!(step["reward_gp"]["noise_variance"].is_number(), "{name}");
     }
-    // The adaptive kernel spends 50 queries per step and names its own approximator.
+    // The adaptive kernel spends 50 queries per step and names its own approximator and
+    // GPs (the recommended model sweep, 32 points, warm refits).
     let adaptive: serde_json::Value =
         serde_json::from_str(&read(&d, "awfqi-adaptive-kernel.json")).unwrap();
     let steps = &adaptive["runs"][0]["steps"];
     assert_eq!(steps[0]["n_target_samples"].as_f64(), Some(50.0));
     assert_eq!(steps[1]["n_target_samples"].as_f64(), Some(100.0));
     let kernel = &adaptive["runs"][0]["parameters"]["kernel"];
-    assert_eq!(kernel["fqi_trees"], serde_json::json!(3), "{kernel}");
-    assert_eq!(kernel["fqi_trees_streamed"], serde_json::json!(true));
-    assert_eq!(kernel["fqi_tree_nodes"], serde_json::json!(1023));
+    assert_eq!(kernel["fqi_sweep_cells"], serde_json::json!(12), "{kernel}");
+    assert_eq!(kernel["fqi_sweep_rewards"], serde_json::json!("Pooled"));
+    assert_eq!(kernel["gp_capacity"], serde_json::json!(32));
+    let options = &adaptive["runs"][0]["parameters"]["adaptive"];
+    assert_eq!(
+        options["kernel_candidates"],
+        serde_json::json!(250),
+        "{options}"
+    );
+    assert_eq!(options["kernel_refit"], serde_json::json!([30, 0]));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
         .as_array()

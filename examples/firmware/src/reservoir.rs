@@ -1,12 +1,15 @@
-//! The controller itself: sizes, settings and the AWFQI run over the flash tables, with no
-//! I/O, so the same file also runs on the host (`examples/firmware_host.rs` of the
-//! repository) to check a configuration before it is flashed.
+//! The controller itself: sizes, settings and the run over the flash tables, with no I/O,
+//! so the same file also runs on the host (`examples/firmware_host.rs` of the repository)
+//! to check a configuration before it is flashed. Two algorithms over the same tables:
+//! [`learn_and_compare`], adaptive AWFQI (what the firmware runs), and
+//! [`learn_and_compare_thesis`], the thesis's AWFQI (the faithful variant).
 
 use awfqi::env::{DAM_ACTIONS, DAM_DISCOUNT, DAM_EVALUATION_STATE, DAM_HORIZON, Dam};
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Conditioning, EmptyCells, Estimator, Evaluation,
-    EvaluationProtocol, FqiConfig, HyperparameterBounds, Hyperparameters, PointGrid, RowSet,
-    StepReport, WeightParams, evaluate, evaluate_greedy,
+    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid,
+    Conditioning, EmptyCells, Estimator, Evaluation, EvaluationProtocol, FqiConfig,
+    HyperparameterBounds, Hyperparameters, MeanFunction, ModelSweep, PointGrid, RewardModel,
+    RowSet, SourceData, StepReport, SweepStorage, WeightParams, evaluate, evaluate_greedy,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -39,9 +42,53 @@ pub const SOURCE_RECORDS: usize = tables::SOURCES * tables::RECORDS_PER_SOURCE;
 /// The action of the baseline: release the demand (10 units) every day.
 pub const RELEASE_DEMAND: usize = 4;
 
-/// All the RAM the loop writes, in one block: `f32`, state dimension 2, GP input dimension
-/// 3 (state + action), then the capacities: GP points, target records, one weight per
-/// source record, one alias entry per candidate row, the Q-table: 18 428 bytes.
+/// Candidate rows the adaptive kernel scores per sub-batch (of the grid's 528).
+pub const CANDIDATES: usize = 250;
+/// Cells of the adaptive kernel's model sweep along storage and day (nodes at their
+/// corners: 11 × 5 = 55 nodes). The day gets a few: the inflow follows the season.
+pub const SWEEP_CELLS: [usize; 2] = [10, 4];
+/// Nodes of the sweep.
+pub const SWEEP_NODES: usize = (SWEEP_CELLS[0] + 1) * (SWEEP_CELLS[1] + 1);
+
+/// All the RAM the adaptive loop writes: the sources' reward mean functions (fitted on the
+/// device at set-up), the kernel's block (`f32`, state dimension 2, GP input dimension 3,
+/// then the capacities: GP points, target records, one weight per source record, candidate
+/// slots, no table entries, the verified states of a step, one belief per source) and the
+/// model sweep's entries and nodes.
+pub struct Memory {
+    /// Each source's reward mean function.
+    pub means: [MeanFunction<f32, GP_POINTS, 3>; tables::SOURCES],
+    /// The adaptive kernel's block.
+    pub kernel: AdaptiveStorage<
+        f32,
+        2,
+        3,
+        GP_POINTS,
+        { STEPS * BUDGET },
+        SOURCE_RECORDS,
+        CANDIDATES,
+        0,
+        BUDGET,
+        { tables::SOURCES },
+    >,
+    /// The model sweep's memory: one entry per (node, release), one value per node.
+    pub sweep: SweepStorage<f32, 2, { SWEEP_NODES * DAM_ACTIONS }, SWEEP_NODES>,
+}
+
+impl Memory {
+    /// All-zero memory, for a `static` in `.bss`.
+    pub const fn new() -> Self {
+        Self {
+            means: [MeanFunction::EMPTY; tables::SOURCES],
+            kernel: AdaptiveStorage::new(),
+            sweep: SweepStorage::new(),
+        }
+    }
+}
+
+/// All the RAM the thesis's AWFQI writes, in one block: `f32`, state dimension 2, GP input
+/// dimension 3 (state + action), then the capacities: GP points, target records, one weight
+/// per source record, one alias entry per candidate row, the Q-table: 18 428 bytes.
 pub type Storage = AwfqiStorage<
     f32,
     2,
@@ -91,9 +138,89 @@ pub fn settings() -> awfqi::Result<AwfqiConfig<f32, 3>> {
     Ok(config)
 }
 
-/// Sets AWFQI up over the flash tables, runs its steps (`on_step` sees each step's
-/// report) and evaluates the learned policy and the baseline.
+/// Sets adaptive AWFQI up over the flash tables, runs its steps (`on_step` sees each
+/// step's report) and evaluates the learned policy and the baseline.
 pub fn learn_and_compare(
+    memory: &mut Memory,
+    seed: u64,
+    mut on_step: impl FnMut(&StepReport<f32, 3>),
+) -> awfqi::Result<Outcome> {
+    // All randomness comes from the caller's seeded generator: same seed, same run.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let Memory {
+        means,
+        kernel,
+        sweep,
+    } = memory;
+
+    // 1. Settings: the thesis's GP and FQI settings for this plant ([`settings`]), queries
+    //    that verify the current plan from the evaluation's start (a year from storage 200
+    //    on day 1) and score the candidates by where the reservoir surprised the sources.
+    let bounds = [(0.0, 500.0), (1.0, 360.0)];
+    let start = DAM_EVALUATION_STATE.map(|x| x as f32);
+    let mut config = AdaptiveConfig::recommended(BUDGET, start, DAM_HORIZON, 0.3, bounds);
+    config.awfqi = settings()?;
+    config.candidates = CANDIDATES;
+
+    // 2. The sources: their records and stored posteriors from flash, and each one's reward
+    //    mean function, fitted here in the kernel's own GP (set-up, once).
+    let sources = tables::SOURCE_RECORDS
+        .each_ref()
+        .map(|source| source.as_slice());
+    let mut buffers = kernel.buffers();
+    for (mean, source) in means.iter_mut().zip(&sources) {
+        let training = &config.awfqi.gp_training;
+        mean.fit_rewards(buffers.gp, source, training, config.awfqi.subset, &mut rng)?;
+    }
+    let candidates = RowSet::grid(
+        PointGrid::new(
+            tables::GRID_LOWER,
+            tables::GRID_SPACING,
+            tables::GRID_POINTS,
+        )?,
+        DAM_ACTIONS,
+    )?;
+    // FQI by value iteration on a grid model of the records. The release changes the
+    // reward (flooding, the demand), so each release keeps its own reward model where it
+    // was tried, and takes every release's elsewhere.
+    let grid = CellGrid::new([0.0, 1.0], [500.0, 360.0], SWEEP_CELLS)?;
+    let approximator = ModelSweep::new(grid)?.with_rewards(RewardModel::Backfilled);
+    buffers.fqi = sweep.storage();
+    let plant = Dam::<f32>::target();
+    let data = SourceData::new(&sources, &tables::SOURCE_POSTERIORS)?;
+    let mut kernel = AdaptiveAwfqi::new(
+        config.validate()?,
+        approximator,
+        data,
+        &means[..],
+        candidates,
+        &plant,
+        buffers,
+    )?;
+    kernel.plan(&mut rng)?;
+
+    // 3. The active loop. A step that fails leaves the previous Q-function in place.
+    for _ in 0..STEPS {
+        on_step(&kernel.step(&mut rng)?);
+    }
+
+    // 4. The evaluation, as for the thesis's AWFQI below.
+    let protocol = EvaluationProtocol {
+        start,
+        rollouts: 10,
+        horizon: DAM_HORIZON,
+        discount: DAM_DISCOUNT as f32,
+    };
+    let mut inflows = rng.clone();
+    let learned = evaluate_greedy(&plant, kernel.q(), &protocol, &mut rng)?;
+    let mut release_demand = |_: &[f32; 2]| Ok(RELEASE_DEMAND);
+    let baseline = evaluate(&plant, &mut release_demand, &protocol, &mut inflows)?;
+    Ok(Outcome { learned, baseline })
+}
+
+/// Sets the thesis's AWFQI up over the flash tables, runs its steps (`on_step` sees each
+/// step's report) and evaluates the learned policy and the baseline: the faithful variant.
+pub fn learn_and_compare_thesis(
     storage: &mut Storage,
     seed: u64,
     mut on_step: impl FnMut(&StepReport<f32, 3>),

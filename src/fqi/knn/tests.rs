@@ -277,8 +277,7 @@ fn the_hybrid_is_the_mean_of_its_two_fits() {
                 entries: &mut e1,
                 records: &mut r1,
                 links: &mut l1,
-                tree_records: &mut [],
-                nodes: &mut [],
+                ..QStorage::default()
             },
         )
         .unwrap();

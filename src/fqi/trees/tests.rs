@@ -373,11 +373,9 @@ fn same_seed_same_q_and_replacement_rewards_as_carried_rewards() {
         .build(
             2,
             QStorage {
-                entries: &mut [],
-                records: &mut [],
-                links: &mut [],
                 tree_records: &mut records,
                 nodes: &mut nodes,
+                ..QStorage::default()
             },
         )
         .unwrap();

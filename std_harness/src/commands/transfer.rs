@@ -30,10 +30,10 @@ use crate::run_range::RunRange;
 use crate::store::write_csv;
 use crate::transfer::algorithms::adaptive::{AdaptiveOptions, AdaptiveOracle, AdaptiveSetup};
 use crate::transfer::algorithms::adaptive_kernel::{
-    ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
+    ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
 };
 use crate::transfer::algorithms::awfqi_kernel::{
-    KernelConfig, KernelQFunction, KernelSetup, TreeKnobs,
+    KernelConfig, KernelQFunction, KernelSetup, SweepKnobs, TreeKnobs,
 };
 use crate::transfer::algorithms::rbt::ComplianceSum;
 use crate::transfer::algorithms::{
@@ -101,6 +101,30 @@ pub enum AdaptiveKernelQ {
     /// `--kernel-trees` trees, streamed through a scratch tree of `--kernel-tree-nodes`
     /// nodes (or stored, each of at most that many, with `--kernel-tree-streamed false`).
     Trees,
+    /// Value iteration on a grid model of the weighted records (the core's `SweepFqi`):
+    /// `--kernel-sweep-cells` cells per axis, nodes at their corners.
+    Sweep,
+}
+
+/// `--kernel-sweep-rewards`: the core's `RewardModel`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepRewards {
+    /// The action's own records.
+    PerAction,
+    /// Every action's records.
+    Pooled,
+    /// The action's own where it has some, every action's elsewhere.
+    Backfilled,
+}
+
+impl From<SweepRewards> for awfqi::RewardModel {
+    fn from(r: SweepRewards) -> Self {
+        match r {
+            SweepRewards::PerAction => Self::PerAction,
+            SweepRewards::Pooled => Self::Pooled,
+            SweepRewards::Backfilled => Self::Backfilled,
+        }
+    }
 }
 
 /// Arguments of `awfqi-harness puddle`, `dam` and `acrobot`. Options without a value take
@@ -241,7 +265,7 @@ pub struct Args {
     #[arg(long, default_value_t = 4)]
     pub kernel_tilings: usize,
     /// Q-function approximator of awfqi-adaptive-kernel's FQI.
-    #[arg(long, value_enum, default_value = "trees")]
+    #[arg(long, value_enum, default_value = "sweep")]
     pub adaptive_kernel_q: AdaptiveKernelQ,
     /// Neighbours per prediction of `--adaptive-kernel-q knn`.
     #[arg(long, default_value_t = 4)]
@@ -282,6 +306,22 @@ pub struct Args {
     /// Depth limit of `--adaptive-kernel-q trees` (absent: none; the root is at depth 0).
     #[arg(long)]
     pub kernel_tree_max_depth: Option<usize>,
+    /// Cells per axis of `--adaptive-kernel-q sweep` (its nodes: one more per axis).
+    #[arg(long, default_value_t = ADAPTIVE_SWEEP_CELLS)]
+    pub kernel_sweep_cells: usize,
+    /// `--adaptive-kernel-q sweep`: which records a node's reward averages (`pooled`: every
+    /// action's, for rewards that depend on the state only; `backfilled`: the action's own
+    /// where it has some, every action's elsewhere).
+    #[arg(long, value_enum, default_value = "pooled")]
+    pub kernel_sweep_rewards: SweepRewards,
+    /// `--adaptive-kernel-q sweep`: the least reward weight of a node with data (a record
+    /// at the node weighs 1).
+    #[arg(long, default_value_t = 0.0)]
+    pub kernel_sweep_min_mass: f64,
+    /// `--adaptive-kernel-q sweep`: decide by one step of lookahead at the state instead of
+    /// interpolating the node Q-values.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
+    pub kernel_sweep_lookahead: bool,
     /// Skip the plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -375,6 +415,22 @@ pub struct Args {
     /// `AdaptiveConfig::relabel`); off by default, as chosen on the tuning runs.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().kernel_relabel)]
     pub adaptive_kernel_relabel: bool,
+    /// awfqi-adaptive-kernel: after a target GP's first fit in a run, start each later
+    /// search from its last hyperparameters with this many likelihood evaluations (the
+    /// core's `Refit::Warm`); 0: every fit searches as the thesis does.
+    #[arg(long, default_value_t = 30)]
+    pub adaptive_kernel_refit_evaluations: usize,
+    /// awfqi-adaptive-kernel: random restarts of those warm searches.
+    #[arg(long, default_value_t = 0)]
+    pub adaptive_kernel_refit_restarts: usize,
+    /// awfqi-adaptive-kernel: points of the target GPs and of the sources' mean functions
+    /// (16, 24, 32, 48 or 64).
+    #[arg(long, default_value_t = AdaptiveOptions::default().kernel_gp_points)]
+    pub adaptive_kernel_gp_points: usize,
+    /// awfqi-adaptive-kernel: candidate rows scored per sub-batch (`--adaptive-candidates`
+    /// is awfqi-adaptive's).
+    #[arg(long, default_value_t = AdaptiveOptions::default().kernel_candidates)]
+    pub adaptive_kernel_candidates: usize,
     /// awfqi-adaptive: drop source records whose episode end no other source or target
     /// record corroborates.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().corroborate)]
@@ -414,6 +470,12 @@ impl Args {
             consensus: self.adaptive_consensus,
             relabel: self.adaptive_relabel,
             kernel_relabel: self.adaptive_kernel_relabel,
+            kernel_refit: (self.adaptive_kernel_refit_evaluations > 0).then_some((
+                self.adaptive_kernel_refit_evaluations,
+                self.adaptive_kernel_refit_restarts,
+            )),
+            kernel_gp_points: self.adaptive_kernel_gp_points,
+            kernel_candidates: self.adaptive_kernel_candidates,
             corroborate: self.adaptive_corroborate,
             oracle: self.adaptive_oracle,
             select: self.adaptive_select,
@@ -786,6 +848,14 @@ pub fn build_experiment<const D: usize>(
                     })?);
                 }
                 (AdaptiveKernelQ::Tiles, _, tiles) => kernel = kernel.with_adaptive_q(tiles),
+                (AdaptiveKernelQ::Sweep, _, _) => {
+                    kernel = kernel.with_adaptive_q(KernelQFunction::sweep(SweepKnobs {
+                        cells: args.kernel_sweep_cells,
+                        rewards: args.kernel_sweep_rewards.into(),
+                        min_mass: args.kernel_sweep_min_mass,
+                        lookahead: args.kernel_sweep_lookahead,
+                    })?);
+                }
             }
             Some(Arc::new((h.setup)(&sources, kernel, &mut rng)?))
         }

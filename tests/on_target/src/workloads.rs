@@ -50,7 +50,7 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, ExtraTrees, MeanFunction,
-    SourceData, Tilings, TreeStorage,
+    ModelSweep, SourceData, Tilings,
 };
 use awfqi::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
@@ -466,34 +466,23 @@ pub fn grid_identification(
 /// The sources' reward mean functions and the adaptive kernel's [`AdaptiveStorage`]: a
 /// target GP of `N` points, `Q` target records (steps × budget), one weight per published
 /// source record (1033), `C` candidate slots, `E` FQI entries (tiles), room for `B`
-/// verified states (the budget), 3 source beliefs; and for Extra-Trees FQI `R` record slots
-/// (target and source records) and `K` nodes (0 and 0 with tiles).
+/// verified states (the budget), 3 source beliefs. The memory of another approximator
+/// (trees, a model sweep) is lent to [`adaptive_puddle`] beside it.
 pub struct AdaptiveMemory<
     const N: usize,
     const Q: usize,
     const C: usize,
     const E: usize,
     const B: usize,
-    const R: usize,
-    const K: usize,
 > {
     /// Each published source's reward-GP posterior mean, fitted on the device.
     pub means: [MeanFunction<f32, N, 3>; 3],
     /// The kernel's memory.
     pub kernel: AdaptiveStorage<f32, 2, 3, N, Q, 1033, C, E, B, 3>,
-    /// The trees' records and nodes.
-    pub trees: TreeStorage<f32, 2, R, K>,
 }
 
-impl<
-    const N: usize,
-    const Q: usize,
-    const C: usize,
-    const E: usize,
-    const B: usize,
-    const R: usize,
-    const K: usize,
-> AdaptiveMemory<N, Q, C, E, B, R, K>
+impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: usize>
+    AdaptiveMemory<N, Q, C, E, B>
 {
     /// All-zero memory, for a `static` in `.bss`.
     pub const fn new() -> Self {
@@ -504,7 +493,6 @@ impl<
                 MeanFunction::EMPTY,
             ],
             kernel: AdaptiveStorage::new(),
-            trees: TreeStorage::new(),
         }
     }
 }
@@ -514,9 +502,12 @@ impl<
 pub enum AdaptiveQ {
     /// Tile coding: tiles per axis and tilings (`E` must hold its entries).
     Tiles(usize, usize),
-    /// Streamed Extra-Trees: trees per action and the scratch tree's nodes (`R` must hold
-    /// the target and source records, `K` the nodes).
+    /// Streamed Extra-Trees: trees per action and the scratch tree's nodes (the lent
+    /// storage must hold the target and source records and the nodes).
     Trees(usize, usize),
+    /// A model sweep: cells per axis, reward model, least reward mass (the lent storage
+    /// must hold its entries and nodes).
+    Sweep(usize, awfqi::RewardModel, f32),
 }
 
 /// What a run of [`adaptive_puddle`] changes from the recommended configuration.
@@ -534,34 +525,50 @@ pub struct AdaptiveRun {
     pub search: Option<(usize, usize)>,
     /// Relabel the sources' rewards instead of weighting them (`AdaptiveConfig::relabel`).
     pub relabel: bool,
+    /// Likelihood evaluations and restarts of the warm refits (`Refit::Warm`; `None`: every
+    /// fit searches as the thesis does).
+    pub refit: Option<(usize, usize)>,
 }
 
-/// Adaptive AWFQI on Puddle World on the device: the published source records and their
-/// posteriors from flash ([`crate::puddle_tables`]), one reward GP per source fitted in the
-/// kernel's GP and kept as a mean function, the candidate rows of the spacing-0.1 puddle
-/// grid (arithmetic, no memory), `steps` steps of the shared-dynamics target and the greedy
-/// policy's evaluation. `inspect` sees the kernel after the last step.
-pub fn adaptive_puddle<
+/// The published shared-dynamics sources, in flash.
+pub static PUBLISHED_SOURCES: [&[Record]; 3] = [
+    &crate::puddle_tables::SOURCE_1,
+    &crate::puddle_tables::SOURCE_2,
+    &crate::puddle_tables::SOURCE_3,
+];
+
+/// The approximator `q` names, over Puddle World's `[0, 10]²`.
+pub fn adaptive_approximator(q: AdaptiveQ) -> Result<Approximator<f32, 2>> {
+    Ok(match q {
+        AdaptiveQ::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
+        AdaptiveQ::Trees(count, nodes) => ExtraTrees::streamed(count, nodes)?.into(),
+        AdaptiveQ::Sweep(cells, rewards, min_mass) => ModelSweep::cube(0.0, 10.0, cells)?
+            .with_rewards(rewards)
+            .with_min_mass(min_mass)?
+            .into(),
+    })
+}
+
+/// The set-up of adaptive AWFQI on Puddle World on the device: the published source
+/// records and their posteriors from flash ([`crate::puddle_tables`]), one reward GP per
+/// source fitted in the kernel's GP and kept as a mean function, the candidate rows of the
+/// spacing-0.1 puddle grid (arithmetic, no memory), the shared-dynamics target; `fqi` lends
+/// the memory of trees or a model sweep.
+pub fn adaptive_setup<
+    'm,
     const N: usize,
     const Q: usize,
     const C: usize,
     const E: usize,
     const B: usize,
-    const R: usize,
-    const K: usize,
 >(
-    memory: &mut AdaptiveMemory<N, Q, C, E, B, R, K>,
-    run: AdaptiveRun,
-    seed: u64,
-    inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
-) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
+    memory: &'m mut AdaptiveMemory<N, Q, C, E, B>,
+    fqi: awfqi::QStorage<'m, f32, 2>,
+    run: &AdaptiveRun,
+    rng: &mut ChaCha8Rng,
+) -> Result<AdaptiveAwfqi<'m, f32, PuddleWorld<f32>, 2, 3, N>> {
     use crate::puddle_tables as t;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let AdaptiveMemory {
-        means,
-        kernel,
-        trees,
-    } = memory;
+    let AdaptiveMemory { means, kernel } = memory;
     let target = PuddleWorld::target(Dynamics::Shared);
     let mut config = AdaptiveConfig::recommended(
         run.budget,
@@ -576,34 +583,60 @@ pub fn adaptive_puddle<
         config.awfqi.gp_training.search.max_evaluations = evaluations;
         config.awfqi.gp_training.search.restarts = restarts;
     }
-    let sources: [&[Record]; 3] = [&t::SOURCE_1, &t::SOURCE_2, &t::SOURCE_3];
-    let mut buffers = kernel.buffers();
-    let approximator: Approximator<f32, 2> = match run.q {
-        AdaptiveQ::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
-        AdaptiveQ::Trees(count, nodes) => {
-            buffers.fqi = trees.storage();
-            ExtraTrees::streamed(count, nodes)?.into()
-        }
+    config.refit = match run.refit {
+        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+            max_evaluations,
+            restarts,
+            isotropic: true,
+        }),
+        None => awfqi::adaptive::Refit::Search,
     };
-    for (mean, source) in means.iter_mut().zip(&sources) {
+    let sources = &PUBLISHED_SOURCES;
+    let mut buffers = kernel.buffers();
+    let approximator = adaptive_approximator(run.q)?;
+    if !matches!(run.q, AdaptiveQ::Tiles(..)) {
+        buffers.fqi = fqi;
+    }
+    for (mean, source) in means.iter_mut().zip(sources) {
         mean.fit_rewards(
             &mut *buffers.gp,
             source,
             &config.awfqi.gp_training,
             config.awfqi.subset,
-            &mut rng,
+            rng,
         )?;
     }
     let rows = RowSet::grid(PuddleWorld::score_grid(0.1)?, PUDDLE_ACTIONS)?;
-    let mut kernel = AdaptiveAwfqi::new(
+    AdaptiveAwfqi::new(
         config.validate()?,
         approximator,
-        SourceData::new(&sources, &t::SOURCE_POSTERIORS)?,
+        SourceData::new(sources, &t::SOURCE_POSTERIORS)?,
         &*means,
         rows,
         target,
         buffers,
-    )?;
+    )
+}
+
+/// Adaptive AWFQI on Puddle World on the device: [`adaptive_setup`], the plan on the
+/// sources, `steps` steps and the greedy policy's evaluation. `inspect` sees the kernel
+/// after the last step.
+pub fn adaptive_puddle<
+    const N: usize,
+    const Q: usize,
+    const C: usize,
+    const E: usize,
+    const B: usize,
+>(
+    memory: &mut AdaptiveMemory<N, Q, C, E, B>,
+    fqi: awfqi::QStorage<'_, f32, 2>,
+    run: AdaptiveRun,
+    seed: u64,
+    inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
+) -> Result<(StepReport<f32, 3>, Evaluation<f32>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut kernel = adaptive_setup(memory, fqi, &run, &mut rng)?;
+    kernel.plan(&mut rng)?;
     let mut report = None;
     for _ in 0..run.steps {
         report = Some(kernel.step(&mut rng)?);
@@ -614,31 +647,56 @@ pub fn adaptive_puddle<
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
-/// The recommended Puddle World configuration of adaptive AWFQI (the one the harness
-/// measures as `awfqi-adaptive-kernel`): the sources' 64-point mean functions and the
-/// kernel's memory — a 64-point target GP, 6 steps × 50 target records, one weight per
-/// published source record, 4 000 candidate slots (and their alias table), 50 verified
-/// states, 3 beliefs — and streamed Extra-Trees FQI: one record slot per target and source
-/// record (300 + 1 033) and a 1 023-node scratch tree.
-pub type AdaptiveRecommended = AdaptiveMemory<64, 300, 4000, 0, 50, 1333, 1023>;
+/// The trees' configuration of adaptive AWFQI (the harness's `awfqi-adaptive-kernel` with
+/// `--adaptive-kernel-q trees`): the sources' 64-point mean functions and the kernel's
+/// memory — a 64-point target GP, 6 steps × 50 target records, one weight per published
+/// source record, 4 000 candidate slots (and their alias table), 50 verified states, 3
+/// beliefs — with [`AdaptiveTreeMemory`] lent beside it.
+pub type AdaptiveTrees = AdaptiveMemory<64, 300, 4000, 0, 50>;
 
-/// The recommended configuration's run: 6 steps of 50 queries, 4 000 candidates, 50
-/// streamed trees per action, the thesis's GP search.
-pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
+/// The trees' FQI memory: one record slot per target and source record (300 + 1 033) and
+/// a 1 023-node scratch tree.
+pub type AdaptiveTreeMemory = awfqi::TreeStorage<f32, 2, 1333, 1023>;
+
+/// The trees' run: 6 steps of 50 queries, 4 000 candidates, 50 streamed trees per action,
+/// the thesis's GP search.
+pub const ADAPTIVE_TREES: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
     candidates: 4000,
     q: AdaptiveQ::Trees(50, 1023),
     search: None,
     relabel: false,
+    refit: None,
 };
 
 /// The former recommendation's memory, tile coding: 12 × 12 tiles × 8 tilings of FQI
 /// entries (13² · 8 · 4 = 5 408) instead of the trees.
-pub type AdaptiveTiles = AdaptiveMemory<64, 300, 4000, 5408, 50, 0, 0>;
+pub type AdaptiveTiles = AdaptiveMemory<64, 300, 4000, 5408, 50>;
 
-/// The former recommendation's run: [`ADAPTIVE_RECOMMENDED`] with 12 × 8 tiles.
+/// The former recommendation's run: [`ADAPTIVE_TREES`] with 12 × 8 tiles.
 pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
     q: AdaptiveQ::Tiles(12, 8),
-    ..ADAPTIVE_RECOMMENDED
+    ..ADAPTIVE_TREES
+};
+
+/// The recommended configuration of adaptive AWFQI on Puddle World (what the harness's
+/// `awfqi-adaptive-kernel` runs by default, the footprint image `adaptive_puddle` and the
+/// instruction-count image `m4_adaptive`): the sources' 32-point mean functions and the
+/// kernel's memory — a 32-point target GP, 6 steps × 50 target records, one weight per
+/// published source record, 250 candidate slots, 50 verified states, 3 beliefs — with
+/// [`AdaptiveRecommendedFqi`] lent beside it.
+pub type AdaptiveRecommended = AdaptiveMemory<32, 300, 250, 0, 50>;
+/// Its FQI memory: a model sweep of 12 × 12 cells (13² nodes), 4 actions.
+pub type AdaptiveRecommendedFqi = awfqi::SweepStorage<f32, 2, { 169 * 4 }, 169>;
+/// Its run: 6 steps of 50 queries, 250 candidates, the sweep with pooled rewards, warm
+/// refits of 30 evaluations.
+pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
+    budget: 50,
+    steps: 6,
+    candidates: 250,
+    q: AdaptiveQ::Sweep(12, awfqi::RewardModel::Pooled, 0.0),
+    search: None,
+    relabel: false,
+    refit: Some((30, 0)),
 };

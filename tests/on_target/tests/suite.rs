@@ -624,7 +624,7 @@ mod tests {
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
         use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12, 0, 0> = AdaptiveMemory::new();
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
         // SAFETY: the only reference.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let run = AdaptiveRun {
@@ -634,9 +634,11 @@ mod tests {
             q: AdaptiveQ::Tiles(6, 2),
             search: Some((40, 1)),
             relabel: true,
+            refit: None,
         };
         let mut checked = false;
-        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+        let fqi = awfqi::QStorage::default();
+        let (report, evaluation) = adaptive_puddle(memory, fqi, run, 4, |kernel| {
             let d0 = kernel.target_samples();
             let starts = d0.chunks(4).all(|b| b[0].state == [0.0, 0.0]);
             let finite = d0.iter().all(|t| {
@@ -672,9 +674,11 @@ mod tests {
     #[test]
     fn adaptive_awfqi_with_streamed_trees() {
         use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12, 1057, 511> = AdaptiveMemory::new();
-        // SAFETY: the only reference.
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
+        static mut TREES: awfqi::TreeStorage<f32, 2, 1057, 511> = awfqi::TreeStorage::new();
+        // SAFETY: the only references.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+        let trees = unsafe { &mut *core::ptr::addr_of_mut!(TREES) };
         let run = AdaptiveRun {
             budget: 12,
             steps: 2,
@@ -682,9 +686,10 @@ mod tests {
             q: AdaptiveQ::Trees(4, 511),
             search: Some((40, 1)),
             relabel: false,
+            refit: None,
         };
         let mut checked = false;
-        let (report, evaluation) = adaptive_puddle(memory, run, 4, |kernel| {
+        let (report, evaluation) = adaptive_puddle(memory, trees.storage(), run, 4, |kernel| {
             let weights = kernel.reward_weights();
             let action = kernel.q().greedy_action([0.0, 0.0]);
             checked = kernel.target_samples().len() == 24
@@ -1102,6 +1107,78 @@ mod tests {
             }
             assert!(fqi.value([f32::NAN], 0).is_err());
         }
+    }
+
+    /// A model sweep on the target (f32): on the 5-state chain the records lie on the nodes,
+    /// so the sweep is value iteration and Q is the closed-form Q* at the states, and the
+    /// greedy action between two states is the interpolated one.
+    #[test]
+    fn sweep_q_on_a_chain() {
+        use awfqi::{
+            EmptyCells, FqiConfig, ModelSweep, RewardModel, SampleSet, SweepEntry, SweepFqi,
+            SweepNode,
+        };
+        let at = super::chain_state;
+        let samples = super::chain_samples();
+        let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
+        let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
+        for rewards in [RewardModel::PerAction, RewardModel::Pooled] {
+            let sweep = ModelSweep::cube(0.5f32, 4.5, 4).unwrap().with_rewards(rewards);
+            let mut entries = [SweepEntry::<f32, 1>::EMPTY; 5 * 2];
+            let mut nodes = [SweepNode::<f32>::EMPTY; 5];
+            let mut fqi = SweepFqi::new(sweep, 2, &mut entries, &mut nodes).unwrap();
+            fqi.fit(&[SampleSet::unweighted(&samples)], &config).unwrap();
+            for c in 0..4 {
+                let right = fqi.value(at(c), 0).unwrap() as f64;
+                assert!(close(right, v(c), 1e-5, 1e-5), "Q({}, right) {}", c, right);
+                let left = fqi.value(at(c), 1).unwrap() as f64;
+                assert!(close(left, -1.0 + 0.9 * v(c.saturating_sub(1)), 1e-5, 1e-5));
+                assert!(fqi.greedy_action(at(c)) == Ok(0));
+            }
+            let middle = fqi.value([1.0], 0).unwrap() as f64;
+            assert!(close(middle, (v(0) + v(1)) / 2.0, 1e-5, 1e-5));
+            assert!(fqi.value([f32::NAN], 0).is_err());
+        }
+    }
+
+    /// Adaptive AWFQI on the target with FQI by a model sweep (f32), small: as
+    /// `adaptive_awfqi_with_streamed_trees` with a 6 × 6-cell sweep of pooled rewards and
+    /// warm refits. Checks the run's sizes, the weights, and that the greedy policy acts.
+    #[test]
+    fn adaptive_awfqi_with_a_model_sweep() {
+        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
+        static mut SWEEP: awfqi::SweepStorage<f32, 2, { 49 * 4 }, 49> = awfqi::SweepStorage::new();
+        // SAFETY: the only references.
+        let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
+        let sweep = unsafe { &mut *core::ptr::addr_of_mut!(SWEEP) };
+        let run = AdaptiveRun {
+            budget: 12,
+            steps: 2,
+            candidates: 60,
+            q: AdaptiveQ::Sweep(6, awfqi::RewardModel::Pooled, 0.0),
+            search: Some((40, 1)),
+            relabel: false,
+            refit: Some((10, 0)),
+        };
+        let mut checked = false;
+        let (report, evaluation) = adaptive_puddle(memory, sweep.storage(), run, 4, |kernel| {
+            let weights = kernel.reward_weights();
+            let action = kernel.q().greedy_action([0.0, 0.0]);
+            checked = kernel.target_samples().len() == 24
+                && weights.len() == 1033
+                && weights.iter().all(|w| w.is_finite() && *w >= 0.0)
+                && matches!(action, Ok(a) if a < 4)
+                && kernel
+                    .q()
+                    .max_value([5.0, 5.0])
+                    .is_ok_and(|v| v.is_finite() && v <= 0.0);
+        })
+        .unwrap();
+        assert!(checked);
+        assert!(report.step == 2 && report.n_target_samples == 24);
+        assert!(evaluation.mean_return.is_finite() && evaluation.mean_return <= 0.0);
+        assert!(evaluation.mean_steps >= 1.0 && evaluation.mean_steps <= 50.0);
     }
 
     /// Transition weights in the loop, on a 1-D plant whose two sources share the target's

@@ -120,6 +120,13 @@ pub struct AdaptiveOptions {
     /// default, where the tuning runs put it for the core's tile-coded FQI (relabelling
     /// is `awfqi-adaptive`'s default; docs/active-budget.md).
     pub kernel_relabel: bool,
+    /// awfqi-adaptive-kernel's warm refits: likelihood evaluations and restarts of every
+    /// search after a GP's first in a run (`None`: the thesis's search every time).
+    pub kernel_refit: Option<(usize, usize)>,
+    /// awfqi-adaptive-kernel's GP capacity (target GPs and the sources' mean functions).
+    pub kernel_gp_points: usize,
+    /// awfqi-adaptive-kernel's candidate rows scored per sub-batch.
+    pub kernel_candidates: usize,
     /// A source record that ends its episode (absorbs) keeps weight only when that end is
     /// corroborated: by a target record's end there, or by at least half of the other
     /// sources (their nearest record with the same action ends too). A goal only one
@@ -175,6 +182,9 @@ impl Default for AdaptiveOptions {
             consensus: false,
             relabel: true,
             kernel_relabel: false,
+            kernel_refit: Some((30, 0)),
+            kernel_gp_points: 32,
+            kernel_candidates: 250,
             corroborate: false,
             oracle: AdaptiveOracle::None,
             select: 0,

@@ -16,36 +16,37 @@
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, FqiEntry, Gp, KnnRecord,
-    MeanFunction, QStorage, SourceData, Transition, TreeNode, TreeRecord,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, KnnRecord, MeanFunction,
+    QStorage, SourceData, Transition, TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
 
 use super::Experiment;
 use super::adaptive::AdaptiveOptions;
 use super::awfqi_kernel::{
-    GP_POINTS, KernelQFunction, KernelSetup, Record32, T, TreeKnobs, reward_gp_summary, row_set,
+    GP_POINTS, KernelQFunction, KernelSetup, Record32, SweepKnobs, T, reward_gp_summary, row_set,
     to_f64,
 };
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
 
-/// Trees per action of the adaptive kernel's FQI by default (streamed Extra-Trees, the
-/// default approximator since the trees round): chosen on the tuning runs (`--seed 100`, 20
-/// runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
+/// Trees per action of `--adaptive-kernel-q trees` by default: chosen on the tuning runs
+/// (`--seed 100`, 20 runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
 pub const ADAPTIVE_TREES: usize = 50;
 /// Nodes of the streamed trees' scratch tree by default (the FQI iterations' trees of the
 /// largest action are cut at this budget; the final trees are fully grown).
 pub const ADAPTIVE_TREE_NODES: usize = 1023;
-/// The adaptive kernel's default approximator: [`ADAPTIVE_TREES`] streamed Extra-Trees per
-/// action, a scratch tree of [`ADAPTIVE_TREE_NODES`] nodes, otherwise fully grown.
-pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Trees(TreeKnobs {
-    trees: ADAPTIVE_TREES,
-    nodes: ADAPTIVE_TREE_NODES,
-    min_samples_split: 2,
-    min_samples_leaf: 1,
-    max_depth: None,
-    streamed: true,
+/// Cells per axis of the model sweep by default (13 × 13 nodes over `[0, 10]²`), chosen on
+/// the tuning runs (`docs/embedded-adaptive.md`).
+pub const ADAPTIVE_SWEEP_CELLS: usize = 12;
+/// The adaptive kernel's default approximator: a model sweep on [`ADAPTIVE_SWEEP_CELLS`]
+/// cells per axis with one reward model for every action (Puddle World's reward depends on
+/// the state only).
+pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Sweep(SweepKnobs {
+    cells: ADAPTIVE_SWEEP_CELLS,
+    rewards: awfqi::RewardModel::Pooled,
+    min_mass: 0.0,
+    lookahead: false,
 });
 
 /// Tiles per axis of the adaptive kernel's tile coding (`--adaptive-kernel-q tiles`, the
@@ -101,44 +102,54 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
     c.uncertainty = o.uncertainty;
     c.decision = o.decision;
     c.floor = o.floor as T;
-    c.candidates = o.candidates;
+    c.candidates = o.kernel_candidates;
     c.relevance_width = o.relevance_width as T;
     c.relabel = o.kernel_relabel;
+    c.refit = match o.kernel_refit {
+        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+            max_evaluations,
+            restarts,
+            isotropic: c.awfqi.gp_training.search.isotropic,
+        }),
+        None => awfqi::adaptive::Refit::Search,
+    };
     Ok(c)
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
 /// an [`awfqi::AdaptiveStorage`].
 #[derive(Debug)]
-struct Memory {
-    gp: Box<Gp<T, GP_POINTS, 3>>,
+struct Memory<const N: usize> {
+    gp: Box<Gp<T, N, 3>>,
     samples: Vec<Record32>,
     weights: Vec<T>,
     candidates: Vec<awfqi::adaptive::Candidate<T>>,
-    alias: Vec<AliasEntry<T>>,
     fqi: Vec<FqiEntry<T>>,
     records: Vec<KnnRecord<T, 2>>,
     links: Vec<u16>,
     tree_records: Vec<TreeRecord<T, 2>>,
     nodes: Vec<TreeNode<T>>,
+    sweep_entries: Vec<awfqi::SweepEntry<T, 2>>,
+    sweep_nodes: Vec<awfqi::SweepNode<T>>,
     path: Vec<[T; 2]>,
     beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
 }
 
-impl Memory {
-    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, 2, 3, GP_POINTS> {
+impl<const N: usize> Memory<N> {
+    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, 2, 3, N> {
         AdaptiveBuffers {
             gp: &mut self.gp,
             samples: &mut self.samples,
             weights: &mut self.weights,
             candidates: &mut self.candidates,
-            alias: &mut self.alias,
             fqi: QStorage {
                 entries: &mut self.fqi,
                 records: &mut self.records,
                 links: &mut self.links,
                 tree_records: &mut self.tree_records,
                 nodes: &mut self.nodes,
+                sweep_entries: &mut self.sweep_entries,
+                sweep_nodes: &mut self.sweep_nodes,
             },
             path: &mut self.path,
             beliefs: &mut self.beliefs,
@@ -149,12 +160,12 @@ impl Memory {
 /// `awfqi-adaptive-kernel` as a [`Learner`]: each protocol step is one
 /// [`AdaptiveAwfqi::step`]; the greedy action is the `f32` Q-function's, and `D₀` is kept in
 /// `f64` for the result files.
-struct AdaptiveKernelLearner<'a> {
-    kernel: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, GP_POINTS>,
+struct AdaptiveKernelLearner<'a, const N: usize> {
+    kernel: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
     collected: Vec<Record>,
 }
 
-impl Learner for AdaptiveKernelLearner<'_> {
+impl<const N: usize> Learner for AdaptiveKernelLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.kernel.step(rng)?;
         let new = &self.kernel.target_samples()[self.collected.len()..];
@@ -181,6 +192,59 @@ impl Learner for AdaptiveKernelLearner<'_> {
 /// Hands a fresh learner for one run of `experiment` to `f` (the kernel borrows its memory
 /// and the set-up for the whole run, so they live in this frame).
 pub fn with_learner(
+    experiment: &Experiment,
+    rng: &mut ChaCha8Rng,
+    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    match experiment.adaptive_options.kernel_gp_points {
+        GP_POINTS => with_learner_of::<GP_POINTS>(experiment, rng, f),
+        16 => with_learner_of::<16>(experiment, rng, f),
+        24 => with_learner_of::<24>(experiment, rng, f),
+        32 => with_learner_of::<32>(experiment, rng, f),
+        48 => with_learner_of::<48>(experiment, rng, f),
+        n => anyhow::bail!("--adaptive-kernel-gp-points {n}: 16, 24, 32, 48 or 64"),
+    }
+}
+
+/// The sources' reward mean functions of capacity `N`: the set-up's when `N` is its GP
+/// capacity, else fitted here as the set-up fits its own (the published training, an even
+/// spread), from a stream of their own so every run has the same.
+fn means_of<const N: usize>(
+    setup: &KernelSetup,
+    sources: &[&[Record32]],
+) -> anyhow::Result<Vec<MeanFunction<T, N, 3>>> {
+    use rand_core::SeedableRng;
+    if N == GP_POINTS {
+        let means: Vec<MeanFunction<T, N, 3>> = setup
+            .means()
+            .iter()
+            .map(|m| {
+                // N == GP_POINTS: the same type.
+                let m: &dyn std::any::Any = m;
+                m.downcast_ref::<MeanFunction<T, N, 3>>()
+                    .cloned()
+                    .ok_or_else(|| anyhow::anyhow!("mean function capacity"))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        return Ok(means);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(N as u64);
+    let mut gp = Box::new(Gp::<T, N, 3>::empty());
+    let mut means = vec![MeanFunction::EMPTY; sources.len()];
+    for (mean, source) in means.iter_mut().zip(sources) {
+        mean.fit_rewards(
+            &mut gp,
+            source,
+            &awfqi::GpTraining::published(),
+            awfqi::SubsetRule::Spread,
+            &mut rng,
+        )?;
+    }
+    Ok(means)
+}
+
+/// [`with_learner`] with target GPs and mean functions of `N` points.
+fn with_learner_of<const N: usize>(
     experiment: &Experiment,
     rng: &mut ChaCha8Rng,
     f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
@@ -222,21 +286,32 @@ pub fn with_learner(
         }
         _ => (0, 0),
     };
-    let mut memory = Memory {
+    let (sweep_entries, sweep_nodes) = match approximator {
+        awfqi::Approximator::Sweep(sweep) => (
+            sweep
+                .required_entries(awfqi::env::PUDDLE_ACTIONS)
+                .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
+            sweep.nodes(),
+        ),
+        _ => (0, 0),
+    };
+    let mut memory = Memory::<N> {
         gp: Box::new(Gp::empty()),
         samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
         weights: vec![0.0; setup.posteriors().len()],
         candidates: vec![awfqi::adaptive::Candidate::EMPTY; slots],
-        alias: vec![AliasEntry::EMPTY; slots],
         fqi: vec![FqiEntry::EMPTY; entries],
         records: vec![KnnRecord::EMPTY; records],
         links: vec![0; links],
         tree_records: vec![TreeRecord::EMPTY; tree_records],
         nodes: vec![TreeNode::EMPTY; nodes],
+        sweep_entries: vec![awfqi::SweepEntry::EMPTY; sweep_entries],
+        sweep_nodes: vec![awfqi::SweepNode::EMPTY; sweep_nodes],
         path: vec![[0.0; 2]; budget],
         beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
     };
-    let means: &[MeanFunction<T, GP_POINTS, 3>] = setup.means();
+    let means = means_of::<N>(setup, &sources)?;
+    let means: &[MeanFunction<T, N, 3>] = &means;
     let kernel = AdaptiveAwfqi::new(
         config,
         approximator,

@@ -58,6 +58,21 @@ pub enum KernelQFunction {
     Hybrid((usize, usize), (usize, Option<f64>, Option<f64>, bool)),
     /// Per-action Extra-Trees forests; `awfqi-adaptive-kernel` only.
     Trees(TreeKnobs),
+    /// Value iteration on a grid model of the records; `awfqi-adaptive-kernel` only.
+    Sweep(SweepKnobs),
+}
+
+/// The knobs of [`KernelQFunction::Sweep`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepKnobs {
+    /// Cells per axis (nodes at their corners).
+    pub cells: usize,
+    /// Which records a node's reward averages.
+    pub rewards: awfqi::RewardModel,
+    /// The least reward weight of a node with data.
+    pub min_mass: f64,
+    /// Decide by one step of lookahead.
+    pub lookahead: bool,
 }
 
 /// The knobs of [`KernelQFunction::Trees`].
@@ -126,6 +141,15 @@ impl KernelQFunction {
         Ok(out)
     }
 
+    /// A model sweep (`--kernel-sweep-*`).
+    ///
+    /// Errors: those of [`awfqi::ModelSweep::cube`] and [`awfqi::ModelSweep::with_min_mass`].
+    pub fn sweep(knobs: SweepKnobs) -> anyhow::Result<Self> {
+        let out = Self::Sweep(knobs);
+        out.approximator()?;
+        Ok(out)
+    }
+
     /// The core's approximator over Puddle World's `[0, 10]²`.
     pub(super) fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
         Ok(match self {
@@ -147,6 +171,11 @@ impl KernelQFunction {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
+            Self::Sweep(k) => awfqi::ModelSweep::cube(0.0, 10.0, k.cells)?
+                .with_rewards(k.rewards)
+                .with_min_mass(k.min_mass as T)?
+                .with_lookahead(k.lookahead)
+                .into(),
         })
     }
 }
@@ -365,6 +394,12 @@ impl<const N: usize> KernelSetup<N> {
                 out["fqi_min_samples_split"] = k.min_samples_split.into();
                 out["fqi_min_samples_leaf"] = k.min_samples_leaf.into();
                 out["fqi_tree_max_depth"] = k.max_depth.into();
+            }
+            KernelQFunction::Sweep(k) => {
+                out["fqi_sweep_cells"] = k.cells.into();
+                out["fqi_sweep_rewards"] = format!("{:?}", k.rewards).into();
+                out["fqi_sweep_min_mass"] = k.min_mass.into();
+                out["fqi_sweep_lookahead"] = k.lookahead.into();
             }
         }
         out

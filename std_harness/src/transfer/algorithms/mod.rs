@@ -401,6 +401,16 @@ impl<const D: usize> Experiment<D> {
             Algorithm::AwfqiAdaptiveKernel => {
                 if let Some(k) = &self.kernel {
                     o["kernel"] = k.parameters_with(k.config.adaptive_q);
+                    // The adaptive kernel's own GPs, not the set-up's.
+                    let a = self.adaptive_options;
+                    o["kernel"]["gp_capacity"] = a.kernel_gp_points.into();
+                    o["kernel"]["gp_search"] = match a.kernel_refit {
+                        Some((e, r)) => format!(
+                            "core Nelder-Mead, 10 restarts, then warm refits of {e} evaluations, {r} restarts"
+                        ),
+                        None => "core Nelder-Mead, 10 restarts".into(),
+                    }
+                    .into();
                 }
                 o["var_rw"] = v_r.into();
                 o["max_weight"] = self.options.max_weight.into();

@@ -27,7 +27,9 @@ use awfqi::planning::{
     value_iteration,
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-use awfqi::record_gp::{batch_transform, fit_gp, fit_gp_on, input, predict_posteriors};
+use awfqi::record_gp::{
+    batch_transform, fit_gp, fit_gp_on, input, map_posteriors, predict_posteriors,
+};
 use awfqi::score::{GpSourceModel, PointGrid};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
@@ -38,10 +40,10 @@ use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
     ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi,
     HyperparameterBounds, Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction,
-    Neighbours, Output, QFunction, Real, RowSet, SampleSet, ScoreColumn, ScoreTable, Scores,
-    SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule, TabularFqi, TileFqi, Tilings,
-    Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy,
-    rollout,
+    ModelSweep, Neighbours, Output, QFunction, Real, RewardModel, RowSet, SampleSet, ScoreColumn,
+    ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
+    SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings, Transition,
+    TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
@@ -855,6 +857,69 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         }
     }
 
+    // fqi: the model sweep, directly and behind QFunction
+    let rewards = [RewardModel::PerAction, RewardModel::Pooled, RewardModel::Backfilled];
+    let sweep = ModelSweep::<T, D>::cube(num(0.0), high, index(3))
+        .and_then(|s| s.with_min_mass(num(0.25)))
+        .map(|s| {
+            s.with_rewards(rewards[index(2) % 3])
+                .with_lookahead(opaque(true))
+        });
+    let sweep = sweep.or_else(|_| {
+        CellGrid::new([num(0.0); D], [high; D], [index(2); D]).and_then(ModelSweep::new)
+    });
+    if let Ok(sweep) = sweep {
+        keep((
+            sweep.nodes(),
+            sweep.required_entries(actions),
+            sweep.rewards(),
+            sweep.min_mass(),
+            sweep.lookahead(),
+            *sweep.cells(),
+        ));
+        let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
+            .unwrap_or_else(|_| FqiConfig::published());
+        let w = [num::<T>(0.5); 12];
+        let sets = [
+            SampleSet::unweighted(&records[..6]),
+            SampleSet::weighted(&records[6..], Some(&w[6..]), Some(&w[..6])),
+        ];
+        let mut entries = [SweepEntry::<T, D>::EMPTY; 64 * 4];
+        let mut nodes = [SweepNode::<T>::EMPTY; 64];
+        if let Ok(mut fqi) = SweepFqi::new(sweep, actions, &mut entries, &mut nodes) {
+            keep(fqi.fit(&sets, &config));
+            keep(fqi.fit_sets(sets.iter().copied(), &config));
+            let s = [num::<T>(0.2); D];
+            keep((
+                fqi.value(s, index(1)),
+                fqi.max_value(s),
+                fqi.greedy_action(s),
+                fqi.greedy(s),
+                fqi.next_state(index(3), index(1)),
+                fqi.actions(),
+                *fqi.sweep(),
+            ));
+            if let (Some(e), Some(n)) = (fqi.entries().get(index(2)), fqi.nodes().get(index(1))) {
+                keep((e.reward(), n.value(), n.absorbing()));
+            }
+            fqi.clear();
+        }
+        let mut block = SweepStorage::<T, D, { 64 * 4 }, 64>::new();
+        let approximator: Approximator<T, D> = sweep.into();
+        keep(approximator.required_entries(actions));
+        if let Ok(mut q) = approximator.build(actions, block.storage()) {
+            keep(q.fit(&sets, &config, rng));
+            keep((
+                q.value([num(0.7); D], 0),
+                q.max_value([num(0.7); D]),
+                q.greedy_action([num(0.7); D]),
+                q.entries().len(),
+                q.actions(),
+            ));
+            q.clear();
+        }
+    }
+
     // score
     let point_grid = PointGrid::<T, D>::new([num(0.0); D], [num(0.5); D], [index(3); D])
         .or_else(|_| PointGrid::spanning([num(0.0); D], [high; D], num(0.5)));
@@ -989,6 +1054,15 @@ fn adaptive<T, G, const D: usize, const I: usize>(
     config.surprise = opaque(true);
     config.uncertainty = opaque(true);
     config.decision = opaque(true);
+    config.refit = if opaque(true) {
+        adaptive::Refit::Warm(SearchOptions {
+            max_evaluations: index(6),
+            restarts: index(0),
+            isotropic: opaque(true),
+        })
+    } else {
+        adaptive::Refit::Search
+    };
     let Ok(config) = config.validate() else {
         return;
     };
@@ -1021,6 +1095,19 @@ fn adaptive<T, G, const D: usize, const I: usize>(
         SubsetRule::Spread,
         &training,
         rng,
+    ));
+    let mut mapped = [T::ZERO; 12];
+    let noise = if opaque(true) {
+        NoiseSubtraction::Reference
+    } else {
+        NoiseSubtraction::Off
+    };
+    keep(map_posteriors(
+        &gp,
+        records.get(..index(7)).unwrap_or(&[]),
+        noise,
+        mapped.get_mut(..index(7)).unwrap_or(&mut []),
+        |i, r, p| Ok(p.mean + p.std + r.reward + T::from_usize(i)),
     ));
     // The pieces on their own.
     let mut beliefs = [adaptive::SourceBelief::<T>::EMPTY; 3];
@@ -1066,8 +1153,10 @@ fn adaptive<T, G, const D: usize, const I: usize>(
     let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 400, 6, 2>::new();
     let built = AdaptiveAwfqi::new(config, grid, data, &means, rows, plant, &mut storage);
     if let Ok(mut kernel) = built {
+        keep(kernel.plan(rng));
         keep(kernel.step(rng));
         keep(kernel.step(rng));
+        keep(kernel.means().len());
         keep((
             kernel.config().candidates,
             kernel.steps(),
@@ -1112,6 +1201,21 @@ fn adaptive<T, G, const D: usize, const I: usize>(
         buffers.fqi = trees.storage();
         let built = AdaptiveAwfqi::new(config, forests, data, &means, rows, plant, buffers);
         if let Ok(mut kernel) = built {
+            keep(kernel.step(rng));
+            keep(kernel.q().greedy_action([num(0.5); D]));
+        }
+    }
+    // The kernel with a model sweep: entries and nodes.
+    let sweep = ModelSweep::<T, D>::cube(num(0.0), high, index(3))
+        .map(|s| s.with_rewards(RewardModel::Pooled));
+    if let Ok(sweep) = sweep {
+        let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
+        let mut block = SweepStorage::<T, D, { 64 * 4 }, 64>::new();
+        let mut buffers = storage.buffers();
+        buffers.fqi = block.storage();
+        let built = AdaptiveAwfqi::new(config, sweep, data, &means, rows, plant, buffers);
+        if let Ok(mut kernel) = built {
+            keep(kernel.plan(rng));
             keep(kernel.step(rng));
             keep(kernel.q().greedy_action([num(0.5); D]));
         }
