@@ -119,14 +119,14 @@ use Quantity::*;
 /// Cholesky solve may make on a matrix of that condition (the hard classes reach κ₁ ≈ 1e13);
 /// `cap` is the largest error that is still an answer rather than a wrong number.
 const TOLERANCES: &[Tolerance] = &[
-    // The issue's requirement for f64 on well-conditioned cases: 1e-9 relative, flat.
+    // The requirement for f64 on well-conditioned cases: 1e-9 relative, flat.
     row(WellConditioned, F64, Mean, 1e-9, 0.0, 1e-9),
     row(WellConditioned, F64, Std, 1e-9, 0.0, 1e-9),
     row(WellConditioned, F64, LogMarginalLikelihood, 1e-9, 0.0, 1e-9),
-    // The issue's requirement for f32, N ≤ 64: 1e-3 on mean and latent std.
+    // The requirement for f32, N ≤ 64: 1e-3 on mean and latent std.
     row(WellConditioned, F32, Mean, 1e-3, 0.0, 1e-3),
     row(WellConditioned, F32, Std, 1e-3, 0.0, 1e-3),
-    // Not required by the issue; the LML sums N terms of data fit and log-determinant.
+    // Not required; the LML sums N terms of data fit and log-determinant.
     row(WellConditioned, F32, LogMarginalLikelihood, 1e-3, 0.0, 1e-3),
     // A large offset leaves K as well-conditioned as above: the f64 target still holds.
     row(LargeOffset, F64, Mean, 1e-9, 0.0, 1e-9),

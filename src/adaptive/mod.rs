@@ -1,4 +1,4 @@
-//! Adaptive AWFQI (issue 11; not a thesis algorithm): the query distribution is recomputed
+//! Adaptive AWFQI (not a thesis algorithm): the query distribution is recomputed
 //! from what the target has answered, several times per step, and aims at what decides the
 //! greedy policy. The harness's `awfqi-adaptive` (`docs/active-budget.md`) in fixed memory,
 //! for any plant with a `D`-dimensional state; the harness runs it as

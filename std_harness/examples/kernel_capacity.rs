@@ -1,6 +1,6 @@
 //! The core's embedded AWFQI (`awfqi-kernel`) on the main job's protocol at other
 //! capacities: target-GP points `N`, FQI cells per axis and score-grid spacing — what a
-//! smaller RAM budget costs in return (issue 12 item 7, the 32 KiB configuration).
+//! smaller RAM budget costs in return (the 32 KiB configuration).
 //!
 //! Same protocol, data and random streams as `awfqi-harness puddle --algorithms
 //! awfqi-kernel` (thesis setting 2 (b): shared dynamics, the published sources, grid rows,

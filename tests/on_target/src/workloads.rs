@@ -191,7 +191,7 @@ pub fn awfqi_puddle<
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
-/// The recommended Puddle World configuration in 32 KiB of RAM (issue 12 item 7): the
+/// The recommended Puddle World configuration in 32 KiB of RAM: the
 /// kernel's whole memory, `AwfqiStorage<f32, 2, 3, 24, 300, 1033, 324, 484>` = 27 616 B on
 /// this target — a 24-point target GP, 6 steps × 50 target records, one weight per
 /// published source record (1033), the sampler over the 324 rows of the spacing-1.25
