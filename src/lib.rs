@@ -66,7 +66,8 @@
 //! - No allocation (there is no `alloc`), no panics: `unwrap`, `expect`, `panic!` and
 //!   indexing are denied by lint, and the repository's `scripts/no-panic` links every public
 //!   entry point for a Cortex-M4F with a panic handler that does not exist.
-//! - Cargo feature `defmt`: `defmt::Format` for [`Error`] and the public data types.
+//! - Cargo features: `defmt` (`defmt::Format` for [`Error`] and the public data types);
+//!   `rand_core_06`, `rand_core_09` (generators of older `rand_core` versions, [`rng::compat`]).
 //! - Dependencies: `libm`, `nalgebra` (no default features), `heapless`, `rand_core`.
 //!
 //! ## Example: a room heater learned from two other heaters
@@ -236,7 +237,9 @@
 //! let mut posteriors = [Posterior::default(); 40];
 //! let mut scores = [Scores::ZERO; 42];
 //!
-//! let mut config = AwfqiConfig::thesis(10); // 10 queries per step
+//! // The thesis's settings (Puddle World's scales; for a plant of your own derive them from
+//! // the logs: `AwfqiConfig::scaled`, docs/embedding.md), 10 queries per step.
+//! let mut config = AwfqiConfig::thesis(10);
 //! config.gp_training.search.restarts = 1;
 //! let candidates = RowSet::grid(PointGrid::spanning([0.0], [1.0], 0.05)?, 2)?;
 //! let mut kernel = Awfqi::builder(config.validate()?, CellGrid::cube(0.0, 1.0, 10)?, &records, candidates)
@@ -291,7 +294,13 @@
 //! The experiments, their results and the harness that runs them are described in the
 //! repository's README.md and `docs/` (`docs/results-puddle.md` for the headline comparison,
 //! `docs/algorithms.md` for every formula).
+//!
+//! The embedding guide (the repository's `docs/embedding.md`) follows: depending on the crate,
+//! settings derived from your logs, the recommended kernel, the step reports' warnings.
+//!
+#![doc = include_str!("../docs/embedding.md")]
 #![no_std]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![cfg_attr(
     not(test),
     deny(
@@ -321,13 +330,19 @@ pub mod rng;
 pub mod score;
 pub mod weights;
 
-/// The README's examples, compiled and run as doctests (the crate docs are this file's own).
+/// The README's examples, compiled and run as doctests (the crate docs are the embedding
+/// guide, `docs/embedding.md`).
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
 pub use error::{Error, Result};
 pub use float::Real;
+/// The `rand_core` (0.10) whose [`Rng`](rand_core::Rng) every randomised call takes:
+/// depend on this one (`awfqi::rand_core::Rng`, `awfqi::rand_core::SeedableRng`) and the
+/// versions cannot drift apart. Generators of `rand_core` 0.6 and 0.9 go through
+/// [`rng::compat`].
+pub use rand_core;
 
 // The types a user of the transfer path meets, at the crate root (as heapless does).
 pub use adaptive::{
@@ -336,10 +351,13 @@ pub use adaptive::{
 };
 pub use alias::AliasEntry;
 pub use awfqi::{
-    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
-    ValidAwfqiConfig,
+    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
+    StepReport, ValidAwfqiConfig, Warning, Warnings,
 };
-pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
+pub use evaluation::{
+    Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
+    evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+};
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
     KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
@@ -349,7 +367,7 @@ pub use fqi::{
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use model::{GenerativeModel, Transition};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-pub use record_gp::{GpTraining, Output, SubsetRule};
+pub use record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
 pub use score::{
     GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
     SourceModel,
