@@ -2,10 +2,10 @@
 //! implementation on identical inputs where the reference has a counterpart.
 //!
 //! `cargo bench` runs it (about two minutes on a 2-core machine); `scripts/perf-tables`
-//! turns the results in `target/criterion` into the performance tables of the README.
+//! turns the results in `target/criterion` into the tables of docs/performance.md.
 //! Benchmark ids are `group/implementation/parameter`; implementations are `kernel_f32`,
 //! `kernel_f64` and `reference_f64`. Where the reference has no counterpart the group has
-//! the kernel only (see the README's performance section).
+//! the kernel only (see docs/performance.md).
 
 mod common;
 

@@ -6,7 +6,7 @@
 //!     cargo run --release --example nalgebra_cholesky
 //!
 //! Code size and stack on the Cortex-M4F: `scripts/cholesky-size`. The figures and the
-//! reason the hand-written factor stays: the README's "The design card's packages".
+//! reason the hand-written factor stays: docs/footprint.md, "The design card's packages".
 use std::time::Instant;
 
 use awfqi::gp::{Conditioning, Gp, Hyperparameters};

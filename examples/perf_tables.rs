@@ -1,4 +1,4 @@
-//! Turns measurements into the markdown tables of `README.md`.
+//! Turns measurements into the markdown tables of `docs/performance.md`.
 //!
 //! Reads criterion's results (`target/criterion/**/new/{benchmark,estimates}.json`), the
 //! callgrind counts written by `scripts/perf-tables` (`target/perf/callgrind.tsv`: operation,
@@ -8,7 +8,7 @@
 //! command line. Missing measurements show as `–`.
 //!
 //! ```text
-//! cargo run --release --example perf_tables -- README.md
+//! cargo run --release --example perf_tables -- docs/performance.md
 //! ```
 
 use std::collections::BTreeMap;
@@ -144,7 +144,7 @@ fn kernel_flops(d: f64) -> f64 {
 }
 
 /// The minimal flop counts of the GP operations (D = 3), the formulas stated in
-/// `README.md`.
+/// `docs/performance.md`.
 fn gp_flops(op: &str, n: f64) -> Option<f64> {
     let fk = kernel_flops(3.0);
     let fit = n * n * n / 3.0 + fk * n * (n - 1.0) / 2.0 + n * n;
@@ -441,7 +441,7 @@ fn experiments_table(d: &Data) -> String {
 
 /// Clock of the Cortex-M4F the instruction counts are converted at.
 const M4_HZ: f64 = 168e6;
-/// Assumed cycles per instruction (README: why), and a pessimistic one.
+/// Assumed cycles per instruction (docs/performance.md: why), and a pessimistic one.
 const M4_CPI: f64 = 1.25;
 const M4_CPI_SLOW: f64 = 1.5;
 

@@ -377,7 +377,7 @@ mod reservoir;
 mod tables;
 
 /// The firmware example's controller, run on the host with the device's seed: the same
-/// code and f32 arithmetic, so this is what QEMU prints (README: −1335.1 against −1798.7).
+/// code and f32 arithmetic, so this is what QEMU prints (docs/footprint.md, the firmware example: −1335.1 against −1798.7).
 /// Adaptive AWFQI (what the firmware runs) and the thesis's AWFQI (its faithful variant)
 /// both beat the baseline, every step reports consistent sizes, and the evaluation is the
 /// plant's protocol (10 one-year rollouts, no absorbing state).

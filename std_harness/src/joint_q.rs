@@ -8,7 +8,7 @@
 //! regressor on `[storage, day, release]`, the release value being a third input feature
 //! the trees may split on. Leaves then average neighbouring releases, which changes how the
 //! Q-function generalises; `--q-function joint` measures whether that explains the Dam's
-//! FQI curve (docs/paper-domains.md).
+//! FQI curve (docs/results-paper-domains.md).
 //!
 //! Only 2-D states (the Dam) are supported: the forest's input is `[s₀, s₁, action value]`.
 //! The FQI loop is [`crate::forest_fqi::fqi`]'s (same iterations, weights, reward model and

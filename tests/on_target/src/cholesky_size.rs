@@ -1,4 +1,4 @@
-//! The GP's linear algebra two ways, for the code-size comparison of the README ("Why the
+//! The GP's linear algebra two ways, for the code-size comparison of docs/footprint.md ("Why the
 //! hand-written Cholesky"): the core's [`Gp`] (fit = kernel fill + Cholesky + solve, then a
 //! prediction) and the same job with nalgebra's fixed-size `Cholesky` (no default features,
 //! as the core would use it). Built and sized by `scripts/cholesky-size`; each image of

@@ -32,7 +32,7 @@ pub enum ComplianceSum {
     Means,
     /// `λᵢ = (Σ_j W_ij P_ij)(Σ_j W_ij Q_ij)`: what the published Acrobot RBT runs computed
     /// (their compliances are ours with means, times `N_k²`, renormalised;
-    /// docs/paper-domains.md). Equal-sized sources give the same compliances either way.
+    /// docs/results-paper-domains.md). Equal-sized sources give the same compliances either way.
     Sums,
 }
 
