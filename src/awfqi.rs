@@ -64,20 +64,27 @@
 //! Q-function keeps its previous fit; the step counter does not advance.
 
 pub mod builder;
+pub mod report;
+pub mod scaled;
 pub(crate) mod transfer;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
+pub use report::{COLLAPSED_SHARE, DISCARDED_SHARE, StepReport, Warning, Warnings, Weights};
+pub use scaled::SourceScales;
 
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, FqiConfig, QFunction};
-use crate::gp::{Gp, Hyperparameters};
+use crate::gp::Gp;
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::{GpTraining, InputDim, Output, SubsetRule, fit_gp, visit_posteriors};
+use crate::record_gp::{
+    Dims, GpTraining, InputDim, Output, StatePlusAction, SubsetRule, fit_gp_searched,
+    visit_posteriors,
+};
 use crate::score::{RowSampler, ScoreColumn};
-use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
+use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
 use rand_core::Rng;
-use transfer::{SourceValues, Transfer};
+use transfer::{ReplanGp, SourceValues, Transfer};
 
 /// Settings of AWFQI for a GP input dimension `I` (`D + 1`): the parameters before
 /// validation (linfa style: [`AwfqiConfig::validate`] turns them into a
@@ -104,12 +111,45 @@ pub struct AwfqiConfig<T, const I: usize> {
 }
 
 impl<T: Real, const I: usize> AwfqiConfig<T, I> {
-    /// The thesis configuration (§12) for a per-step budget: mean estimator with
-    /// `v_r = 0.1`, `w_max = 1000`, reference noise subtraction, the reference GP training
-    /// (10 restarts), γ = 0.99 with 60 iterations, nearest-cell filling, sampling on `V_r`
-    /// — and [`SubsetRule::Spread`] **\[CHOICE\]**: with a target GP far smaller than the
-    /// reference's 4000, "the last N" would forget every earlier step's queries, while an
-    /// even spread keeps them all represented.
+    /// The thesis configuration (§12) for a per-step budget: the **faithful Puddle World
+    /// setting**, not a default for another plant. Its GP scales (every GP starts from
+    /// `c = ℓ = σ²ₙ = 1` and searches `c ∈ [10⁻⁵, 10⁵]`, `ℓ ∈ [10⁻², 10³]`,
+    /// `σ²ₙ ∈ [10⁻², 1]`, isotropic, 10 restarts, 550 evaluations) and its reward-weight
+    /// noise `v_r = 0.1` are in Puddle World's units (states in `[0, 10]²`, rewards of
+    /// about −1 per step); for a plant of your own start from
+    /// [`AwfqiConfig::scaled`], which derives them from your source data.
+    ///
+    /// The values: mean estimator with `v_r = 0.1`, `w_max = 1000`
+    /// ([`WeightParams::reference_reward`]); reference noise subtraction; the reference GP
+    /// training above ([`GpTraining::published`]); FQI with γ = 0.99, 60 iterations and,
+    /// for (cell, action) pairs without data, [`crate::EmptyCells::CappedNearest`] with a
+    /// minimum total weight of 0.5 ([`FqiConfig::published`]); sampling on `V_r`
+    /// ([`ScoreColumn::Reward`]) — and [`SubsetRule::Spread`] **\[CHOICE\]**: with a target
+    /// GP far smaller than the reference's 4000, "the last N" would forget every earlier
+    /// step's queries, while an even spread keeps them all represented.
+    ///
+    /// ```
+    /// use awfqi::{AwfqiConfig, EmptyCells, Estimator, NoiseSubtraction, ScoreColumn, SubsetRule};
+    /// let c = AwfqiConfig::<f64, 3>::thesis(50);
+    /// assert_eq!(c.budget, 50);
+    /// assert_eq!(c.weights.estimator(), Estimator::Mean);
+    /// assert_eq!((c.weights.noise_variance(), c.weights.max_weight()), (0.1, 1000.0));
+    /// assert_eq!(c.noise_subtraction, NoiseSubtraction::Reference);
+    /// assert_eq!(c.subset, SubsetRule::Spread);
+    /// let gp = c.gp_training;
+    /// assert_eq!(gp.initial.signal_variance, 1.0);
+    /// assert_eq!(gp.initial.length_scales, [1.0; 3]);
+    /// assert_eq!(gp.initial.noise_variance, 1.0);
+    /// assert_eq!(gp.bounds.signal_variance, (1e-5, 1e5));
+    /// assert_eq!(gp.bounds.length_scales, [(1e-2, 1e3); 3]);
+    /// assert_eq!(gp.bounds.noise_variance, (1e-2, 1.0));
+    /// assert!(gp.search.isotropic);
+    /// assert_eq!((gp.search.restarts, gp.search.max_evaluations), (10, 550));
+    /// assert_eq!((c.fqi.discount(), c.fqi.iterations()), (0.99, 60));
+    /// assert_eq!(c.fqi.empty_cells(), EmptyCells::CappedNearest);
+    /// assert_eq!(c.fqi.min_weight(), 0.5);
+    /// assert_eq!(c.sampling, ScoreColumn::Reward);
+    /// ```
     pub fn thesis(budget: usize) -> Self {
         Self {
             budget,
@@ -150,6 +190,54 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ValidAwfqiConfig<T, const I: usize>(AwfqiConfig<T, I>);
+
+impl<T: Copy, const I: usize> ValidAwfqiConfig<T, I> {
+    /// The checked settings (also reachable field by field through `Deref`:
+    /// `valid.budget`).
+    pub fn config(&self) -> &AwfqiConfig<T, I> {
+        &self.0
+    }
+
+    /// The checked settings, by value (to change one and validate again).
+    pub fn into_inner(self) -> AwfqiConfig<T, I> {
+        self.0
+    }
+
+    /// Queries per step.
+    pub fn budget(&self) -> usize {
+        self.0.budget
+    }
+
+    /// The reward-weight estimator, `v_r` and `w_max`.
+    pub fn weights(&self) -> WeightParams<T> {
+        self.0.weights
+    }
+
+    /// The noise subtraction of the GPs' predictive stds.
+    pub fn noise_subtraction(&self) -> NoiseSubtraction {
+        self.0.noise_subtraction
+    }
+
+    /// Which records a GP is fitted on when a dataset exceeds its capacity.
+    pub fn subset(&self) -> SubsetRule {
+        self.0.subset
+    }
+
+    /// How every GP is trained.
+    pub fn gp_training(&self) -> &GpTraining<T, I> {
+        &self.0.gp_training
+    }
+
+    /// FQI's discount, iterations and empty-cell rule.
+    pub fn fqi(&self) -> FqiConfig<T> {
+        self.0.fqi
+    }
+
+    /// The score column the queries are drawn on.
+    pub fn sampling(&self) -> ScoreColumn {
+        self.0.sampling
+    }
+}
 
 impl<T, const I: usize> core::ops::Deref for ValidAwfqiConfig<T, I> {
     type Target = AwfqiConfig<T, I>;
@@ -235,32 +323,6 @@ impl<'a, T: Real, const D: usize> SourceData<'a, T, D> {
     }
 }
 
-/// What one step did: the diagnostics of §7.2 step 6 and §12 step 6.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct StepReport<T, const I: usize> {
-    /// Steps completed, this one included (`k`).
-    pub step: usize,
-    /// `|D₀|` after the step (`k·n`).
-    pub n_target_samples: usize,
-    /// Number of source records.
-    pub n_source_samples: usize,
-    /// Records the target GP was fitted on (`min(|D₀|, N)`).
-    pub gp_points: usize,
-    /// The target GP's log marginal likelihood after the search.
-    pub gp_log_likelihood: T,
-    /// The target GP's hyperparameters after the search.
-    pub gp_hyperparameters: Hyperparameters<T, I>,
-    /// Mean reward weight over all records, target ones (weight 1) included (`wr_mean`).
-    pub wr_mean: T,
-    /// Effective sample size of the reward weights over all records (`wr_eff`).
-    pub wr_eff: T,
-    /// Mean transition weight (1: transition weights are off).
-    pub ws_mean: T,
-    /// Effective sample size of the transition weights (all records).
-    pub ws_eff: T,
-}
-
 /// The AWFQI kernel: configuration, borrowed storage and the state of a run.
 ///
 /// Generic over the scalar `T`, the target model `G` (any [`GenerativeModel`] with states
@@ -299,7 +361,10 @@ impl<'a, T: Real, const D: usize, const I: usize> Awfqi<'a, T, (), D, I, 0> {
         approximator: impl Into<Approximator<T, D>>,
         sources: &'a [&'a [Transition<[T; D], T>]],
         candidates: crate::score::RowSet<'a, T, D>,
-    ) -> AwfqiBuilder<'a, T, D, I> {
+    ) -> AwfqiBuilder<'a, T, D, I>
+    where
+        crate::record_gp::Dims<D, I>: crate::record_gp::StatePlusAction,
+    {
         AwfqiBuilder::new(config, approximator, sources, candidates)
     }
 }
@@ -308,6 +373,7 @@ impl<'a, T, G, const D: usize, const I: usize, const N: usize> Awfqi<'a, T, G, D
 where
     T: Real,
     G: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
 {
     /// Assembles a kernel for a fresh run (`D₀` empty, Q = 0) from parts the builder has
     /// checked: `samples` holds at least one step, `weights` one weight per source record,
@@ -396,10 +462,14 @@ where
 
     /// Runs one step (module docs): `n` queries, target GP, reward weights, weighted FQI.
     ///
-    /// Errors: `D₀` has no room for `n` more records ([`Error::CapacityExceeded`] with the
-    /// buffer's length; checked before anything is drawn); then the first error of a query,
-    /// the GP fit or search, a prediction or a weight, after which the state is as the
-    /// module docs describe.
+    /// Errors: `D₀` has no room for `n` more records ([`Error::BufferTooSmall`] naming
+    /// `samples` and its `Q`; checked before anything is drawn); then the first error of a
+    /// query, the GP fit or search, a prediction or a weight, after which the state is as
+    /// the module docs describe.
+    // Inlined into its caller: a firmware loop calls it from one place, and a frame of its
+    // own on top of the caller's (which holds the kernel) costs the 32 KiB configuration
+    // its margin (measured: 656 B more stack when it was not inlined).
+    #[inline(always)]
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let budget = self.config.budget;
         let run = &mut self.run;
@@ -416,17 +486,22 @@ where
         // the end of the step.
         let mut ws = WeightSummary::new();
         ws.add_ones(target.len());
+        let mut ws_tally = WeightTally::new();
+        let mut refused = 0usize;
         let transitions_on = self.transitions.is_some();
         if let Some(tw) = self.transitions.as_mut() {
             for d in 0..D {
-                fit_gp(
+                let output = Output::NextState(d);
+                output.of(target.first().ok_or(Error::EmptyData)?)?;
+                let fit = fit_gp_searched(
                     run.gp,
                     target,
-                    Output::NextState(d),
+                    |r| output.of(r),
                     self.config.subset,
                     &self.config.gp_training,
                     rng,
                 )?;
+                refused += usize::from(fit.refused);
                 let mut start = 0usize;
                 for records in run.sources.records {
                     let end = start + records.len();
@@ -446,36 +521,55 @@ where
                     start = end;
                 }
             }
-            ws.add(tw.weights.get(..run.sources.len()).unwrap_or(&[]))?;
+            let weights = tw.weights.get(..run.sources.len()).unwrap_or(&[]);
+            ws.add(weights)?;
+            // A record is discarded when any of its `D` coordinates is.
+            let (mut discarded, mut last) = (0usize, None);
+            for (k, &p) in tw.posteriors.iter().enumerate() {
+                let record = k.checked_div(D);
+                if tw.params.discards(p) && record != last {
+                    discarded += 1;
+                    last = record;
+                }
+            }
+            ws_tally.add(weights, tw.params.max_weight(), discarded)?;
         }
         // 4: target reward GP on a bounded subset of D₀.
-        let lml = fit_gp(
+        let fit = fit_gp_searched(
             run.gp,
             target,
-            Output::Reward,
+            |r| Ok(r.reward),
             self.config.subset,
             &self.config.gp_training,
             rng,
         )?;
+        refused += usize::from(fit.refused);
+        let gp = ReplanGp::of(run.gp, fit.lml);
         // Reward weights, one noise-subtraction batch per source.
         let mut wr = WeightSummary::new();
         wr.add_ones(target.len());
+        let mut wr_tally = WeightTally::new();
         run.fit_reward_weights(
             &self.config.weights,
             self.config.noise_subtraction,
             &mut wr,
+            &mut wr_tally,
             false,
         )?;
         // 5: weighted FQI on D₀ then the sources.
         let transition: Option<&[T]> = self.transitions.as_ref().map(|t| &*t.weights);
         run.fit_q(SourceValues::Weights, transition, &self.config.fqi, rng)?;
         run.steps += 1;
-        let mut report = run.report(&wr, lml, *run.gp.hyperparameters(), run.gp.len());
+        let mut report = run.report(&wr, &wr_tally, gp, refused);
+        report.queries = budget;
+        // Off: exactly 1 and the record count, as before transition weights existed.
         if transitions_on {
             report.ws_mean = ws.mean();
             report.ws_eff = ws.effective_sample_size();
+            report.ws_source_eff = ws_tally.sources.effective_sample_size();
+            report.ws_discarded = ws_tally.discarded;
+            report.ws_capped = ws_tally.capped;
         }
-        // Off: exactly 1 and the record count, as before transition weights existed.
         Ok(report)
     }
 }
@@ -492,7 +586,10 @@ fn transition_weights_of<T: Real, const N: usize, const D: usize, const I: usize
     params: &WeightParams<T>,
     noise: NoiseSubtraction,
     out: &mut [T],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if records.is_empty() {
         return Ok(());
     }

@@ -15,6 +15,18 @@ pub enum Error {
         /// The capacity (number of elements) of the container that is full.
         capacity: usize,
     },
+    /// A buffer lent to a kernel (a part of an [`AwfqiStorage`](crate::AwfqiStorage) or
+    /// [`AdaptiveStorage`](crate::AdaptiveStorage), or a set-up buffer) is shorter than the
+    /// set-up or the run needs: `buffer` names it and the const parameter that sizes it.
+    BufferTooSmall {
+        /// The buffer and its const parameter, e.g. ``"samples (`Q`: steps × budget target
+        /// records)"``.
+        buffer: &'static str,
+        /// Its length.
+        capacity: usize,
+        /// The length needed.
+        needed: usize,
+    },
     /// An input value was NaN or infinite.
     NonFinite {
         /// Name of the offending parameter or data field.
@@ -137,6 +149,14 @@ impl fmt::Display for Error {
             Error::CapacityExceeded { capacity } => {
                 write!(f, "capacity exceeded: the limit is {capacity} elements")
             }
+            Error::BufferTooSmall {
+                buffer,
+                capacity,
+                needed,
+            } => write!(
+                f,
+                "buffer too small: {buffer} holds {capacity}, {needed} are needed"
+            ),
             Error::NonFinite { parameter } => {
                 write!(f, "non-finite value (NaN or infinity) in `{parameter}`")
             }
@@ -199,6 +219,16 @@ mod tests {
         assert!(e.to_string().contains("noise_variance"));
         let e = Error::CapacityExceeded { capacity: 64 };
         assert!(e.to_string().contains("64"));
+        let e = Error::BufferTooSmall {
+            buffer: "samples (`Q`: steps × budget target records)",
+            capacity: 150,
+            needed: 200,
+        };
+        assert_eq!(
+            e.to_string(),
+            "buffer too small: samples (`Q`: steps × budget target records) holds 150, \
+             200 are needed"
+        );
         let e = Error::InvalidParameter {
             parameter: "length_scales",
         };

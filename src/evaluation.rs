@@ -130,8 +130,69 @@ where
     P: Policy<[T; D]> + ?Sized,
     R: Rng + ?Sized,
 {
-    let rollouts = protocol.rollouts;
-    if rollouts == 0 {
+    let multi = MultiStartProtocol {
+        starts: core::slice::from_ref(&protocol.start),
+        rollouts: protocol.rollouts,
+        horizon: protocol.horizon,
+        discount: protocol.discount,
+    };
+    evaluate_multi_start(model, policy, &multi, rng)
+}
+
+/// How a policy is evaluated over several start states: `rollouts` rollouts from each
+/// state of `starts` in turn (start after start), each at most `horizon` steps, scored by
+/// the return discounted with `discount`. A plant without one natural initial state (a
+/// building that may be cold or warm in the morning) is judged over the states it meets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MultiStartProtocol<'a, T, const D: usize> {
+    /// The start states (at least one).
+    pub starts: &'a [[T; D]],
+    /// Rollouts from each start (≥ 1).
+    pub rollouts: usize,
+    /// Most steps of a rollout (≥ 1).
+    pub horizon: usize,
+    /// The discount γ in `[0, 1]`.
+    pub discount: T,
+}
+
+/// Runs the rollouts of a [`MultiStartProtocol`] with `policy` on `model`: the statistics
+/// of all `starts.len() · rollouts` returns together (mean, standard error of that mean,
+/// mean length, absorbed count), as [`evaluate`] gives them for one start.
+///
+/// Errors: no start ([`Error::EmptyData`]), `rollouts == 0` ([`Error::InvalidParameter`]
+/// `rollouts`); those of [`rollout`].
+///
+/// ```
+/// use awfqi::env::{Dynamics, PuddleWorld};
+/// use awfqi::evaluation::{MultiStartProtocol, evaluate_multi_start};
+/// use awfqi::rand_core::SeedableRng;
+/// # fn main() -> awfqi::Result<()> {
+/// let world = PuddleWorld::<f32>::target(Dynamics::Shared);
+/// let starts = [[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]];
+/// let protocol = MultiStartProtocol { starts: &starts, rollouts: 2, horizon: 50, discount: 0.99 };
+/// let mut up = |_: &[f32; 2]| Ok(awfqi::env::ACTION_UP);
+/// let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+/// let result = evaluate_multi_start(&world, &mut up, &protocol, &mut rng)?;
+/// assert!(result.mean_return < 0.0 && result.mean_steps <= 50.0);
+/// # Ok(())
+/// # }
+/// ```
+pub fn evaluate_multi_start<T, G, P, R, const D: usize>(
+    model: &G,
+    policy: &mut P,
+    protocol: &MultiStartProtocol<'_, T, D>,
+    rng: &mut R,
+) -> Result<Evaluation<T>>
+where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + ?Sized,
+    P: Policy<[T; D]> + ?Sized,
+    R: Rng + ?Sized,
+{
+    if protocol.starts.is_empty() {
+        return Err(Error::EmptyData);
+    }
+    if protocol.rollouts == 0 {
         return Err(Error::InvalidParameter {
             parameter: "rollouts",
         });
@@ -140,21 +201,25 @@ where
     let mut sum_sq = T::ZERO;
     let mut steps = T::ZERO;
     let mut absorbed = 0;
-    for _ in 0..rollouts {
-        let r = rollout(
-            model,
-            policy,
-            protocol.start,
-            protocol.horizon,
-            protocol.discount,
-            rng,
-        )?;
-        sum += r.discounted_return;
-        sum_sq += r.discounted_return * r.discounted_return;
-        steps += T::from_usize(r.steps);
-        absorbed += usize::from(r.absorbed);
+    let mut count = 0usize;
+    for &start in protocol.starts {
+        for _ in 0..protocol.rollouts {
+            let r = rollout(
+                model,
+                policy,
+                start,
+                protocol.horizon,
+                protocol.discount,
+                rng,
+            )?;
+            sum += r.discounted_return;
+            sum_sq += r.discounted_return * r.discounted_return;
+            steps += T::from_usize(r.steps);
+            absorbed += usize::from(r.absorbed);
+            count += 1;
+        }
     }
-    let n = T::from_usize(rollouts);
+    let n = T::from_usize(count);
     let mean = sum / n;
     let variance = (sum_sq / n - mean * mean).max(T::ZERO);
     Ok(Evaluation {
@@ -163,6 +228,26 @@ where
         mean_steps: steps / n,
         absorbed,
     })
+}
+
+/// [`evaluate_multi_start`] for the greedy policy of a Q-function (see
+/// [`evaluate_greedy`]).
+///
+/// Errors: those of [`evaluate_multi_start`].
+pub fn evaluate_greedy_multi_start<T, G, R, Q, const D: usize>(
+    model: &G,
+    q: &Q,
+    protocol: &MultiStartProtocol<'_, T, D>,
+    rng: &mut R,
+) -> Result<Evaluation<T>>
+where
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]> + ?Sized,
+    R: Rng + ?Sized,
+    Q: Greedy<T, D> + ?Sized,
+{
+    let mut greedy = |s: &[T; D]| q.greedy(*s);
+    evaluate_multi_start(model, &mut greedy, protocol, rng)
 }
 
 /// [`evaluate`] for the greedy policy of a Q-function (a [`crate::TabularFqi`], a
@@ -218,6 +303,73 @@ mod tests {
             ..protocol
         };
         assert!(evaluate(&env, &mut policy, &none, &mut rng).is_err());
+    }
+
+    #[test]
+    fn multi_start_pools_the_rollouts_of_every_start() {
+        let env = PuddleWorld::<f64>::target(Dynamics::Shared);
+        let mut policy = UniformPolicy::new(4).unwrap();
+        let starts = [[0.0, 0.0], [9.0, 9.0]];
+        let protocol = MultiStartProtocol {
+            starts: &starts,
+            rollouts: 3,
+            horizon: 20,
+            discount: 0.9,
+        };
+        let eval = evaluate_multi_start(
+            &env,
+            &mut policy,
+            &protocol,
+            &mut ChaCha8Rng::seed_from_u64(5),
+        )
+        .unwrap();
+        // The same stream, rollout by rollout: three from (0, 0), then three from (9, 9).
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut returns = [0.0f64; 6];
+        let mut lengths = 0usize;
+        for (i, r) in returns.iter_mut().enumerate() {
+            let out = rollout(&env, &mut policy, starts[i / 3], 20, 0.9, &mut rng).unwrap();
+            *r = out.discounted_return;
+            lengths += out.steps;
+        }
+        let mean = returns.iter().sum::<f64>() / 6.0;
+        let var = returns.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / 6.0;
+        assert!((eval.mean_return - mean).abs() < 1e-9);
+        assert!((eval.standard_error - (var / 6.0).sqrt()).abs() < 1e-9);
+        assert!((eval.mean_steps - lengths as f64 / 6.0).abs() < 1e-12);
+        let none = MultiStartProtocol {
+            starts: &[],
+            ..protocol
+        };
+        assert_eq!(
+            evaluate_multi_start(&env, &mut policy, &none, &mut rng),
+            Err(Error::EmptyData)
+        );
+        let zero = MultiStartProtocol {
+            rollouts: 0,
+            ..protocol
+        };
+        assert!(evaluate_multi_start(&env, &mut policy, &zero, &mut rng).is_err());
+        // One start is exactly `evaluate`.
+        let one = EvaluationProtocol {
+            start: [0.0, 0.0],
+            rollouts: 3,
+            horizon: 20,
+            discount: 0.9,
+        };
+        let a = evaluate(&env, &mut policy, &one, &mut ChaCha8Rng::seed_from_u64(8)).unwrap();
+        let single = MultiStartProtocol {
+            starts: &starts[..1],
+            ..protocol
+        };
+        let b = evaluate_multi_start(
+            &env,
+            &mut policy,
+            &single,
+            &mut ChaCha8Rng::seed_from_u64(8),
+        )
+        .unwrap();
+        assert_eq!(a, b);
     }
 
     #[test]

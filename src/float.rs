@@ -3,6 +3,24 @@
 //!
 //! The trait is sealed and deliberately small: exactly the operations the core needs, each
 //! routed through `libm` so that results do not depend on the platform's `std`.
+//!
+//! **Maths in a `no_std` program.** `f32::sqrt`, `exp`, `ln`, `sin`, `cos`, `abs`, `floor`
+//! and friends are `std` methods, so firmware that writes `x.sqrt()` does not compile
+//! ("no method named `sqrt` found for type `f32`"). Bring [`Real`] into scope and the
+//! same calls work, with the core's `libm` arithmetic — the same results on the host and
+//! on the device:
+//!
+//! ```
+//! use awfqi::Real; // sqrt, exp, ln, ln_1p, sin, cos, abs, floor, max, min, squared, clamp_to
+//! let gain: f32 = 0.3;
+//! let settle = (-gain * 4.0).exp(); // e^(−1.2)
+//! let noise = Real::sqrt(0.02f32); // or `0.02f32.sqrt()`; in std code the inherent
+//!                                  // method wins, so name the trait to be sure of libm
+//! assert!((settle - 0.301_194).abs() < 1e-6);
+//! assert!((noise - 0.141_421_36).abs() < 1e-7);
+//! assert_eq!((1.7f32).clamp_to(0.0, 1.0), 1.0);
+//! assert_eq!(<f32 as Real>::from_f64(0.1), 0.1f32);
+//! ```
 
 use core::fmt::{Debug, Display};
 use core::iter::Sum;

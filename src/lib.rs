@@ -1,5 +1,6 @@
-#![doc = include_str!("../README.md")]
+#![doc = include_str!("../docs/embedding.md")]
 #![no_std]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![cfg_attr(
     not(test),
     deny(
@@ -29,8 +30,19 @@ pub mod rng;
 pub mod score;
 pub mod weights;
 
+/// The README's examples, compiled and run as doctests (the crate docs are the embedding
+/// guide, `docs/embedding.md`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub use error::{Error, Result};
 pub use float::Real;
+/// The `rand_core` (0.10) whose [`Rng`](rand_core::Rng) every randomised call takes:
+/// depend on this one (`awfqi::rand_core::Rng`, `awfqi::rand_core::SeedableRng`) and the
+/// versions cannot drift apart. Generators of `rand_core` 0.6 and 0.9 go through
+/// [`rng::compat`].
+pub use rand_core;
 
 // The types a user of the transfer path meets, at the crate root (as heapless does).
 pub use adaptive::{
@@ -39,10 +51,13 @@ pub use adaptive::{
 };
 pub use alias::AliasEntry;
 pub use awfqi::{
-    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, StepReport,
-    ValidAwfqiConfig,
+    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
+    StepReport, ValidAwfqiConfig, Warning, Warnings,
 };
-pub use evaluation::{Evaluation, EvaluationProtocol, Rollout, evaluate, evaluate_greedy, rollout};
+pub use evaluation::{
+    Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
+    evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+};
 pub use fqi::{
     Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
     KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
@@ -52,7 +67,7 @@ pub use fqi::{
 pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 pub use model::{GenerativeModel, Transition};
 pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-pub use record_gp::{GpTraining, Output, SubsetRule};
+pub use record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
 pub use score::{
     GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
     SourceModel,

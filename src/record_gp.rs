@@ -12,10 +12,69 @@
 
 use crate::error::{Error, Result};
 use crate::float::Real;
-use crate::gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use crate::gp::{
+    Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, Searched, WhenFull,
+};
 use crate::model::Transition;
 use crate::weights::{NoiseSubtraction, Posterior, StdTransform};
 use rand_core::Rng;
+
+/// A state dimension `D` paired with a GP input dimension `I`: it implements
+/// [`StatePlusAction`] exactly when `I = D + 1`, so an entry point bounded by
+/// `Dims<D, I>: StatePlusAction` refuses a wrong pair at `cargo check` (error E0277), before
+/// anything is built.
+///
+/// ```compile_fail,E0277
+/// // A 2-D plant's GP input is (s₀, s₁, a): I = 3, not 4.
+/// type Wrong = awfqi::AwfqiStorage<f32, 2, 4, 16, 20, 40, 42, 20>;
+/// let storage = Wrong::new();
+/// ```
+///
+/// ```
+/// type Right = awfqi::AwfqiStorage<f32, 2, 3, 16, 20, 40, 42, 20>;
+/// let storage = Right::new();
+/// ```
+///
+/// The free functions that pair records with GP inputs carry the same bound:
+///
+/// ```compile_fail,E0277
+/// let z: [f32; 4] = awfqi::record_gp::input([0.5, 0.5], 1);
+/// ```
+///
+/// ```
+/// let z: [f32; 3] = awfqi::record_gp::input([0.5, 0.5], 1);
+/// assert_eq!(z, [0.5, 0.5, 1.0]);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Dims<const D: usize, const I: usize>;
+
+mod sealed {
+    pub trait Sealed {}
+}
+
+/// Implemented by [`Dims<D, I>`](Dims) for `I = D + 1`, `1 ≤ D ≤ 32`: the GP input is the
+/// `D` state coordinates followed by the action. Sealed.
+#[diagnostic::on_unimplemented(
+    message = "the GP input dimension I must be the state dimension D plus one (the action): \
+               `{Self}` is not `Dims<D, D + 1>`",
+    label = "I ≠ D + 1 here",
+    note = "a plant with states `[T; D]` uses GP inputs `[T; D + 1]`: e.g. D = 2, I = 3"
+)]
+pub trait StatePlusAction: sealed::Sealed {}
+
+macro_rules! state_plus_action {
+    ($($d:literal => $i:literal),* $(,)?) => {$(
+        impl sealed::Sealed for Dims<$d, $i> {}
+        impl StatePlusAction for Dims<$d, $i> {}
+    )*};
+}
+
+state_plus_action!(
+    1 => 2, 2 => 3, 3 => 4, 4 => 5, 5 => 6, 6 => 7, 7 => 8, 8 => 9, 9 => 10, 10 => 11,
+    11 => 12, 12 => 13, 13 => 14, 14 => 15, 15 => 16, 16 => 17, 17 => 18, 18 => 19,
+    19 => 20, 20 => 21, 21 => 22, 22 => 23, 23 => 24, 24 => 25, 25 => 26, 26 => 27,
+    27 => 28, 28 => 29, 29 => 30, 30 => 31, 31 => 32, 32 => 33,
+);
 
 /// Fails to compile unless `I == D + 1` (the GP input is the state followed by the action).
 /// Referenced from every function that pairs `D`-dimensional records with `I`-dimensional
@@ -31,7 +90,10 @@ impl<const D: usize, const I: usize> InputDim<D, I> {
 
 /// The GP input `z = (s₀, …, s_{D−1}, a)` of a state-action pair (`I = D + 1`, checked at
 /// compile time).
-pub fn input<T: Real, const D: usize, const I: usize>(state: [T; D], action: usize) -> [T; I] {
+pub fn input<T: Real, const D: usize, const I: usize>(state: [T; D], action: usize) -> [T; I]
+where
+    Dims<D, I>: StatePlusAction,
+{
     let () = InputDim::<D, I>::CHECK;
     let mut z = [T::from_usize(action); I];
     for (zi, &si) in z.iter_mut().zip(&state) {
@@ -148,7 +210,10 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I:
     subset: SubsetRule,
     training: &GpTraining<T, I>,
     rng: &mut R,
-) -> Result<T> {
+) -> Result<T>
+where
+    Dims<D, I>: StatePlusAction,
+{
     let () = InputDim::<D, I>::CHECK;
     let Some(first) = records.first() else {
         return Err(Error::EmptyData);
@@ -167,7 +232,7 @@ pub fn fit_gp<T: Real, R: Rng + ?Sized, const N: usize, const D: usize, const I:
 pub fn fit_gp_on<T, R, F, const N: usize, const D: usize, const I: usize>(
     gp: &mut Gp<T, N, I>,
     records: &[Transition<[T; D], T>],
-    mut target: F,
+    target: F,
     subset: SubsetRule,
     training: &GpTraining<T, I>,
     rng: &mut R,
@@ -176,6 +241,26 @@ where
     T: Real,
     R: Rng + ?Sized,
     F: FnMut(&Transition<[T; D], T>) -> Result<T>,
+    Dims<D, I>: StatePlusAction,
+{
+    fit_gp_searched(gp, records, target, subset, training, rng).map(|s| s.lml)
+}
+
+/// [`fit_gp_on`], also saying whether the search's optimum was refused by the GP's
+/// conditioning policy (a step report counts those fits).
+pub(crate) fn fit_gp_searched<T, R, F, const N: usize, const D: usize, const I: usize>(
+    gp: &mut Gp<T, N, I>,
+    records: &[Transition<[T; D], T>],
+    mut target: F,
+    subset: SubsetRule,
+    training: &GpTraining<T, I>,
+    rng: &mut R,
+) -> Result<Searched<T>>
+where
+    T: Real,
+    R: Rng + ?Sized,
+    F: FnMut(&Transition<[T; D], T>) -> Result<T>,
+    Dims<D, I>: StatePlusAction,
 {
     let () = InputDim::<D, I>::CHECK;
     if records.is_empty() {
@@ -191,7 +276,7 @@ where
             gp.add_point(input(r.state, r.action), target(r)?, WhenFull::Refuse)?;
         }
     }
-    gp.optimize_hyperparameters(&training.bounds, &training.search, rng)
+    gp.search(&training.bounds, &training.search, rng)
 }
 
 /// Predicts `gp` at every record's `z` and writes the posterior of the mean function into
@@ -207,7 +292,10 @@ pub fn predict_posteriors<T: Real, const N: usize, const D: usize, const I: usiz
     records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
     out: &mut [Posterior<T>],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if out.len() != records.len() {
         return Err(Error::InvalidParameter { parameter: "out" });
     }
@@ -232,7 +320,10 @@ pub fn visit_posteriors<T: Real, const N: usize, const D: usize, const I: usize>
     records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
     mut visit: impl FnMut(&Transition<[T; D], T>, Posterior<T>) -> Result<()>,
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     let transform = batch_transform(gp, records, noise)?;
     for r in records {
         let p = gp.predict(&input(r.state, r.action))?;
@@ -257,7 +348,10 @@ pub fn map_posteriors<T: Real, const N: usize, const D: usize, const I: usize>(
     noise: NoiseSubtraction,
     out: &mut [T],
     mut f: impl FnMut(usize, &Transition<[T; D], T>, Posterior<T>) -> Result<T>,
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if out.len() != records.len() {
         return Err(Error::InvalidParameter { parameter: "out" });
     }
@@ -307,7 +401,10 @@ pub fn batch_transform<T: Real, const N: usize, const D: usize, const I: usize>(
     gp: &Gp<T, N, I>,
     records: &[Transition<[T; D], T>],
     noise: NoiseSubtraction,
-) -> Result<StdTransform<T>> {
+) -> Result<StdTransform<T>>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if records.is_empty() {
         return Err(Error::EmptyData);
     }

@@ -4,6 +4,12 @@
 //! [`rand_core::Rng`], so the same seed always gives the same result, on a host or a
 //! microcontroller. Each draw consumes a fixed, documented amount of the stream where
 //! possible, so `f32` and `f64` runs from the same seed stay in step.
+//!
+//! The trait is `rand_core` 0.10's, re-exported as [`crate::rand_core`] so a caller names
+//! the same version the core does; generators of `rand_core` 0.6 or 0.9 are passed through
+//! the adapters of [`compat`] (features `rand_core_06`, `rand_core_09`).
+
+pub mod compat;
 
 use crate::error::{Error, Result};
 

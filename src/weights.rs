@@ -45,6 +45,13 @@ pub struct Posterior<T> {
 }
 
 impl<T: Real> Posterior<T> {
+    /// Mean 0, std 0; `const` and all-zero, so a buffer of posteriors can be a `static` in
+    /// `.bss`: `static mut POSTERIORS: [Posterior<f32>; 600] = [Posterior::EMPTY; 600];`.
+    pub const EMPTY: Self = Self {
+        mean: T::ZERO,
+        std: T::ZERO,
+    };
+
     /// A posterior with the given mean and standard deviation (checked when used).
     pub fn new(mean: T, std: T) -> Self {
         Self { mean, std }
@@ -132,6 +139,14 @@ impl<T: Real> WeightParams<T> {
     /// The cap `w_max`.
     pub fn max_weight(&self) -> T {
         self.max_weight
+    }
+
+    /// `true` when the estimator discards a record whose source posterior is `source`
+    /// whatever its observation (weight 0 by the variance rule of §7.3: the mean
+    /// estimator with `σ_s² ≥ v`). A share of such records is a sign that `v` is small for
+    /// the sources' posterior uncertainty (see [`crate::awfqi::Warning`]).
+    pub fn discards(&self, source: Posterior<T>) -> bool {
+        self.estimator == Estimator::Mean && self.noise_variance - source.std.squared() <= T::ZERO
     }
 
     /// The weight of one source observation `y` given the target and source posteriors
@@ -438,6 +453,42 @@ impl<T: Real> WeightSummary<T> {
         } else {
             T::ZERO
         }
+    }
+}
+
+/// What one step's weights of the source records looked like: their [`WeightSummary`], how
+/// many the variance rule discarded and how many reached the cap (the diagnostics of
+/// [`crate::StepReport`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct WeightTally<T> {
+    /// The source records' weights alone.
+    pub(crate) sources: WeightSummary<T>,
+    /// Records the variance rule discarded.
+    pub(crate) discarded: usize,
+    /// Records whose weight reached `w_max`.
+    pub(crate) capped: usize,
+}
+
+impl<T: Real> WeightTally<T> {
+    /// An empty tally.
+    pub(crate) fn new() -> Self {
+        Self {
+            sources: WeightSummary::new(),
+            discarded: 0,
+            capped: 0,
+        }
+    }
+
+    /// Adds one source's `weights`, of which `discarded` were discarded by the variance
+    /// rule; counts those at `cap`.
+    ///
+    /// Errors: those of [`WeightSummary::add`].
+    pub(crate) fn add(&mut self, weights: &[T], cap: T, discarded: usize) -> Result<()> {
+        self.sources.add(weights)?;
+        let capped = weights.iter().filter(|&&w| w >= cap).count();
+        self.capped = self.capped.saturating_add(capped);
+        self.discarded = self.discarded.saturating_add(discarded);
+        Ok(())
     }
 }
 

@@ -1234,22 +1234,27 @@ fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
         };
         builder().build(target, buffers, &mut r).map(|_| ())
     };
-    assert_eq!(
-        build(&mut samples, &mut weights[..5], &mut alias, &mut entries).err(),
-        Some(Error::CapacityExceeded { capacity: 5 })
-    );
-    assert_eq!(
-        build(&mut samples[..3], &mut weights, &mut alias, &mut entries).err(),
-        Some(Error::CapacityExceeded { capacity: 3 })
-    );
-    assert_eq!(
-        build(&mut samples, &mut weights, &mut alias[..2], &mut entries).err(),
-        Some(Error::CapacityExceeded { capacity: 2 })
-    );
-    assert_eq!(
-        build(&mut samples, &mut weights, &mut alias, &mut entries[..35]).err(),
-        Some(Error::CapacityExceeded { capacity: 35 })
-    );
+    // Each error names the buffer and the const parameter of `AwfqiStorage` that sizes it.
+    let named = |e: Option<Error>| match e {
+        Some(Error::BufferTooSmall {
+            buffer,
+            capacity,
+            needed,
+        }) => (buffer.split(' ').next().unwrap_or(""), capacity, needed),
+        other => panic!("not a named buffer error: {other:?}"),
+    };
+    let param = |e: Option<Error>| match e {
+        Some(Error::BufferTooSmall { buffer, .. }) => buffer.split('`').nth(1).unwrap_or(""),
+        _ => "",
+    };
+    let e = build(&mut samples, &mut weights[..5], &mut alias, &mut entries).err();
+    assert_eq!((named(e), param(e)), (("weights", 5, 6), "W"));
+    let e = build(&mut samples[..3], &mut weights, &mut alias, &mut entries).err();
+    assert_eq!((named(e), param(e)), (("samples", 3, 4), "Q"));
+    let e = build(&mut samples, &mut weights, &mut alias[..2], &mut entries).err();
+    assert_eq!((named(e), param(e)), (("alias", 2, rows.len()), "R"));
+    let e = build(&mut samples, &mut weights, &mut alias, &mut entries[..35]).err();
+    assert_eq!((named(e), param(e)), (("fqi", 35, 36), "E"));
     untouched(&mut r);
 
     // Two steps of 4 fill the 8-sample buffer; a third is refused before anything is drawn
@@ -1270,10 +1275,14 @@ fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
         kernel.reward_weights().to_vec(),
     );
     let mut copy = r.clone();
-    assert_eq!(
+    assert!(matches!(
         err(kernel.step(&mut r)),
-        Error::CapacityExceeded { capacity: 8 }
-    );
+        Error::BufferTooSmall {
+            capacity: 8,
+            needed: 12,
+            ..
+        }
+    ));
     assert_eq!(
         r.next_u64(),
         copy.next_u64(),

@@ -223,6 +223,69 @@ fn without_transition_weights_every_weight_is_one() {
     assert_eq!(report.ws_eff, (BUDGET + 2 * PER_SOURCE) as T);
 }
 
+/// The report counts what the weights did, against an independent count on the weights and
+/// posteriors the kernel used: records the variance rule discarded (a stored source std
+/// whose square reaches `v`), records at the cap, the source records' effective sample
+/// sizes, and the reward GP's jitter and condition.
+#[test]
+fn the_report_counts_discarded_and_capped_records() {
+    let mut rng = ChaCha8Rng::seed_from_u64(14);
+    let s = setup(&mut rng);
+    let slices: Vec<&[Record]> = s.data.iter().map(Vec::as_slice).collect();
+    // Every 5th reward posterior at std 0.4 (0.16 ≥ v_r = 0.1), every 7th transition
+    // posterior at std 0.5 (0.25 ≥ v_s = 0.2): discarded whatever the target says.
+    let mut reward = s.reward.clone();
+    for p in reward.iter_mut().step_by(5) {
+        p.std = 0.4;
+    }
+    let mut transition = s.transition.clone();
+    for p in transition.iter_mut().step_by(7) {
+        p.std = 0.5;
+    }
+    let mut storage = Box::new(Storage::new());
+    let mut scores = vec![Scores::ZERO; ROWS];
+    let mut ws = vec![0.0; 2 * PER_SOURCE];
+    let mut kernel = Awfqi::builder(
+        config().validate().unwrap(),
+        awfqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
+        &slices,
+        RowSet::grid(lattice(), 2).unwrap(),
+    )
+    .stored_posteriors(&reward)
+    .scores_from(&s.models, &mut scores)
+    .unwrap()
+    .transition_weights(WeightParams::reference_transition(), &transition, &mut ws)
+    .build(Shift { shift: 1.0 }, &mut *storage, &mut rng)
+    .unwrap();
+    let report = kernel.step(&mut rng).unwrap();
+    let n = 2 * PER_SOURCE;
+    assert_eq!(report.queries, BUDGET);
+    assert_eq!(report.wr_discarded, n.div_ceil(5));
+    assert_eq!(report.ws_discarded, n.div_ceil(7));
+    let (wr, w) = (kernel.reward_weights(), kernel.transition_weights());
+    assert!(wr.iter().step_by(5).all(|&x| x == 0.0));
+    assert!(w.iter().step_by(7).all(|&x| x == 0.0));
+    let at_cap = |w: &[T]| w.iter().filter(|&&x| x >= 1000.0).count();
+    assert_eq!(
+        (report.wr_capped, report.ws_capped),
+        (at_cap(wr), at_cap(w))
+    );
+    let ess = |w: &[T]| {
+        let sum: T = w.iter().sum();
+        sum * sum / w.iter().map(|x| x * x).sum::<T>()
+    };
+    assert!((report.wr_source_eff - ess(wr)).abs() < 1e-9 * ess(wr));
+    assert!((report.ws_source_eff - ess(w)).abs() < 1e-9 * ess(w));
+    assert_eq!(report.gp_jitter, kernel.gp().jitter());
+    assert_eq!(report.gp_condition, kernel.gp().condition_estimate());
+    // 32 of 160 discarded (20 %) and 23 of 160 (14 %): both above the 10 % that warns.
+    let discarded: Vec<_> = report
+        .warnings()
+        .filter(|w| matches!(w, awfqi::Warning::RecordsDiscarded { .. }))
+        .collect();
+    assert_eq!(discarded.len(), 2, "{discarded:?}");
+}
+
 #[test]
 fn the_builder_runs_tile_coding_with_transition_weights() {
     let mut rng = ChaCha8Rng::seed_from_u64(13);
@@ -288,7 +351,11 @@ fn bad_transition_set_ups_are_refused() {
     assert_eq!(try_build(&s.transition, n), Ok(()));
     assert_eq!(
         try_build(&s.transition, n - 1),
-        Err(Error::CapacityExceeded { capacity: n - 1 })
+        Err(Error::BufferTooSmall {
+            buffer: "transition weights (one per source record)",
+            capacity: n - 1,
+            needed: n,
+        })
     );
     assert_eq!(
         try_build(&s.transition[1..], n),
@@ -324,8 +391,14 @@ fn bad_transition_set_ups_are_refused() {
     .scores_from(&s.models, &mut scores)
     .unwrap()
     .build(Shift { shift: 1.0 }, &mut *storage, &mut rng);
+    // 41 offset tiles per axis (one more than the 40 covering the box) × 8 tilings × 2
+    // actions, named with the storage's `E`.
     assert_eq!(
         result.err(),
-        Some(Error::CapacityExceeded { capacity: 256 })
+        Some(Error::BufferTooSmall {
+            buffer: "fqi (`E`: the approximator's entries, cells × actions)",
+            capacity: 256,
+            needed: 41 * 8 * 2,
+        })
     );
 }

@@ -133,6 +133,7 @@ fn run<T: Real, G, const D: usize, const I: usize>(
     options: Options,
 ) where
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy + core::fmt::Debug,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
     // Configuration.
     let mut config = AwfqiConfig::<T, I>::thesis(b.index(9));

@@ -135,7 +135,7 @@ impl Seed {
 /// The kinds of [`Error`] a call is documented to return, for [`expect_kind`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
-    /// [`Error::CapacityExceeded`].
+    /// [`Error::CapacityExceeded`] or [`Error::BufferTooSmall`]: a capacity the caller chose.
     Capacity,
     /// [`Error::NonFinite`].
     NonFinite,
@@ -154,7 +154,7 @@ pub enum Kind {
 /// The kind of an error.
 pub fn kind(e: &Error) -> Kind {
     match e {
-        Error::CapacityExceeded { .. } => Kind::Capacity,
+        Error::CapacityExceeded { .. } | Error::BufferTooSmall { .. } => Kind::Capacity,
         Error::NonFinite { .. } => Kind::NonFinite,
         Error::InvalidParameter { .. } => Kind::Invalid,
         Error::OutOfRange { .. } => Kind::OutOfRange,

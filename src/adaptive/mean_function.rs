@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::gp::{Gp, Hyperparameters};
 use crate::model::Transition;
-use crate::record_gp::{GpTraining, Output, SubsetRule, fit_gp};
+use crate::record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule, fit_gp};
 use rand_core::Rng;
 
 /// The posterior mean `m(z) = Σᵢ k(z, xᵢ) αᵢ` of a fitted GP with room for `N` inputs of
@@ -65,7 +65,10 @@ impl<T: Real, const N: usize, const I: usize> MeanFunction<T, N, I> {
         training: &GpTraining<T, I>,
         subset: SubsetRule,
         rng: &mut R,
-    ) -> Result<()> {
+    ) -> Result<()>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         fit_gp(gp, records, Output::Reward, subset, training, rng)?;
         self.copy_from(gp)
     }

@@ -58,17 +58,19 @@ pub use mean_function::MeanFunction;
 pub use plausibility::SourceBelief;
 pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
-use crate::awfqi::builder::short;
-use crate::awfqi::transfer::{SourceValues, Transfer, for_each_source};
-use crate::awfqi::{AwfqiConfig, SourceData, StepReport};
+use crate::awfqi::builder::{buffer, short};
+use crate::awfqi::transfer::{ReplanGp, SourceValues, Transfer, for_each_source};
+use crate::awfqi::{AwfqiConfig, SourceData, SourceScales, StepReport};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};
 use crate::gp::{Gp, Hyperparameters, SearchOptions};
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::{GpTraining, InputDim, fit_gp_on, input, visit_posteriors};
+use crate::record_gp::{
+    Dims, GpTraining, InputDim, StatePlusAction, fit_gp_searched, input, visit_posteriors,
+};
 use crate::score::RowSet;
-use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary};
+use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary, WeightTally};
 use rand_core::Rng;
 
 /// Settings of adaptive AWFQI for a `D`-dimensional plant (`I = D + 1`): the AWFQI
@@ -135,7 +137,8 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
     /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
     /// each GP's first fit), on the thesis's AWFQI settings for `budget`
-    /// ([`AwfqiConfig::thesis`]), for a plant that starts in `start`, with episodes of
+    /// ([`AwfqiConfig::thesis`]: Puddle World's scales; for a plant of your own,
+    /// [`AdaptiveConfig::scaled`]), for a plant that starts in `start`, with episodes of
     /// `horizon` steps, exploration `epsilon` (the protocol's 0.3) and state `bounds`.
     ///
     /// With it, on Puddle World: 32-point GPs (`N = 32`) and FQI by a model sweep on 12
@@ -149,7 +152,10 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
         horizon: usize,
         epsilon: T,
         bounds: [(T, T); D],
-    ) -> Self {
+    ) -> Self
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         Self {
             awfqi: AwfqiConfig::thesis(budget),
             sub_batches: 3,
@@ -171,6 +177,27 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
                 isotropic: true,
             }),
         }
+    }
+
+    /// [`AdaptiveConfig::recommended`] on settings derived from the source data
+    /// ([`AwfqiConfig::scaled`], the state bounds from [`SourceScales::bounds`]): the start
+    /// for a plant of your own. Set `awfqi.fqi` to its discount.
+    ///
+    /// Errors: those of [`AwfqiConfig::scaled`].
+    pub fn scaled(
+        budget: usize,
+        scales: &SourceScales<T, D>,
+        start: [T; D],
+        horizon: usize,
+        epsilon: T,
+    ) -> Result<Self>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
+        Ok(Self {
+            awfqi: AwfqiConfig::scaled(budget, scales)?,
+            ..Self::recommended(budget, start, horizon, epsilon, scales.bounds())
+        })
     }
 
     /// Checks every setting.
@@ -229,6 +256,64 @@ pub struct ValidAdaptiveConfig<T, const D: usize, const I: usize> {
     config: AdaptiveConfig<T, D, I>,
 }
 
+impl<T: Copy, const D: usize, const I: usize> ValidAdaptiveConfig<T, D, I> {
+    /// The checked settings (also reachable field by field through `Deref`:
+    /// `valid.sub_batches`).
+    pub fn config(&self) -> &AdaptiveConfig<T, D, I> {
+        &self.config
+    }
+
+    /// The checked settings, by value (to change one and validate again).
+    pub fn into_inner(self) -> AdaptiveConfig<T, D, I> {
+        self.config
+    }
+
+    /// The AWFQI settings it shares (budget, weights, GP training, subset rule, FQI).
+    pub fn awfqi(&self) -> &AwfqiConfig<T, I> {
+        &self.config.awfqi
+    }
+
+    /// Queries per step.
+    pub fn budget(&self) -> usize {
+        self.config.awfqi.budget
+    }
+
+    /// Sub-batches per step.
+    pub fn sub_batches(&self) -> usize {
+        self.config.sub_batches
+    }
+
+    /// Share of each sub-batch spent on verification rollouts.
+    pub fn verify(&self) -> T {
+        self.config.verify
+    }
+
+    /// Candidate rows scored per sub-batch.
+    pub fn candidates(&self) -> usize {
+        self.config.candidates
+    }
+
+    /// The state every verification rollout starts in.
+    pub fn start(&self) -> [T; D] {
+        self.config.start
+    }
+
+    /// Most steps of a verification rollout.
+    pub fn horizon(&self) -> usize {
+        self.config.horizon
+    }
+
+    /// Exploration rate of the verification rollouts.
+    pub fn epsilon(&self) -> T {
+        self.config.epsilon
+    }
+
+    /// `(lower, upper)` of every state coordinate.
+    pub fn bounds(&self) -> [(T, T); D] {
+        self.config.bounds
+    }
+}
+
 impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig<T, D, I> {
     type Target = AdaptiveConfig<T, D, I>;
 
@@ -260,6 +345,8 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     path_len: usize,
     /// The Q-function has been fitted in this run.
     planned: bool,
+    /// GP fits of the current step whose optimum the conditioning policy refused.
+    refused_fits: usize,
     last: Option<StepReport<T, I>>,
     /// `D₀`, the sources, the weights, the GP, the Q-function, the step count.
     run: Transfer<'a, T, G, D, I, N>,
@@ -269,6 +356,7 @@ impl<'a, T, G, const D: usize, const I: usize, const N: usize> AdaptiveAwfqi<'a,
 where
     T: Real,
     G: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
 {
     /// A kernel for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
     /// stored reward posteriors, one mean function per source (`means`, e.g.
@@ -279,8 +367,8 @@ where
     /// ([`Error::InvalidParameter`] `actions`), a row whose action the model lacks
     /// ([`Error::OutOfRange`] `actions`); no sources ([`Error::EmptyData`]), a mean-function
     /// count other than the source count ([`Error::InvalidParameter`] `means`); a buffer
-    /// too short ([`Error::CapacityExceeded`] with its length): `samples` for one budget,
-    /// `weights` for the source records, `candidates` for
+    /// too short ([`Error::BufferTooSmall`] naming it and its const parameter): `samples`
+    /// for one budget, `weights` for the source records, `candidates` for
     /// `min(candidates, rows)`, `path` for the budget, `beliefs` for the sources, `fqi`
     /// for the approximator.
     pub fn new(
@@ -291,7 +379,10 @@ where
         rows: RowSet<'a, T, D>,
         target: G,
         buffers: impl Into<AdaptiveBuffers<'a, T, D, I, N>>,
-    ) -> Result<Self> {
+    ) -> Result<Self>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         let () = InputDim::<D, I>::CHECK;
         let AdaptiveBuffers {
             gp,
@@ -322,12 +413,16 @@ where
         }
         let slots = config.candidates.min(rows.len());
         let budget = config.awfqi.budget;
-        short(samples.len(), budget)?;
-        short(weights.len(), sources.len())?;
-        short(candidates.len(), slots)?;
-        short(path.len(), budget)?;
-        short(beliefs.len(), m)?;
-        let fqi = approximator.into().build(actions, fqi)?;
+        short(samples.len(), budget, buffer::SAMPLES)?;
+        short(weights.len(), sources.len(), buffer::WEIGHTS)?;
+        short(candidates.len(), slots, buffer::CANDIDATES)?;
+        short(path.len(), budget, buffer::PATH)?;
+        short(beliefs.len(), m, buffer::BELIEFS)?;
+        let approximator = approximator.into();
+        if let Some(entries) = approximator.required_entries(actions) {
+            short(fqi.entries.len(), entries, buffer::FQI)?;
+        }
+        let fqi = approximator.build(actions, fqi)?;
         let beliefs = beliefs
             .get_mut(..m)
             .ok_or(Error::CapacityExceeded { capacity: m })?;
@@ -343,6 +438,7 @@ where
             path,
             path_len: 0,
             planned: false,
+            refused_fits: 0,
             last: None,
             run: Transfer::new(target, sources, samples, weights, gp, fqi),
         };
@@ -443,13 +539,14 @@ where
     /// re-plan). The report's GP fields describe the weights' reward GP of the last
     /// re-plan.
     ///
-    /// Errors: `D₀` has no room for `n` more records ([`Error::CapacityExceeded`] with the
-    /// buffer's length; checked before anything is drawn); then the first error of a
+    /// Errors: `D₀` has no room for `n` more records ([`Error::BufferTooSmall`] naming
+    /// `samples` and its `Q`; checked before anything is drawn); then the first error of a
     /// greedy action, a query, a GP fit, a prediction, a weight or FQI (module docs).
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let n = self.config.awfqi.budget;
         self.run.ensure_room(n)?;
         self.path_len = 0;
+        self.refused_fits = 0;
         self.plan(rng)?;
         let s = self.config.sub_batches;
         let mut report = None;
@@ -470,6 +567,7 @@ where
             parameter: "sub_batches",
         })?;
         report.step = self.run.steps;
+        report.queries = n;
         self.last = Some(report);
         Ok(report)
     }
@@ -623,13 +721,16 @@ where
         let run = &mut self.run;
         let mut wr = WeightSummary::new();
         wr.add_ones(run.len);
+        let mut tally = WeightTally::new();
         if run.len == 0 {
             run.fit_q(SourceValues::Unused, None, &config.fqi, rng)?;
             wr.add_ones(run.sources.len());
+            tally.sources.add_ones(run.sources.len());
             self.planned = true;
             self.residual = false;
             self.relabelled = false;
-            return Ok(run.report(&wr, T::ZERO, *run.gp.hyperparameters(), 0));
+            let gp = ReplanGp::none(run.gp);
+            return Ok(run.report(&wr, &tally, gp, self.refused_fits));
         }
         let target = run.samples.get(..run.len).unwrap_or(&[]);
         let relabel = self.config.relabel;
@@ -637,7 +738,7 @@ where
         // target rewards' median there (a zero prior would relabel towards an optimistic 0).
         let centre = if relabel { median(target) } else { T::ZERO };
         // `r − 0` is `r` exactly: without relabelling this is the thesis's zero-mean GP.
-        let lml = fit_gp_on(
+        let fit = fit_gp_searched(
             run.gp,
             target,
             |r| Ok(r.reward - centre),
@@ -645,8 +746,9 @@ where
             &reward_training,
             rng,
         )?;
+        self.refused_fits += usize::from(fit.refused);
         self.last_hyper[REWARD_GP] = Some(*run.gp.hyperparameters());
-        let (hyper, points) = (*run.gp.hyperparameters(), run.gp.len());
+        let gp = ReplanGp::of(run.gp, fit.lml);
         self.relabelled = false;
         let values = if relabel {
             // The per-record values are the relabelled rewards; every weight is 1.
@@ -659,9 +761,16 @@ where
                 run.weights,
             )?;
             wr.add_ones(run.sources.len());
+            tally.sources.add_ones(run.sources.len());
             SourceValues::Rewards
         } else {
-            run.fit_reward_weights(&config.weights, config.noise_subtraction, &mut wr, true)?;
+            run.fit_reward_weights(
+                &config.weights,
+                config.noise_subtraction,
+                &mut wr,
+                &mut tally,
+                true,
+            )?;
             SourceValues::Weights
         };
         run.fit_q(values, None, &config.fqi, rng)?;
@@ -672,7 +781,7 @@ where
         plausibility::update(self.beliefs, config.weights.noise_variance())?;
         let (means, beliefs) = (self.means, &*self.beliefs);
         let target = run.samples.get(..run.len).unwrap_or(&[]);
-        fit_gp_on(
+        let residual = fit_gp_searched(
             run.gp,
             target,
             |r| {
@@ -683,9 +792,10 @@ where
             &residual_training,
             rng,
         )?;
+        self.refused_fits += usize::from(residual.refused);
         self.last_hyper[RESIDUAL_GP] = Some(*run.gp.hyperparameters());
         self.residual = true;
-        Ok(run.report(&wr, lml, hyper, points))
+        Ok(run.report(&wr, &tally, gp, self.refused_fits))
     }
 
     /// The training of GP `which` ([`REWARD_GP`], [`RESIDUAL_GP`]) by [`Refit`].
@@ -717,7 +827,10 @@ struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {
     beliefs: &'k mut [SourceBelief<T>],
 }
 
-impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N> {
+impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N>
+where
+    Dims<D, I>: StatePlusAction,
+{
     /// Adds `record`'s clipped errors to the beliefs and appends it to `run`'s `D₀`.
     ///
     /// Errors: `D₀` full ([`Error::CapacityExceeded`], checked first), those of a mean
@@ -769,7 +882,10 @@ fn relabel_rewards<T: Real, const N: usize, const D: usize, const I: usize>(
     v: T,
     noise: NoiseSubtraction,
     out: &mut [T],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     for_each_source(sources, out, |records, _, mine| {
         if records.is_empty() {
             return Ok(());
@@ -844,3 +960,9 @@ fn spread<T: Real, const N: usize, const I: usize>(
 
 #[cfg(test)]
 mod tests;
+
+/// The embedding example of `docs/embedded-adaptive.md`, compiled and run as a doctest so
+/// that the page's code stays the code that works.
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/embedded-adaptive.md")]
+struct EmbeddedAdaptiveDoc;

@@ -7,6 +7,7 @@ use crate::float::Real;
 use crate::fqi::{FqiEntry, QStorage};
 use crate::gp::Gp;
 use crate::model::Transition;
+use crate::record_gp::{Dims, StatePlusAction};
 
 /// All the memory an [`AdaptiveAwfqi`](super::AdaptiveAwfqi) run writes, as one block:
 /// the target GP (`N` points of dimension `I = D + 1`), `Q` target samples (steps ×
@@ -52,8 +53,11 @@ impl<
     const M: usize,
 > AdaptiveStorage<T, D, I, N, Q, W, C, E, B, M>
 {
-    /// Empty, all-zero storage.
-    pub const fn new() -> Self {
+    /// Empty, all-zero storage. `I` must be `D + 1` ([`Dims`]).
+    pub const fn new() -> Self
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         Self {
             gp: Gp::zeroed(),
             samples: [Transition::EMPTY; Q],
@@ -91,6 +95,8 @@ impl<
     const B: usize,
     const M: usize,
 > Default for AdaptiveStorage<T, D, I, N, Q, W, C, E, B, M>
+where
+    Dims<D, I>: StatePlusAction,
 {
     fn default() -> Self {
         Self::new()

@@ -246,7 +246,14 @@ fn construction_checks_the_parts_before_anything_changes() {
         target,
         &mut *small,
     );
-    assert_eq!(e.err(), Some(Error::CapacityExceeded { capacity: 119 }));
+    assert_eq!(
+        e.err(),
+        Some(Error::BufferTooSmall {
+            buffer: "weights (`W`: one per source record)",
+            capacity: 119,
+            needed: 120,
+        })
+    );
     let pairs = [([1.0, 1.0], 4)];
     let e = AdaptiveAwfqi::new(
         valid,
@@ -362,7 +369,11 @@ fn a_full_buffer_refuses_the_step_before_any_query() {
     let beliefs = kernel.beliefs().to_vec();
     assert_eq!(
         kernel.step(&mut rng).err(),
-        Some(Error::CapacityExceeded { capacity: 12 })
+        Some(Error::BufferTooSmall {
+            buffer: "samples (`Q`: steps × budget target records)",
+            capacity: 12,
+            needed: 24,
+        })
     );
     assert_eq!(kernel.target_samples(), &before[..]);
     assert_eq!(kernel.beliefs(), &beliefs[..]);

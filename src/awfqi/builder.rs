@@ -17,7 +17,7 @@ use crate::float::Real;
 use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::{InputDim, Output, fit_gp, predict_posteriors};
+use crate::record_gp::{Dims, InputDim, Output, StatePlusAction, fit_gp, predict_posteriors};
 use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
 use crate::weights::{Posterior, WeightParams};
 use rand_core::Rng;
@@ -61,7 +61,11 @@ impl<
 > AwfqiStorage<T, D, I, N, Q, W, R, E>
 {
     /// Empty, all-zero storage (the GP's hyperparameters are set when a kernel is built).
-    pub const fn new() -> Self {
+    /// `I` must be `D + 1` ([`Dims`]).
+    pub const fn new() -> Self
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         Self {
             gp: Gp::zeroed(),
             samples: [Transition::EMPTY; Q],
@@ -93,6 +97,8 @@ impl<
     const R: usize,
     const E: usize,
 > Default for AwfqiStorage<T, D, I, N, Q, W, R, E>
+where
+    Dims<D, I>: StatePlusAction,
 {
     fn default() -> Self {
         Self::new()
@@ -180,7 +186,10 @@ pub struct AwfqiBuilder<'a, T, const D: usize, const I: usize> {
     transitions: Option<TransitionWeighting<'a, T>>,
 }
 
-impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
+impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
     /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
     /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.
@@ -189,7 +198,10 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
         approximator: impl Into<Approximator<T, D>>,
         sources: &'a [&'a [Transition<[T; D], T>]],
         candidates: RowSet<'a, T, D>,
-    ) -> Self {
+    ) -> Self
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         let () = InputDim::<D, I>::CHECK;
         Self {
             config,
@@ -280,9 +292,9 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
     /// ([`Error::InvalidParameter`] / [`Error::OutOfRange`] `actions`); `samples` unable to
     /// hold one step, `weights` or the posterior storage shorter than the source records,
     /// `alias` or the score storage shorter than the candidate rows, `fqi` shorter than
-    /// the approximator's entries ([`Error::CapacityExceeded`] with the short length); with
-    /// transition weights, a weight buffer shorter than the source records
-    /// ([`Error::CapacityExceeded`]), a posterior count other than `D` per record
+    /// the approximator's entries ([`Error::BufferTooSmall`] naming the buffer and its
+    /// const parameter, with its length and the length needed); with transition weights, a
+    /// weight buffer shorter than the source records ([`Error::BufferTooSmall`]), a posterior count other than `D` per record
     /// ([`Error::InvalidParameter`] `transition_posteriors`), a non-finite posterior or a
     /// negative std ([`Error::NonFinite`] / [`Error::InvalidParameter`]
     /// `transition_posteriors`); then those of
@@ -325,11 +337,14 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
                 parameter: "actions",
             });
         }
+        if let Some(entries) = self.approximator.required_entries(actions) {
+            short(fqi.len(), entries, buffer::FQI)?;
+        }
         let fqi = self.approximator.build(actions, fqi)?;
         let transitions = match self.transitions {
             None => None,
             Some(t) => {
-                short(t.weights.len(), source_records)?;
+                short(t.weights.len(), source_records, buffer::TRANSITION_WEIGHTS)?;
                 check_transition_posteriors::<T, D>(t.posteriors, source_records)?;
                 let weights =
                     t.weights
@@ -344,16 +359,16 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
                 })
             }
         };
-        short(samples.len(), config.budget)?;
-        short(weights.len(), source_records)?;
-        short(alias.len(), rows)?;
+        short(samples.len(), config.budget, buffer::SAMPLES)?;
+        short(weights.len(), source_records, buffer::WEIGHTS)?;
+        short(alias.len(), rows, buffer::ALIAS)?;
         match &self.posteriors {
             Posteriors::Missing if source_records > 0 => {
                 return Err(Error::InvalidParameter {
                     parameter: "posteriors",
                 });
             }
-            Posteriors::Fit(storage) => short(storage.len(), source_records)?,
+            Posteriors::Fit(storage) => short(storage.len(), source_records, buffer::POSTERIORS)?,
             _ => {}
         }
         match &self.scores {
@@ -362,8 +377,8 @@ impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I> {
                     parameter: "scores",
                 });
             }
-            ScoreValues::Stored(values) => short(values.len(), rows)?,
-            ScoreValues::Realistic(storage) => short(storage.len(), rows)?,
+            ScoreValues::Stored(values) => short(values.len(), rows, buffer::SCORES)?,
+            ScoreValues::Realistic(storage) => short(storage.len(), rows, buffer::SCORES)?,
         }
 
         // Source GPs: posteriors and/or realistic scores, one source at a time.
@@ -462,11 +477,37 @@ fn check_transition_posteriors<T: Real, const D: usize>(
     Ok(())
 }
 
-/// `Err(CapacityExceeded { capacity: have })` when `have < need`.
-pub(crate) fn short(have: usize, need: usize) -> Result<()> {
+/// `Err(BufferTooSmall { buffer, capacity: have, needed: need })` when `have < need`.
+pub(crate) fn short(have: usize, need: usize, buffer: &'static str) -> Result<()> {
     if have < need {
-        Err(Error::CapacityExceeded { capacity: have })
+        Err(Error::BufferTooSmall {
+            buffer,
+            capacity: have,
+            needed: need,
+        })
     } else {
         Ok(())
     }
+}
+
+/// `Ok` when `len + more` records fit in the target-sample buffer of `capacity`, else the
+/// [`Error::BufferTooSmall`] naming it (a run longer than its `Q` was sized for).
+pub(crate) fn room_for(len: usize, more: usize, capacity: usize) -> Result<()> {
+    let needed = len.saturating_add(more);
+    short(capacity, needed, buffer::SAMPLES)
+}
+
+/// The names of the lent buffers in errors ([`Error::BufferTooSmall`]), with the const
+/// parameter of [`AwfqiStorage`] and [`crate::AdaptiveStorage`] that sizes each.
+pub(crate) mod buffer {
+    pub(crate) const SAMPLES: &str = "samples (`Q`: steps × budget target records)";
+    pub(crate) const WEIGHTS: &str = "weights (`W`: one per source record)";
+    pub(crate) const ALIAS: &str = "alias (`R`: one entry per candidate row)";
+    pub(crate) const FQI: &str = "fqi (`E`: the approximator's entries, cells × actions)";
+    pub(crate) const POSTERIORS: &str = "posteriors (one per source record)";
+    pub(crate) const SCORES: &str = "scores (one per candidate row)";
+    pub(crate) const TRANSITION_WEIGHTS: &str = "transition weights (one per source record)";
+    pub(crate) const CANDIDATES: &str = "candidates (`C`: min(candidates, rows))";
+    pub(crate) const PATH: &str = "path (`B`: the budget)";
+    pub(crate) const BELIEFS: &str = "beliefs (`M`: one per source)";
 }

@@ -223,8 +223,10 @@ fn a_step_queries_weighs_and_fits_as_specified() {
     let before = rng.clone();
     assert_eq!(
         kernel.step(&mut rng).err(),
-        Some(Error::CapacityExceeded {
-            capacity: 2 * budget
+        Some(Error::BufferTooSmall {
+            buffer: "samples (`Q`: steps × budget target records)",
+            capacity: 2 * budget,
+            needed: 3 * budget,
         })
     );
     assert_eq!(rng, before);
@@ -365,26 +367,41 @@ fn the_builder_checks_sizes_and_stages_before_fitting() {
     let ok = || Heap::<8>::new(10, n_source, rows.len(), 36);
 
     assert_eq!(build(complete(), &mut ok()), (Ok(()), true));
+    // Each buffer too short names itself and the const parameter of `AwfqiStorage` that
+    // sizes it, with its length and the length needed.
+    let too_small = |buffer, capacity, needed| Error::BufferTooSmall {
+        buffer,
+        capacity,
+        needed,
+    };
     let cases: [(Heap<8>, Error); 4] = [
         (
             Heap::new(10, n_source - 1, rows.len(), 36),
-            Error::CapacityExceeded {
-                capacity: n_source - 1,
-            },
+            too_small(
+                "weights (`W`: one per source record)",
+                n_source - 1,
+                n_source,
+            ),
         ),
         (
             Heap::new(9, n_source, rows.len(), 36),
-            Error::CapacityExceeded { capacity: 9 },
+            too_small("samples (`Q`: steps × budget target records)", 9, 10),
         ),
         (
             Heap::new(10, n_source, rows.len() - 1, 36),
-            Error::CapacityExceeded {
-                capacity: rows.len() - 1,
-            },
+            too_small(
+                "alias (`R`: one entry per candidate row)",
+                rows.len() - 1,
+                rows.len(),
+            ),
         ),
         (
             Heap::new(10, n_source, rows.len(), 35),
-            Error::CapacityExceeded { capacity: 35 },
+            too_small(
+                "fqi (`E`: the approximator's entries, cells × actions)",
+                35,
+                36,
+            ),
         ),
     ];
     for (mut heap, error) in cases {
@@ -423,8 +440,10 @@ fn the_builder_checks_sizes_and_stages_before_fitting() {
             &mut ok()
         ),
         (
-            Err(Error::CapacityExceeded {
-                capacity: n_source - 1
+            Err(Error::BufferTooSmall {
+                buffer: "posteriors (one per source record)",
+                capacity: n_source - 1,
+                needed: n_source,
             }),
             true
         )
@@ -438,8 +457,10 @@ fn the_builder_checks_sizes_and_stages_before_fitting() {
             &mut ok()
         ),
         (
-            Err(Error::CapacityExceeded {
-                capacity: rows.len() - 1
+            Err(Error::BufferTooSmall {
+                buffer: "scores (one per candidate row)",
+                capacity: rows.len() - 1,
+                needed: rows.len(),
             }),
             true
         )

@@ -11,8 +11,8 @@ use crate::float::Real;
 use crate::fqi::{FqiConfig, QFunction, SampleSet};
 use crate::gp::{Gp, Hyperparameters};
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::visit_posteriors;
-use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary};
+use crate::record_gp::{Dims, StatePlusAction, visit_posteriors};
+use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
 use rand_core::Rng;
 
 /// The state of a transfer run that every kernel has (module docs). Its fields are the
@@ -95,15 +95,9 @@ where
 
     /// Checks, before a step draws anything, that `D₀` has room for `budget` more records.
     ///
-    /// Errors: no room ([`Error::CapacityExceeded`] with the buffer's length).
+    /// Errors: no room ([`Error::BufferTooSmall`] naming `samples` and its `Q`).
     pub(crate) fn ensure_room(&self, budget: usize) -> Result<()> {
-        self.len
-            .checked_add(budget)
-            .filter(|&e| e <= self.samples.len())
-            .map(|_| ())
-            .ok_or(Error::CapacityExceeded {
-                capacity: self.samples.len(),
-            })
+        super::builder::room_for(self.len, budget, self.samples.len())
     }
 
     /// Appends `record` to `D₀` (nothing when it is full: [`Transfer::ensure_room`] checks
@@ -116,7 +110,7 @@ where
     }
 
     /// The reward weights of every source record under the target GP (§7.2 steps 2–3) into
-    /// the per-record values, each source's also added to `summary`.
+    /// the per-record values, each source's also added to `summary` and `tally`.
     ///
     /// With `once`, each record is predicted once (see [`reward_weights`]).
     ///
@@ -126,8 +120,12 @@ where
         params: &WeightParams<T>,
         noise: NoiseSubtraction,
         summary: &mut WeightSummary<T>,
+        tally: &mut WeightTally<T>,
         once: bool,
-    ) -> Result<()> {
+    ) -> Result<()>
+    where
+        Dims<D, I>: StatePlusAction,
+    {
         reward_weights(
             self.gp,
             &self.sources,
@@ -135,6 +133,7 @@ where
             noise,
             self.weights,
             summary,
+            tally,
             once,
         )
     }
@@ -170,38 +169,87 @@ where
         )
     }
 
-    /// A step's report with the reward weights' summary `wr` and the weights' GP as it was
-    /// after its fit (`lml`, `hyper`, `points`); the transition weights are all 1.
+    /// A step's report with the reward weights' summary `wr` over all records and `tally`
+    /// over the source records, the weights' GP as it was after its fit, and the GP fits
+    /// whose optimum was `refused`; the transition weights are all 1 and the queries 0 (the
+    /// step fills them in).
     pub(crate) fn report(
         &self,
         wr: &WeightSummary<T>,
-        lml: T,
-        hyper: Hyperparameters<T, I>,
-        points: usize,
+        tally: &WeightTally<T>,
+        gp: ReplanGp<T, I>,
+        refused: usize,
     ) -> StepReport<T, I> {
         StepReport {
             step: self.steps,
+            queries: 0,
             n_target_samples: self.len,
             n_source_samples: self.sources.len(),
-            gp_points: points,
-            gp_log_likelihood: lml,
-            gp_hyperparameters: hyper,
+            gp_points: gp.points,
+            gp_log_likelihood: gp.lml,
+            gp_hyperparameters: gp.hyper,
+            gp_jitter: gp.jitter,
+            gp_condition: gp.condition,
+            gp_refused_fits: refused,
             wr_mean: wr.mean(),
             wr_eff: wr.effective_sample_size(),
+            wr_source_eff: tally.sources.effective_sample_size(),
+            wr_discarded: tally.discarded,
+            wr_capped: tally.capped,
             ws_mean: T::ONE,
             ws_eff: wr.count(),
+            ws_source_eff: T::from_usize(self.sources.len()),
+            ws_discarded: 0,
+            ws_capped: 0,
+        }
+    }
+}
+
+/// The weights' reward GP of a step or re-plan as its report describes it, taken right
+/// after its fit (the GP may hold another model by the end of the step).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ReplanGp<T, const I: usize> {
+    pub(crate) lml: T,
+    pub(crate) hyper: Hyperparameters<T, I>,
+    pub(crate) points: usize,
+    pub(crate) jitter: T,
+    pub(crate) condition: T,
+}
+
+impl<T: Real, const I: usize> ReplanGp<T, I> {
+    /// `gp` as it is now, with the log marginal likelihood its search reached.
+    pub(crate) fn of<const N: usize>(gp: &Gp<T, N, I>, lml: T) -> Self {
+        Self {
+            lml,
+            hyper: *gp.hyperparameters(),
+            points: gp.len(),
+            jitter: gp.jitter(),
+            condition: gp.condition_estimate(),
+        }
+    }
+
+    /// No fit yet: the GP's hyperparameters, no points, no jitter, condition 1.
+    pub(crate) fn none<const N: usize>(gp: &Gp<T, N, I>) -> Self {
+        Self {
+            lml: T::ZERO,
+            hyper: *gp.hyperparameters(),
+            points: 0,
+            jitter: T::ZERO,
+            condition: T::ONE,
         }
     }
 }
 
 /// The reward weights of every source record under the target GP `gp` (§7.2 steps 2–3),
 /// one noise-subtraction batch per source, into `weights` (source after source, record
-/// after record), each source's weights also added to `summary`.
+/// after record), each source's weights also added to `summary` and to `tally` (with the
+/// records the variance rule discarded and those at the cap).
 ///
 /// Errors: `weights` shorter than the source records ([`Error::CapacityExceeded`] with its
 /// length); those of the predictions and of [`WeightParams::weight`].
 /// With `once`, each record is predicted once ([`crate::record_gp::map_posteriors`]: the
 /// same weights up to rounding, at about half the cost) instead of twice (the thesis path).
+#[allow(clippy::too_many_arguments)] // the run state's parts, lent one by one to share the borrow
 pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     gp: &Gp<T, N, I>,
     sources: &SourceData<'_, T, D>,
@@ -209,8 +257,12 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
     noise: NoiseSubtraction,
     weights: &mut [T],
     summary: &mut WeightSummary<T>,
+    tally: &mut WeightTally<T>,
     once: bool,
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     for_each_source(sources, weights, |records, posteriors, mine| {
         if once {
             if !records.is_empty() {
@@ -224,7 +276,9 @@ pub(crate) fn reward_weights<T: Real, const N: usize, const D: usize, const I: u
         } else {
             source_weights(gp, records, posteriors, params, noise, mine)?;
         }
-        summary.add(mine)
+        summary.add(mine)?;
+        let discarded = posteriors.iter().filter(|&&p| params.discards(p)).count();
+        tally.add(mine, params.max_weight(), discarded)
     })
 }
 
@@ -289,7 +343,10 @@ fn source_weights<T: Real, const N: usize, const D: usize, const I: usize>(
     params: &WeightParams<T>,
     noise: NoiseSubtraction,
     out: &mut [T],
-) -> Result<()> {
+) -> Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     if records.is_empty() {
         return Ok(());
     }

@@ -62,6 +62,43 @@ impl<'a, T, const D: usize> From<&'a mut [FqiEntry<T>]> for QStorage<'a, T, D> {
     }
 }
 
+/// An array of entries lends itself as a slice would (`&mut [FqiEntry<f32>; 484]`).
+impl<'a, T, const D: usize, const E: usize> From<&'a mut [FqiEntry<T>; E]> for QStorage<'a, T, D> {
+    fn from(entries: &'a mut [FqiEntry<T>; E]) -> Self {
+        Self::from(entries.as_mut_slice())
+    }
+}
+
+/// A tree storage block lends itself as [`TreeStorage::storage`](super::TreeStorage::storage)
+/// does, so `build(actions, &mut trees)` reads like `build(actions, &mut entries)`.
+impl<'a, T: Real, const D: usize, const R: usize, const N: usize>
+    From<&'a mut super::TreeStorage<T, D, R, N>> for QStorage<'a, T, D>
+{
+    fn from(storage: &'a mut super::TreeStorage<T, D, R, N>) -> Self {
+        storage.storage()
+    }
+}
+
+/// A kernel-averaging storage block lends itself as
+/// [`KnnStorage::storage`](super::KnnStorage::storage) does.
+impl<'a, T: Real, const D: usize, const R: usize, const L: usize>
+    From<&'a mut super::KnnStorage<T, D, R, L>> for QStorage<'a, T, D>
+{
+    fn from(storage: &'a mut super::KnnStorage<T, D, R, L>) -> Self {
+        storage.storage()
+    }
+}
+
+/// A model sweep's storage block lends itself as
+/// [`SweepStorage::storage`](super::SweepStorage::storage) does.
+impl<'a, T: Real, const D: usize, const E: usize, const K: usize>
+    From<&'a mut super::SweepStorage<T, D, E, K>> for QStorage<'a, T, D>
+{
+    fn from(storage: &'a mut super::SweepStorage<T, D, E, K>) -> Self {
+        storage.storage()
+    }
+}
+
 /// Which approximator, and its geometry: what a caller chooses before storage exists.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -125,8 +162,22 @@ impl<T: Real, const D: usize> Approximator<T, D> {
         }
     }
 
-    /// A Q-function that is 0 everywhere in `storage` (a slice of [`FqiEntry`] for a table
-    /// or tiles).
+    /// A Q-function that is 0 everywhere in `storage`: for a table or tiles, entries as an
+    /// array or a slice (`&mut [FqiEntry<T>; E]`, `&mut [FqiEntry<T>]`); for trees or kernel
+    /// averaging or a model sweep, a [`TreeStorage`](super::TreeStorage),
+    /// [`KnnStorage`](super::KnnStorage) or [`SweepStorage`](super::SweepStorage) block (or
+    /// its `storage()`); any [`QStorage`].
+    ///
+    /// ```
+    /// use awfqi::{Approximator, CellGrid, FqiEntry};
+    /// # fn main() -> awfqi::Result<()> {
+    /// let mut entries = [FqiEntry::<f32>::EMPTY; 4 * 4 * 2]; // 4 × 4 cells, 2 actions
+    /// let grid = CellGrid::cube(0.0, 1.0, 4)?;
+    /// let q = Approximator::Table(grid).build(2, &mut entries)?; // the array itself
+    /// assert_eq!(q.value([0.3, 0.9], 1)?, 0.0);
+    /// # Ok(())
+    /// # }
+    /// ```
     ///
     /// Errors: those of [`TabularFqi::new`], [`TileFqi::new`], [`KnnFqi::new`] or
     /// [`TreeFqi::new`].

@@ -67,6 +67,7 @@ pub mod search;
 
 pub use conditioning::{BASE_JITTER, Conditioning};
 pub use covariance::Hyperparameters;
+pub(crate) use regression::Searched;
 pub use regression::{Gp, JITTER_ESCALATIONS, Prediction, WhenFull};
 pub use search::{HyperparameterBounds, MAX_SEARCH_PARAMETERS, SearchOptions};
 

@@ -22,6 +22,15 @@ pub const JITTER_ESCALATIONS: usize = 4;
 /// `ln 2π`.
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
+/// What a hyperparameter search reached: the log marginal likelihood and whether the
+/// likelihood's optimum was refused by the conditioning policy (the GP then holds the best
+/// evaluated point the policy trusts: an honest fit, not the best one).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Searched<T> {
+    pub(crate) lml: T,
+    pub(crate) refused: bool,
+}
+
 /// The jitter of escalation `level` (0 = the policy's base jitter) for signal variance `c`.
 fn jitter_at<T: Real>(level: usize, c: T, policy: &Conditioning<T>) -> T {
     if level == 0 {
@@ -193,7 +202,7 @@ pub struct Prediction<T> {
 /// prediction costs O(n·D + n²) and the log marginal likelihood O(n).
 ///
 /// **Memory** (all inline, no heap):
-/// `size_of::<T>() · (N² + N·(D + 2) + D + 4) + 2 · size_of::<usize>() + 1`, rounded up to the
+/// `size_of::<T>() · (N² + N·(D + 2) + D + 4) + 2 · size_of::<usize>() + 2`, rounded up to the
 /// alignment; see the table in the [module docs](super). [`Gp::predict`] also uses
 /// `N · size_of::<T>()` bytes of stack. For large `N` avoid moving a `Gp` through the stack
 /// of a microcontroller: build it in place in a `static` with [`Gp::empty`] and fill it with
@@ -654,6 +663,17 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         options: &SearchOptions,
         rng: &mut R,
     ) -> Result<T> {
+        self.search(bounds, options, rng).map(|s| s.lml)
+    }
+
+    /// [`Gp::optimize_hyperparameters`], also saying whether the optimum was refused by the
+    /// conditioning policy (and the best trusted point kept instead).
+    pub(crate) fn search<R: Rng + ?Sized>(
+        &mut self,
+        bounds: &HyperparameterBounds<T, D>,
+        options: &SearchOptions,
+        rng: &mut R,
+    ) -> Result<Searched<T>> {
         options.validate()?;
         let space = LogBox::new(bounds, options.isotropic)?;
         let n = self.len;
@@ -708,7 +728,12 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         if value.is_finite() {
             // On error `set_hyperparameters` keeps (and refactorises) the previous ones.
             let refused = match self.set_hyperparameters(space.hyperparameters::<D>(&best)) {
-                Ok(()) => return self.log_marginal_likelihood(),
+                Ok(()) => {
+                    return self.log_marginal_likelihood().map(|lml| Searched {
+                        lml,
+                        refused: false,
+                    });
+                }
                 Err(e) => e,
             };
             // The fallback needs the data: when even the previous hyperparameters could not
@@ -720,6 +745,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
                 {
                     self.set_hyperparameters(space.hyperparameters::<D>(&theta))?;
                     self.log_marginal_likelihood()
+                        .map(|lml| Searched { lml, refused: true })
                 }
                 (e, _) => Err(e),
             };

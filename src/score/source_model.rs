@@ -5,7 +5,7 @@ use crate::error::Result;
 use crate::float::Real;
 use crate::gp::Gp;
 use crate::model::{SourceMeans, SourceModel};
-use crate::record_gp::{InputDim, input};
+use crate::record_gp::{Dims, InputDim, StatePlusAction, input};
 
 /// The realistic model of one source (§11.2): the posterior means of GPs fitted on that
 /// source's records only, at `z = (s, a)` (`I = D + 1`).
@@ -30,6 +30,8 @@ impl<'g, T: Real, const N: usize, const D: usize, const I: usize> GpSourceModel<
 
 impl<T: Real, const N: usize, const D: usize, const I: usize> SourceModel<T, D>
     for GpSourceModel<'_, T, N, D, I>
+where
+    Dims<D, I>: StatePlusAction,
 {
     fn predict(&self, state: [T; D], action: usize) -> Result<SourceMeans<T, D>> {
         let z = input(state, action);

@@ -8,7 +8,7 @@ use crate::error::{ensure_all_finite, ensure_finite};
 use crate::float::Real;
 use crate::gp::Gp;
 use crate::model::{SourceModel, Transition};
-use crate::record_gp::{GpTraining, Output, SubsetRule, fit_gp, input};
+use crate::record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule, fit_gp, input};
 use rand_core::Rng;
 
 /// The scores of one row: population variances over the sources of the mean reward and of
@@ -34,6 +34,10 @@ impl<T: Real, const D: usize> Scores<T, D> {
         reward: T::ZERO,
         next_state: [T::ZERO; D],
     };
+
+    /// [`Scores::ZERO`] under the name every buffer element type of the crate shares
+    /// (`Transition::EMPTY`, `Posterior::EMPTY`, `FqiEntry::EMPTY`, …).
+    pub const EMPTY: Self = Self::ZERO;
 
     /// `V_r + Σ_k V_k`, the table's last column.
     pub fn total(&self) -> T {
@@ -208,6 +212,7 @@ impl<'a, T: Real, const D: usize> ScoreTable<'a, T, D> {
     where
         R: Rng + ?Sized,
         F: FnMut(usize, &Gp<T, N, I>) -> Result<()>,
+        Dims<D, I>: StatePlusAction,
     {
         if sources.is_empty() {
             return Err(Error::EmptyData);

@@ -262,7 +262,7 @@ fn realistic_table_one_gp_at_a_time_equals_the_table_of_all_gps_bit_for_bit() {
                         crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
                         crate::rng::uniform::<f64, _>(&mut rng) * 10.0,
                     ];
-                    crate::env::GenerativeModel::query(w, s, i % 4, &mut rng).unwrap()
+                    crate::model::GenerativeModel::query(w, s, i % 4, &mut rng).unwrap()
                 })
                 .collect()
         })

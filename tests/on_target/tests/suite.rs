@@ -1123,11 +1123,14 @@ mod tests {
         let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
         let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
         for rewards in [RewardModel::PerAction, RewardModel::Pooled] {
-            let sweep = ModelSweep::cube(0.5f32, 4.5, 4).unwrap().with_rewards(rewards);
+            let sweep = ModelSweep::cube(0.5f32, 4.5, 4)
+                .unwrap()
+                .with_rewards(rewards);
             let mut entries = [SweepEntry::<f32, 1>::EMPTY; 5 * 2];
             let mut nodes = [SweepNode::<f32>::EMPTY; 5];
             let mut fqi = SweepFqi::new(sweep, 2, &mut entries, &mut nodes).unwrap();
-            fqi.fit(&[SampleSet::unweighted(&samples)], &config).unwrap();
+            fqi.fit(&[SampleSet::unweighted(&samples)], &config)
+                .unwrap();
             for c in 0..4 {
                 let right = fqi.value(at(c), 0).unwrap() as f64;
                 assert!(close(right, v(c), 1e-5, 1e-5), "Q({}, right) {}", c, right);

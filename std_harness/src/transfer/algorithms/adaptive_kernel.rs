@@ -24,8 +24,8 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use super::adaptive::AdaptiveOptions;
 use super::awfqi_kernel::{
-    GP_POINTS, KernelQFunction, KernelSetup, Record32, SweepKnobs, T, reward_gp_summary, row_set,
-    to_f64,
+    GP_POINTS, KernelQFunction, KernelSetup, Record32, SweepKnobs, T, print_warnings,
+    reward_gp_summary, row_set, to_f64,
 };
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
@@ -168,6 +168,7 @@ struct AdaptiveKernelLearner<'a, const N: usize> {
 impl<const N: usize> Learner for AdaptiveKernelLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.kernel.step(rng)?;
+        print_warnings("awfqi-adaptive-kernel", &report);
         let new = &self.kernel.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
         Ok(Diagnostics {

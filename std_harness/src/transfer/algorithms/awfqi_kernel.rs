@@ -549,6 +549,7 @@ impl<'a, const N: usize> KernelLearner<'a, N> {
 impl<const N: usize> Learner for KernelLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.kernel.step(rng)?;
+        print_warnings("awfqi-kernel", &report);
         let new = &self.kernel.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
         Ok(Diagnostics {
@@ -569,6 +570,14 @@ impl<const N: usize> Learner for KernelLearner<'_, N> {
 
     fn target_samples(&self) -> &[Record] {
         &self.collected
+    }
+}
+
+/// Prints a kernel step's warnings ([`awfqi::StepReport::warnings`]) to stderr, one line
+/// each, naming the algorithm and the step (shared by the embedded learners).
+pub(super) fn print_warnings<const I: usize>(algorithm: &str, report: &awfqi::StepReport<T, I>) {
+    for warning in report.warnings() {
+        eprintln!("{algorithm}, step {}: warning: {warning}", report.step);
     }
 }
 

@@ -24,7 +24,6 @@ pub extern "C" fn m4_counts_mark() {
     unsafe { core::arch::asm!("nop", options(nomem, nostack, preserves_flags)) };
 }
 
-
 fn run() -> Result<()> {
     m4_counts_mark();
     m4_counts_mark();
@@ -97,7 +96,14 @@ fn parts<const N: usize>(
     let mut gp = kernel.gp().clone();
     let thesis = config.awfqi.gp_training;
     measure("gp_thesis_search", 1, || {
-        fit_gp(&mut gp, target, Output::Reward, config.awfqi.subset, &thesis, rng)
+        fit_gp(
+            &mut gp,
+            target,
+            Output::Reward,
+            config.awfqi.subset,
+            &thesis,
+            rng,
+        )
     })?;
     if let awfqi::adaptive::Refit::Warm(search) = config.refit {
         let warm = GpTraining {
@@ -106,7 +112,14 @@ fn parts<const N: usize>(
             ..thesis
         };
         measure("gp_warm_refit", 1, || {
-            fit_gp(&mut gp, target, Output::Reward, config.awfqi.subset, &warm, rng)
+            fit_gp(
+                &mut gp,
+                target,
+                Output::Reward,
+                config.awfqi.subset,
+                &warm,
+                rng,
+            )
         })?;
     }
     let mut i = 0u16;

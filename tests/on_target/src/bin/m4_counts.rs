@@ -127,11 +127,11 @@ fn run() -> Result<()> {
         ),
     ];
     let fqi = config.fqi;
-    let mut q = Approximator::Table(grid).build(PUDDLE_ACTIONS, fqi_entries)?;
+    let mut q = Approximator::Table(grid).build(PUDDLE_ACTIONS, &mut fqi_entries[..])?;
     for (label, iterations) in [("fqi_1_iteration", 1), ("fqi_60_iterations", 60)] {
         let cfg = FqiConfig::new(fqi.discount(), iterations, fqi.empty_cells())?
             .with_min_weight(fqi.min_weight())?;
-        measure(label, 1, || q.fit(&sets, &cfg))?;
+        measure(label, 1, || q.fit(&sets, &cfg, &mut rng))?;
     }
     Ok(())
 }

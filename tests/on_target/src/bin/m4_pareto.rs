@@ -121,14 +121,59 @@ fn run() -> Result<()> {
     }
     let with = |q| AdaptiveRun { q, ..rec };
     config!("rec", 32, 250, 0, Sweep12, rec);
-    config!("peraction", 32, 250, 0, Sweep12, with(AdaptiveQ::Sweep(12, PerAction, 0.0)));
-    config!("backfilled", 32, 250, 0, Sweep12, with(AdaptiveQ::Sweep(12, Backfilled, 0.0)));
-    config!("thesissearch", 32, 250, 0, Sweep12, AdaptiveRun { refit: None, ..rec });
+    config!(
+        "peraction",
+        32,
+        250,
+        0,
+        Sweep12,
+        with(AdaptiveQ::Sweep(12, PerAction, 0.0))
+    );
+    config!(
+        "backfilled",
+        32,
+        250,
+        0,
+        Sweep12,
+        with(AdaptiveQ::Sweep(12, Backfilled, 0.0))
+    );
+    config!(
+        "thesissearch",
+        32,
+        250,
+        0,
+        Sweep12,
+        AdaptiveRun { refit: None, ..rec }
+    );
     config!("n64", 64, 250, 0, Sweep12, rec);
     config!("n16", 16, 250, 0, Sweep12, rec);
-    config!("c4000", 32, 4000, 0, Sweep12, AdaptiveRun { candidates: 4000, ..rec });
-    config!("cells20", 32, 250, 0, Sweep20, with(AdaptiveQ::Sweep(20, Pooled, 0.0)));
-    config!("cells16", 32, 250, 0, Sweep16, with(AdaptiveQ::Sweep(16, Pooled, 0.0)));
+    config!(
+        "c4000",
+        32,
+        4000,
+        0,
+        Sweep12,
+        AdaptiveRun {
+            candidates: 4000,
+            ..rec
+        }
+    );
+    config!(
+        "cells20",
+        32,
+        250,
+        0,
+        Sweep20,
+        with(AdaptiveQ::Sweep(20, Pooled, 0.0))
+    );
+    config!(
+        "cells16",
+        32,
+        250,
+        0,
+        Sweep16,
+        with(AdaptiveQ::Sweep(16, Pooled, 0.0))
+    );
     Ok(())
 }
 

@@ -40,14 +40,70 @@ use awfqi::{
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
     ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi,
     HyperparameterBounds, Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction,
-    ModelSweep, Neighbours, Output, QFunction, Real, RewardModel, RowSet, SampleSet, ScoreColumn,
-    ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SubsetRule,
-    SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings, Transition,
-    TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy, rollout,
+    ModelSweep, MultiStartProtocol, Neighbours, Output, QFunction, Real, RewardModel, RowSet,
+    SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData, SourceMeans,
+    SourceModel, SourceScales, SubsetRule, SweepEntry, SweepFqi, SweepNode, SweepStorage,
+    TabularFqi, TileFqi, Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull,
+    evaluate, evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
+
+/// A `core::fmt` sink, so `Display` implementations are linked.
+struct Sink;
+
+impl core::fmt::Write for Sink {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        opaque(s);
+        Ok(())
+    }
+}
+
+/// The generator adapters of older `rand_core` versions over the caller's ChaCha8.
+fn generator_adapters(rng: &mut ChaCha8Rng) {
+    struct Old<'a>(&'a mut ChaCha8Rng);
+    impl rand_core_06::RngCore for Old<'_> {
+        fn next_u32(&mut self) -> u32 {
+            rand_core::Rng::next_u32(self.0)
+        }
+        fn next_u64(&mut self) -> u64 {
+            rand_core::Rng::next_u64(self.0)
+        }
+        fn fill_bytes(&mut self, dst: &mut [u8]) {
+            rand_core::Rng::fill_bytes(self.0, dst)
+        }
+        fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), rand_core_06::Error> {
+            rand_core::Rng::fill_bytes(self.0, dst);
+            Ok(())
+        }
+    }
+    impl rand_core_09::RngCore for Old<'_> {
+        fn next_u32(&mut self) -> u32 {
+            rand_core::Rng::next_u32(self.0)
+        }
+        fn next_u64(&mut self) -> u64 {
+            rand_core::Rng::next_u64(self.0)
+        }
+        fn fill_bytes(&mut self, dst: &mut [u8]) {
+            rand_core::Rng::fill_bytes(self.0, dst)
+        }
+    }
+    let mut bytes = [0u8; 5];
+    let mut six = awfqi::rng::compat::Rng06(Old(&mut *rng));
+    keep((
+        awfqi::rng::uniform::<f32, _>(&mut six),
+        rand_core::Rng::next_u32(&mut six),
+    ));
+    rand_core::Rng::fill_bytes(&mut six, &mut bytes);
+    let mut nine = awfqi::rng::compat::Rng09(Old(&mut *rng));
+    keep((
+        awfqi::rng::uniform::<f64, _>(&mut nine),
+        rand_core::Rng::next_u32(&mut nine),
+    ));
+    rand_core::Rng::fill_bytes(&mut nine, &mut bytes);
+    keep(bytes);
+}
 
 /// A value of `T` the optimiser cannot know.
 fn num<T: Real>(x: f64) -> T {
@@ -64,15 +120,13 @@ fn keep<V>(v: V) {
 
 fn error_and_float<T: Real>() {
     // `Error`'s Display goes through core::fmt; it is covered by writing into a sink.
-    struct Sink;
-    impl core::fmt::Write for Sink {
-        fn write_str(&mut self, s: &str) -> core::fmt::Result {
-            opaque(s);
-            Ok(())
-        }
-    }
     let errors = [
         awfqi::Error::CapacityExceeded { capacity: index(3) },
+        awfqi::Error::BufferTooSmall {
+            buffer: "b",
+            capacity: index(3),
+            needed: index(4),
+        },
         awfqi::Error::NonFinite { parameter: "x" },
         awfqi::Error::InvalidParameter { parameter: "y" },
         awfqi::Error::OutOfRange { parameter: "z" },
@@ -535,6 +589,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
     let actions = plant.num_actions();
     let mode = [
@@ -634,6 +689,15 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
             keep(evaluate_greedy(&plant, &fqi, &protocol, rng));
             let mut uniform = UniformPolicy::new(actions).unwrap_or_else(|_| loop {});
             keep(evaluate(&plant, &mut uniform, &protocol, rng));
+            let starts = [[num(0.0); D], [num(0.5); D]];
+            let multi = MultiStartProtocol {
+                starts: starts.get(..index(2)).unwrap_or(&[]),
+                rollouts: index(2),
+                horizon: index(20),
+                discount: num(0.99),
+            };
+            keep(evaluate_greedy_multi_start(&plant, &fqi, &multi, rng));
+            keep(evaluate_multi_start(&plant, &mut uniform, &multi, rng));
             keep(rollout(
                 &plant,
                 &mut uniform,
@@ -683,7 +747,12 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         };
         keep(approximator.required_entries(actions));
         let mut storage = [FqiEntry::<T>::EMPTY; 400];
-        if let Ok(mut q) = approximator.build(actions, &mut storage[..]) {
+        let q = if opaque(true) {
+            approximator.build(actions, &mut storage)
+        } else {
+            approximator.build(actions, &mut storage[..])
+        };
+        if let Ok(mut q) = q {
             keep(q.fit(&sets, &config, rng));
             let s = [num::<T>(0.7); D];
             keep((
@@ -784,7 +853,7 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         }
         let mut block = KnnStorage::<T, D, 12, { 12 * 4 * 3 }>::new();
         let approximator: Approximator<T, D> = neighbours.into();
-        if let Ok(mut q) = approximator.build(actions, block.storage()) {
+        if let Ok(mut q) = approximator.build(actions, &mut block) {
             keep(q.fit(&sets, &config, rng));
             keep((
                 q.value([num(0.7); D], 0),
@@ -844,7 +913,13 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
         let mut block = TreeStorage::<T, D, 12, { 4 * 3 * 15 }>::new();
         let approximator: Approximator<T, D> = forests.into();
         keep(approximator.required_entries(actions));
-        if let Ok(mut q) = approximator.build(actions, block.storage()) {
+        // The block itself, as the array of entries below (the `From` conversions).
+        let q = if opaque(true) {
+            approximator.build(actions, &mut block)
+        } else {
+            approximator.build(actions, block.storage())
+        };
+        if let Ok(mut q) = q {
             keep(q.fit(&sets, &config, rng));
             keep((
                 q.value([num(0.7); D], 0),
@@ -858,7 +933,11 @@ fn transfer_path<T, G, const D: usize, const I: usize>(
     }
 
     // fqi: the model sweep, directly and behind QFunction
-    let rewards = [RewardModel::PerAction, RewardModel::Pooled, RewardModel::Backfilled];
+    let rewards = [
+        RewardModel::PerAction,
+        RewardModel::Pooled,
+        RewardModel::Backfilled,
+    ];
     let sweep = ModelSweep::<T, D>::cube(num(0.0), high, index(3))
         .and_then(|s| s.with_min_mass(num(0.25)))
         .map(|s| {
@@ -1038,6 +1117,7 @@ fn adaptive<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + Copy,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
     let mut config = AdaptiveConfig::<T, D, I>::recommended(
         index(6),
@@ -1067,6 +1147,28 @@ fn adaptive<T, G, const D: usize, const I: usize>(
         return;
     };
     keep((config.sub_batches, config.horizon));
+    keep((
+        config.budget(),
+        config.sub_batches(),
+        config.verify(),
+        config.candidates(),
+    ));
+    keep((
+        config.start(),
+        config.horizon(),
+        config.epsilon(),
+        config.bounds(),
+    ));
+    keep((*config.awfqi(), *config.config(), config.into_inner()));
+    if let Ok(scales) = SourceScales::measure(&[&records[..]]) {
+        keep(AdaptiveConfig::<T, D, I>::scaled(
+            index(6),
+            &scales,
+            [num(0.5); D],
+            index(5),
+            num(0.3),
+        ));
+    }
     let (first, rest) = records.split_at(5);
     let sources: [&[Transition<[T; D], T>]; 2] = [first, rest];
     let Ok(data) = SourceData::new(&sources, posteriors) else {
@@ -1240,7 +1342,21 @@ fn kernel<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
+    awfqi::Dims<D, I>: awfqi::StatePlusAction,
 {
+    // Settings that scale themselves.
+    if let Ok(scales) = SourceScales::measure(&[&records[..5], &records[5..]]) {
+        keep((
+            scales.bounds(),
+            scales.span(index(1)),
+            scales.reward_scale(),
+            scales.noise_floor(),
+        ));
+        keep(scales.gp_training::<I>());
+        keep((scales.reward_weights(), scales.transition_weights()));
+        keep(AwfqiConfig::<T, I>::scaled(index(4), &scales));
+    }
+    keep(WeightParams::<T>::reference_reward().discards(Posterior::new(num(0.1), num(0.5))));
     let mut config = AwfqiConfig::<T, I>::thesis(index(4));
     config.gp_training.search.max_evaluations = index(10);
     config.gp_training.search.restarts = index(1);
@@ -1291,7 +1407,20 @@ fn kernel<T, G, const D: usize, const I: usize>(
     // The plant lent by reference (`GenerativeModel for &G`), as the 32 KiB image does.
     .and_then(|b| b.build(&plant, &mut storage, rng));
     if let Ok(mut kernel) = built {
-        keep(kernel.step(rng));
+        if let Ok(report) = kernel.step(rng) {
+            for warning in report.warnings() {
+                keep(core::fmt::write(&mut Sink, format_args!("{warning}")));
+            }
+        }
+        let valid = kernel.config();
+        keep((
+            valid.budget(),
+            valid.weights(),
+            valid.noise_subtraction(),
+            valid.subset(),
+        ));
+        keep((valid.gp_training().search, valid.fqi(), valid.sampling()));
+        keep((*valid.config(), valid.into_inner()));
         keep((
             kernel.config().budget,
             kernel.steps(),
@@ -1460,6 +1589,7 @@ fn identification<T: Real>(rng: &mut ChaCha8Rng) {
 fn exercise<T: Real>(seed: u64) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     error_and_float::<T>();
+    generator_adapters(&mut rng);
     rng_and_policy::<T>(&mut rng);
     grid::<T>(&mut rng);
     puddle::<T>(&mut rng);

@@ -24,7 +24,8 @@ awfqi_on_target::footprint_image!({
     let report = awfqi_on_target::probe::report;
     report(
         "memory bytes",
-        core::mem::size_of::<AdaptiveRecommended>() + core::mem::size_of::<AdaptiveRecommendedFqi>(),
+        core::mem::size_of::<AdaptiveRecommended>()
+            + core::mem::size_of::<AdaptiveRecommendedFqi>(),
     );
     report(
         "kernel bytes",

@@ -1,0 +1,350 @@
+//! The controller: the plant, its sources' logs, the settings and the learning run, with no
+//! I/O, so the same file runs on the host (`examples/zones_host.rs` of the repository) over
+//! many seeds before it is flashed.
+//!
+//! Written against the crate's public API and documentation only, the way a firmware
+//! engineer would start a plant of their own: implement `GenerativeModel`, measure the
+//! sources' scales, take the recommended adaptive kernel on the scaled settings.
+
+use awfqi::adaptive::MeanFunction;
+use awfqi::rand_core::{Rng, SeedableRng};
+use awfqi::record_gp::predict_posteriors;
+use awfqi::{
+    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, EmptyCells, Evaluation,
+    FqiConfig, GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, Posterior, Real,
+    RewardModel, RowSet, SampleSet, SourceData, SourceScales, StepReport, SweepStorage, Transition,
+    evaluate_greedy_multi_start, evaluate_multi_start,
+};
+use rand_chacha::ChaCha8Rng;
+
+// ---- The plant: three heated zones in a row. ----
+
+/// Zones: the state is each zone's temperature, normalised to [0, 1].
+pub const ZONES: usize = 3;
+/// Actions: 0 = heater off, 1–3 = heat zone 1–3 (one heater, switched between zones).
+pub const ACTIONS: usize = 4;
+/// The comfort temperature every zone of our building should hold.
+pub const SETPOINT: f32 = 0.6;
+/// Discount of the task (an episode is a day of 40 control periods).
+pub const DISCOUNT: f32 = 0.95;
+/// Control periods per episode.
+pub const HORIZON: usize = 40;
+
+/// Heat loss to the outside per period (a share of the gap to the outside temperature).
+const LOSS: f32 = 0.1;
+/// The outside temperature.
+const OUTSIDE: f32 = 0.2;
+/// Heat exchange with each neighbouring zone per period.
+const COUPLING: f32 = 0.05;
+/// Temperature rise of the heated zone per period.
+const GAIN: f32 = 0.25;
+/// Standard deviation of each zone's temperature noise per period.
+const STATE_NOISE: f32 = 0.02;
+/// Standard deviation of the measured comfort (the reward's noise).
+const REWARD_NOISE: f32 = 0.05;
+
+/// Whose comfort is measured: every building shares the physics, not the comfort rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Building {
+    /// Ours: every zone at [`SETPOINT`], heating costs 0.05 a period.
+    Target,
+    /// The east wing's log: as ours while zone 1 is below 0.5; above, its third zone is a
+    /// store room held at 0.3.
+    East,
+    /// The west wing's log: as ours while zone 1 is at 0.5 or above; below, its heating
+    /// costs 0.4 a period (a night tariff).
+    West,
+}
+
+/// Three zones in a row: each loses heat to the outside and exchanges heat with its
+/// neighbours; the heater warms one zone per period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Zones {
+    /// Whose comfort rule scores the periods.
+    pub building: Building,
+}
+
+impl Zones {
+    /// The noise-free next temperatures and comfort of `state` under `action`.
+    pub fn mean(&self, s: [f32; ZONES], action: usize) -> ([f32; ZONES], f32) {
+        let mut next = s;
+        for (i, t) in next.iter_mut().enumerate() {
+            let left = if i > 0 { s[i - 1] - s[i] } else { 0.0 };
+            let right = if i + 1 < ZONES { s[i + 1] - s[i] } else { 0.0 };
+            let heat = if action == i + 1 { GAIN } else { 0.0 };
+            *t = s[i] + LOSS * (OUTSIDE - s[i]) + COUPLING * (left + right) + heat;
+        }
+        let (mut third, mut energy) = (SETPOINT, 0.05);
+        match self.building {
+            Building::Target => {}
+            Building::East if s[0] >= 0.5 => third = 0.3,
+            Building::West if s[0] < 0.5 => energy = 0.4,
+            _ => {}
+        }
+        let discomfort =
+            Real::abs(s[0] - SETPOINT) + Real::abs(s[1] - SETPOINT) + Real::abs(s[2] - third);
+        let cost = if action == 0 { 0.0 } else { energy };
+        (next, -discomfort - cost)
+    }
+}
+
+impl GenerativeModel<f32> for Zones {
+    type State = [f32; ZONES];
+
+    fn num_actions(&self) -> usize {
+        ACTIONS
+    }
+
+    fn query<R: Rng + ?Sized>(
+        &self,
+        state: [f32; ZONES],
+        action: usize,
+        rng: &mut R,
+    ) -> awfqi::Result<Transition<[f32; ZONES], f32>> {
+        if action >= ACTIONS {
+            return Err(awfqi::Error::OutOfRange {
+                parameter: "action",
+            });
+        }
+        if !state.iter().all(|t| (0.0..=1.0).contains(t)) {
+            return Err(awfqi::Error::OutOfRange { parameter: "state" });
+        }
+        let (mean, comfort) = self.mean(state, action);
+        let mut next_state = mean;
+        for t in &mut next_state {
+            let noise: f32 = awfqi::rng::standard_normal(rng);
+            *t = (*t + STATE_NOISE * noise).clamp_to(0.0, 1.0);
+        }
+        let noise: f32 = awfqi::rng::standard_normal(rng);
+        Ok(Transition {
+            state,
+            action,
+            reward: comfort + REWARD_NOISE * noise,
+            next_state,
+            absorbing: false,
+        })
+    }
+}
+
+/// The hand-written rule: heat the zone furthest below the setpoint when it is more than
+/// 0.05 below, else switch the heater off.
+pub fn thermostat(s: &[f32; ZONES]) -> awfqi::Result<usize> {
+    let (mut action, mut worst) = (0, 0.05);
+    for (i, &t) in s.iter().enumerate() {
+        if SETPOINT - t > worst {
+            (action, worst) = (i + 1, SETPOINT - t);
+        }
+    }
+    Ok(action)
+}
+
+// ---- Sizes: every buffer is fixed at compile time. ----
+
+/// Records in each source's log.
+pub const PER_SOURCE: usize = 300;
+/// The sources.
+pub const SOURCES: usize = 2;
+/// All source records.
+pub const SOURCE_RECORDS: usize = SOURCES * PER_SOURCE;
+/// Generative-model queries per step.
+pub const BUDGET: usize = 50;
+/// Steps: `STEPS · BUDGET` target queries in all.
+pub const STEPS: usize = 2;
+/// Target records of the run.
+pub const QUERIES: usize = STEPS * BUDGET;
+/// Capacity of every GP (the target's and the sources' mean functions): the recommended
+/// 32 points.
+pub const GP_POINTS: usize = 32;
+/// Candidate rows scored per sub-batch: room for the recommended configuration's 250 (of
+/// the 11³ × 4 rows of the spacing-0.1 grid).
+pub const CANDIDATES: usize = 250;
+
+/// The recommended adaptive kernel's Q-function, in one place: a model sweep with this many
+/// cells on every axis of [0, 1]³ (nodes at their corners).
+pub const SWEEP_CELLS: usize = 6;
+/// Nodes of the sweep.
+pub const SWEEP_NODES: usize = (SWEEP_CELLS + 1) * (SWEEP_CELLS + 1) * (SWEEP_CELLS + 1);
+
+/// The recommended Q-function: the model sweep on [`SWEEP_CELLS`] cells per axis. The
+/// heating cost makes the reward depend on the action, so each action keeps its own reward
+/// model where it was tried (`RewardModel::Backfilled`; `Pooled` is for rewards of the state
+/// alone).
+pub fn approximator() -> awfqi::Result<Approximator<f32, ZONES>> {
+    Ok(ModelSweep::cube(0.0, 1.0, SWEEP_CELLS)?
+        .with_rewards(RewardModel::Backfilled)
+        .into())
+}
+
+/// A model sweep's memory: one entry per (node, action), one value per node.
+pub type Sweep = SweepStorage<f32, ZONES, { SWEEP_NODES * ACTIONS }, SWEEP_NODES>;
+
+/// All the RAM of a run, in one block for a `static` (`new` is all-zero: `.bss`).
+pub struct Memory {
+    /// The two sources' logs (on a device with real logs: `static` tables in flash).
+    pub sources: [[Transition<[f32; ZONES], f32>; PER_SOURCE]; SOURCES],
+    /// Each source record's reward posterior under its source's GP.
+    pub posteriors: [Posterior<f32>; SOURCE_RECORDS],
+    /// Each source's reward model.
+    pub means: [MeanFunction<f32, GP_POINTS, { ZONES + 1 }>; SOURCES],
+    /// The adaptive kernel's storage (its FQI entries unused: the sweep has its own).
+    pub kernel: AdaptiveStorage<
+        f32,
+        ZONES,
+        { ZONES + 1 },
+        GP_POINTS,
+        QUERIES,
+        SOURCE_RECORDS,
+        CANDIDATES,
+        0,
+        BUDGET,
+        SOURCES,
+    >,
+    /// The kernel's model sweep.
+    pub sweep: Sweep,
+    /// The FQI baseline's model sweep, over the target records alone.
+    pub baseline: Sweep,
+}
+
+impl Memory {
+    /// Empty, all-zero memory.
+    pub const fn new() -> Self {
+        Self {
+            sources: [[Transition::EMPTY; PER_SOURCE]; SOURCES],
+            posteriors: [Posterior::EMPTY; SOURCE_RECORDS],
+            means: [MeanFunction::EMPTY, MeanFunction::EMPTY],
+            kernel: AdaptiveStorage::new(),
+            sweep: SweepStorage::new(),
+            baseline: SweepStorage::new(),
+        }
+    }
+}
+
+impl Default for Memory {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The evaluation's start states: a cold morning, a warm afternoon and two uneven ones.
+pub const STARTS: [[f32; ZONES]; 4] = [
+    [0.2, 0.2, 0.2],
+    [0.7, 0.6, 0.8],
+    [0.3, 0.8, 0.4],
+    [0.9, 0.3, 0.1],
+];
+
+/// Rollouts from each start state.
+pub const ROLLOUTS: usize = 5;
+
+/// The three policies' returns over the same episodes.
+#[derive(Debug, Clone, Copy)]
+pub struct Outcome {
+    /// Adaptive AWFQI's greedy policy (target queries and the weighted sources).
+    pub awfqi: Evaluation<f32>,
+    /// FQI's greedy policy on the same target queries alone.
+    pub fqi: Evaluation<f32>,
+    /// The hand-written thermostat.
+    pub thermostat: Evaluation<f32>,
+}
+
+/// Logs each source's `PER_SOURCE` periods from uniformly drawn temperatures and actions.
+fn log_sources<R: Rng>(
+    logs: &mut [[Transition<[f32; ZONES], f32>; PER_SOURCE]; SOURCES],
+    rng: &mut R,
+) -> awfqi::Result<()> {
+    for (log, building) in logs.iter_mut().zip([Building::East, Building::West]) {
+        let plant = Zones { building };
+        for record in log.iter_mut() {
+            let state = [(); ZONES].map(|_| awfqi::rng::uniform::<f32, R>(rng));
+            let action = awfqi::rng::uniform_index(rng, ACTIONS);
+            *record = plant.query(state, action, rng)?;
+        }
+    }
+    Ok(())
+}
+
+/// One run: the sources' logs, the scaled settings, `STEPS` steps of the adaptive kernel on
+/// our building (`on_step` sees each report), FQI on the same target queries, and the three
+/// policies evaluated over the same episodes.
+pub fn learn_and_compare(
+    memory: &mut Memory,
+    seed: u64,
+    mut on_step: impl FnMut(&StepReport<f32, { ZONES + 1 }>),
+) -> awfqi::Result<Outcome> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let Memory {
+        sources,
+        posteriors,
+        means,
+        kernel,
+        sweep,
+        baseline,
+    } = memory;
+    log_sources(sources, &mut rng)?;
+    let logs: [&[Transition<[f32; ZONES], f32>]; SOURCES] = [&sources[0], &sources[1]];
+
+    // Settings from the logs: nothing tuned by hand but the task's discount.
+    let scales = SourceScales::measure(&logs)?;
+    let mut config = AdaptiveConfig::scaled(BUDGET, &scales, STARTS[0], HORIZON, 0.3)?;
+    config.awfqi.fqi =
+        FqiConfig::new(DISCOUNT, 60, EmptyCells::CappedNearest)?.with_min_weight(0.5)?;
+    let config = config.validate()?;
+
+    // Each source's reward model and the posteriors stored with its records, fitted in the
+    // kernel's GP before the kernel borrows it.
+    let mut buffers = kernel.buffers();
+    let training = config.awfqi().gp_training;
+    for (j, (mean, log)) in means.iter_mut().zip(&logs).enumerate() {
+        let gp = &mut *buffers.gp;
+        mean.fit_rewards(gp, log, &training, config.awfqi().subset, &mut rng)?;
+        let mine = posteriors
+            .get_mut(j * PER_SOURCE..(j + 1) * PER_SOURCE)
+            .ok_or(awfqi::Error::EmptyData)?;
+        predict_posteriors(gp, log, config.awfqi().noise_subtraction, mine)?;
+    }
+
+    // The adaptive kernel on our building.
+    let plant = Zones {
+        building: Building::Target,
+    };
+    buffers.fqi = sweep.storage();
+    let rows = RowSet::grid(
+        PointGrid::spanning([0.0; ZONES], [1.0; ZONES], 0.1)?,
+        ACTIONS,
+    )?;
+    let mut kernel = AdaptiveAwfqi::new(
+        config,
+        approximator()?,
+        SourceData::new(&logs, &posteriors[..])?,
+        &means[..],
+        rows,
+        &plant,
+        buffers,
+    )?;
+    for _ in 0..STEPS {
+        on_step(&kernel.step(&mut rng)?);
+    }
+
+    // FQI on the same target queries, alone.
+    let mut fqi = approximator()?.build(ACTIONS, &mut *baseline)?;
+    let target = [SampleSet::unweighted(kernel.target_samples())];
+    fqi.fit(&target, &config.awfqi().fqi, &mut rng)?;
+
+    // The three policies from the same generator state: the same episodes' noise.
+    let protocol = MultiStartProtocol {
+        starts: &STARTS,
+        rollouts: ROLLOUTS,
+        horizon: HORIZON,
+        discount: DISCOUNT,
+    };
+    let (mut episodes_fqi, mut episodes_rule) = (rng.clone(), rng.clone());
+    let awfqi = evaluate_greedy_multi_start(&plant, kernel.q(), &protocol, &mut rng)?;
+    let fqi = evaluate_greedy_multi_start(&plant, &fqi, &protocol, &mut episodes_fqi)?;
+    let mut rule = thermostat;
+    let thermostat = evaluate_multi_start(&plant, &mut rule, &protocol, &mut episodes_rule)?;
+    Ok(Outcome {
+        awfqi,
+        fqi,
+        thermostat,
+    })
+}

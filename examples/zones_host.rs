@@ -1,0 +1,99 @@
+//! The zones example's controller (`examples/zones/src/zones.rs`) on the host, over a range
+//! of seeds: the same code and `f32` arithmetic as on the Cortex-M4F (the device's seed
+//! gives the returns the QEMU run prints). Prints each seed's three returns and, with
+//! `--out DIR`, writes them as the harness's result files (`awfqi.json`, `fqi.json`,
+//! `thermostat.json`: one step per run) for `scripts/paired-tests`.
+//!
+//! ```sh
+//! cargo run --release --example zones_host -- 0 20 --out /tmp/zones-eval
+//! scripts/paired-tests /tmp/zones-eval/awfqi.json /tmp/zones-eval/fqi.json /tmp/zones-eval/thermostat.json
+//! ```
+
+#[path = "zones/src/zones.rs"]
+mod zones;
+
+use std::fmt::Write as _;
+
+fn main() -> awfqi::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let number =
+        |i: usize, default: u64| args.get(i).and_then(|a| a.parse().ok()).unwrap_or(default);
+    let (first, end) = (number(0, 100), number(1, 120));
+    let out = args
+        .iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1));
+    let mut memory = Box::new(zones::Memory::new());
+    let mut rows: Vec<(u64, [f32; 3])> = Vec::new();
+    for seed in first..end {
+        let mut warnings = 0;
+        let verbose = std::env::var_os("ZONES_VERBOSE").is_some();
+        let outcome = zones::learn_and_compare(&mut memory, seed, |report| {
+            if verbose {
+                eprintln!(
+                    "seed {seed}, step {}: source ESS {:.1}, discarded {}, capped {}, GP {:?}, jitter {:.2e}, condition {:.2e}",
+                    report.step,
+                    report.wr_source_eff,
+                    report.wr_discarded,
+                    report.wr_capped,
+                    report.gp_hyperparameters,
+                    report.gp_jitter,
+                    report.gp_condition
+                );
+            }
+            for w in report.warnings() {
+                eprintln!("seed {seed}, step {}: warning: {w}", report.step);
+                warnings += 1;
+            }
+        })?;
+        let r = [
+            outcome.awfqi.mean_return,
+            outcome.fqi.mean_return,
+            outcome.thermostat.mean_return,
+        ];
+        println!(
+            "seed {seed}: awfqi {:.2}, fqi {:.2}, thermostat {:.2}",
+            r[0], r[1], r[2]
+        );
+        rows.push((seed, r));
+        if std::env::var_os("ZONES_VERBOSE").is_some() {
+            let logs: [&[_]; 2] = [&memory.sources[0], &memory.sources[1]];
+            let scales = awfqi::SourceScales::measure(&logs)?;
+            eprintln!(
+                "seed {seed}: reward mean {:.3}, variance {:.4}, local noise {:.5}, v_r {:.5}",
+                scales.reward_mean,
+                scales.reward_variance,
+                scales.reward_noise,
+                scales.reward_weights()?.noise_variance()
+            );
+        }
+    }
+    let n = rows.len() as f64;
+    for (k, name) in ["awfqi", "fqi", "thermostat"].iter().enumerate() {
+        let mean = rows.iter().map(|(_, r)| f64::from(r[k])).sum::<f64>() / n;
+        println!("{name}: mean {mean:.2} over {n} seeds");
+    }
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir)
+            .map_err(|_| awfqi::Error::InvalidParameter { parameter: "--out" })?;
+        for (k, name) in ["awfqi", "fqi", "thermostat"].iter().enumerate() {
+            let mut json = format!(
+                "{{\"experiment\": \"zones\", \"algorithm\": \"{name}\", \"n_runs\": {}, \"runs\": [",
+                rows.len()
+            );
+            for (i, (seed, r)) in rows.iter().enumerate() {
+                let sep = if i == 0 { "" } else { ", " };
+                let _ = write!(
+                    json,
+                    "{sep}{{\"run\": {seed}, \"steps\": [{{\"step\": 1, \"perf_disc_greedy_mean\": {}}}]}}",
+                    r[k]
+                );
+            }
+            json.push_str("]}\n");
+            let path = std::path::Path::new(dir).join(format!("{name}.json"));
+            std::fs::write(&path, json)
+                .map_err(|_| awfqi::Error::InvalidParameter { parameter: "--out" })?;
+        }
+    }
+    Ok(())
+}
