@@ -155,7 +155,7 @@ fn gp_fit_predict_reference(g: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
     });
 }
 
-/// The acceptance measurement of issue 7: fit at N = 64 plus 100 predictions.
+/// The GP's acceptance measurement: fit at N = 64 plus 100 predictions.
 fn gp_fit_predict(c: &mut Criterion) {
     let mut g = c.benchmark_group("gp_fit_predict100");
     gp_fit_predict_one::<f32, 64>(&mut g, "kernel_f32");

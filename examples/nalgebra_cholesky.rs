@@ -1,5 +1,5 @@
 //! Measures nalgebra's Cholesky (no default features, as the core would use it) against the
-//! core's hand-written one (issue 12 item 6): speed of a 64-point f32 fit, and the
+//! core's hand-written one: speed of a 64-point f32 fit, and the
 //! conditioning behaviour on the 90 exact hard cases of `tests/data/gp_hard_cases.json`
 //! (how often each returns a factor whose mean is wrong beyond 1e-2 of the data scale).
 //!

@@ -36,7 +36,7 @@
 //! followed by the action; stable Rust cannot write `D + 1` in a type, so both are
 //! parameters and `I == D + 1` is checked at compile time), `N` the target GP's capacity.
 //!
-//! **Memory.** The kernel borrows everything large, so it can live in statics on a
+//! **Memory.** The learner borrows everything large, so it can live in statics on a
 //! microcontroller: the target-sample buffer (`K·n` records of `Transition<[T; D], T>`),
 //! the reward-weight buffer (one `T` per source record), the target [`Gp`], the FQI table
 //! and the score sampler's alias table (all in [`AwfqiStorage`]), and the source records
@@ -52,7 +52,7 @@
 //! | target samples, 150 × `Transition<[f32; 2], f32>` (28) | 4 200 |
 //! | alias table, 484 × `AliasEntry<f32>` (8) | 3 872 |
 //! | reward weights, 910 × `f32` | 3 640 |
-//! | **RAM written by the loop** (the kernel and its `AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484>` of 39 096) | **39 564** |
+//! | **RAM written by the loop** (the learner and its `AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484>` of 39 096) | **39 564** |
 //! | source records, 910 × 28 (read-only: flash) | 25 480 |
 //! | source reward posteriors, 910 × 8 (read-only: flash) | 7 280 |
 //! | score values, 484 × 12 (set-up only, then reusable) | 5 808 |
@@ -323,16 +323,16 @@ impl<'a, T: Real, const D: usize> SourceData<'a, T, D> {
     }
 }
 
-/// The AWFQI kernel: configuration, borrowed storage and the state of a run.
+/// The AWFQI learner: configuration, borrowed storage and the state of a run.
 ///
 /// Generic over the scalar `T`, the target model `G` (any [`GenerativeModel`] with states
 /// `[T; D]`), the state dimension `D`, the GP input dimension `I = D + 1` and the target
 /// GP's capacity `N`; the capacities of the buffers are the lengths of the slices it
 /// borrows, so its code is the same for every capacity. Built by [`AwfqiBuilder`].
 /// `size_of::<Awfqi<f32, PuddleWorld<f32>, 2, 3, 64>>()` is 468 bytes on
-/// `thumbv7em-none-eabihf` (216 of them the Puddle World model; a kernel built over
+/// `thumbv7em-none-eabihf` (216 of them the Puddle World model; a learner built over
 /// `&model` — [`GenerativeModel`] is implemented for references — holds 4 bytes instead,
-/// which keeps every frame that holds the kernel small).
+/// which keeps every frame that holds the learner small).
 #[derive(Debug)]
 pub struct Awfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     config: ValidAwfqiConfig<T, I>,
@@ -355,7 +355,7 @@ pub(crate) struct TransitionWeighting<'a, T> {
 /// [`AwfqiBuilder::build`]; this `impl` names them `()` and 0 only so that
 /// `Awfqi::builder(…)` needs no type annotations, as `HashMap::new` does for its hasher.)
 impl<'a, T: Real, const D: usize, const I: usize> Awfqi<'a, T, (), D, I, 0> {
-    /// Starts the set-up of a kernel with its required parts: see [`AwfqiBuilder`].
+    /// Starts the set-up of a learner with its required parts: see [`AwfqiBuilder`].
     pub fn builder(
         config: ValidAwfqiConfig<T, I>,
         approximator: impl Into<Approximator<T, D>>,
@@ -375,7 +375,7 @@ where
     G: GenerativeModel<T, State = [T; D]>,
     Dims<D, I>: StatePlusAction,
 {
-    /// Assembles a kernel for a fresh run (`D₀` empty, Q = 0) from parts the builder has
+    /// Assembles a learner for a fresh run (`D₀` empty, Q = 0) from parts the builder has
     /// checked: `samples` holds at least one step, `weights` one weight per source record,
     /// `fqi` has the model's action count.
     #[allow(clippy::too_many_arguments)]
@@ -467,7 +467,7 @@ where
     /// query, the GP fit or search, a prediction or a weight, after which the state is as
     /// the module docs describe.
     // Inlined into its caller: a firmware loop calls it from one place, and a frame of its
-    // own on top of the caller's (which holds the kernel) costs the 32 KiB configuration
+    // own on top of the caller's (which holds the learner) costs the 32 KiB configuration
     // its margin (measured: 656 B more stack when it was not inlined).
     #[inline(always)]
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {

@@ -251,7 +251,7 @@ where
 }
 
 /// [`evaluate`] for the greedy policy of a Q-function (a [`crate::TabularFqi`], a
-/// [`crate::TileFqi`] or the [`crate::QFunction`] of a kernel; ties between actions as its
+/// [`crate::TileFqi`] or the [`crate::QFunction`] of a learner; ties between actions as its
 /// `greedy_action` breaks them).
 ///
 /// Errors: those of [`evaluate`].

@@ -64,9 +64,9 @@ pub trait GenerativeModel<T: Real> {
     ) -> Result<Transition<Self::State, T>>;
 }
 
-/// A model lent by reference is a model: the kernel can borrow a plant that lives in a
+/// A model lent by reference is a model: a learner can borrow a plant that lives in a
 /// `static` or is shared with the rest of the firmware, instead of holding a copy of it
-/// (for Puddle World's 200-byte model, 200 bytes less in every frame that holds the kernel).
+/// (for Puddle World's 200-byte model, 200 bytes less in every frame that holds the learner).
 impl<T: Real, G: GenerativeModel<T> + ?Sized> GenerativeModel<T> for &G {
     type State = G::State;
 

@@ -13,7 +13,7 @@
 //! The second test does the same for the 32 KiB Puddle World footprint image
 //! (`tests/on_target/src/puddle_tables.rs`): the published shared-dynamics source records
 //! and their stored reward posteriors, and the realistic score table of the recommended
-//! configuration — exactly the set-up `std_harness/examples/kernel_capacity.rs` measures
+//! configuration — exactly the set-up `std_harness/examples/embedded_capacity.rs` measures
 //! the return of (`24 11 1.25`).
 //!
 //! The heavy, one-off work (source GP fits on every record, the score table) happens here,
@@ -269,21 +269,19 @@ const PUDDLE_TABLES: &str = "tests/on_target/src/puddle_tables.rs";
 #[test]
 fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     use awfqi::env::Dynamics;
-    use awfqi_harness::transfer::algorithms::awfqi_kernel::{
-        KernelConfig, KernelQFunction, KernelSetup,
-    };
+    use awfqi_harness::transfer::algorithms::embedded::{EmbeddedConfig, EmbeddedQ, EmbeddedSetup};
     use awfqi_harness::transfer::score_tables::Mode;
     use awfqi_harness::transfer::sources::SourceSet;
     use awfqi_harness::transfer::{SCORE_TABLE, stream};
 
-    // The harness kernel path's set-up (its stream) at this GP capacity: the f32 source
+    // The harness embedded path's set-up (its stream) at this GP capacity: the f32 source
     // records, their stored posteriors and the realistic score table that
-    // `std_harness/examples/kernel_capacity.rs` (`24 11 1.25`) measures the return of.
+    // `std_harness/examples/embedded_capacity.rs` (`24 11 1.25`) measures the return of.
     let set = SourceSet::published(Dynamics::Shared).expect("published sources");
-    let config = KernelConfig::new(Mode::Grid, f64::from(PUDDLE_SPACING))
-        .with_q(KernelQFunction::Tabular(11));
+    let config =
+        EmbeddedConfig::new(Mode::Grid, f64::from(PUDDLE_SPACING)).with_q(EmbeddedQ::Tabular(11));
     let setup =
-        KernelSetup::<PUDDLE_GP_POINTS>::new(&set, config, &mut stream(0, &[SCORE_TABLE, 100]))
+        EmbeddedSetup::<PUDDLE_GP_POINTS>::new(&set, config, &mut stream(0, &[SCORE_TABLE, 100]))
             .unwrap();
     let records = setup.source_slices();
     let posteriors = setup.posteriors();

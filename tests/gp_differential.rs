@@ -42,7 +42,7 @@ use awfqi::Error;
 use awfqi::gp::BASE_JITTER;
 use awfqi::rng::{standard_normal, uniform_f64};
 use awfqi_harness::commands::gp::{
-    Case, CaseError, Fit, Policy, Precision, fit_core, fit_core_under, fit_reference,
+    Case, CaseError, ConditioningOptions, Fit, Precision, fit_core, fit_core_under, fit_reference,
 };
 use awfqi_reference::gp::condition;
 use rand_chacha::ChaCha8Rng;
@@ -119,14 +119,14 @@ use Quantity::*;
 /// Cholesky solve may make on a matrix of that condition (the hard classes reach κ₁ ≈ 1e13);
 /// `cap` is the largest error that is still an answer rather than a wrong number.
 const TOLERANCES: &[Tolerance] = &[
-    // The issue's requirement for f64 on well-conditioned cases: 1e-9 relative, flat.
+    // The requirement for f64 on well-conditioned cases: 1e-9 relative, flat.
     row(WellConditioned, F64, Mean, 1e-9, 0.0, 1e-9),
     row(WellConditioned, F64, Std, 1e-9, 0.0, 1e-9),
     row(WellConditioned, F64, LogMarginalLikelihood, 1e-9, 0.0, 1e-9),
-    // The issue's requirement for f32, N ≤ 64: 1e-3 on mean and latent std.
+    // The requirement for f32, N ≤ 64: 1e-3 on mean and latent std.
     row(WellConditioned, F32, Mean, 1e-3, 0.0, 1e-3),
     row(WellConditioned, F32, Std, 1e-3, 0.0, 1e-3),
-    // Not required by the issue; the LML sums N terms of data fit and log-determinant.
+    // Not required; the LML sums N terms of data fit and log-determinant.
     row(WellConditioned, F32, LogMarginalLikelihood, 1e-3, 0.0, 1e-3),
     // A large offset leaves K as well-conditioned as above: the f64 target still holds.
     row(LargeOffset, F64, Mean, 1e-9, 0.0, 1e-9),
@@ -627,7 +627,7 @@ fn numbers(v: &serde_json::Value) -> Vec<f64> {
 /// "exact_base_jitter"); returns the summaries per class and the failures.
 fn run_exact(
     precision: Precision,
-    policy: &Policy,
+    policy: &ConditioningOptions,
     expected: &str,
 ) -> (Vec<(String, ExactSummary)>, Vec<String>) {
     let mut summaries: Vec<(String, ExactSummary)> = Vec::new();
@@ -712,7 +712,7 @@ fn run_exact(
     (summaries, failures)
 }
 
-fn assert_exact(precision: Precision, policy: Policy, expected: &str) {
+fn assert_exact(precision: Precision, policy: ConditioningOptions, expected: &str) {
     let (summaries, failures) = run_exact(precision, &policy, expected);
     assert!(
         failures.is_empty(),
@@ -724,7 +724,7 @@ fn assert_exact(precision: Precision, policy: Policy, expected: &str) {
     assert!(summaries.iter().all(|(_, s)| s.cases >= 20));
 }
 
-const EXACT_MODEL: Policy = Policy {
+const EXACT_MODEL: ConditioningOptions = ConditioningOptions {
     base_jitter: false,
     max_jitter_ratio: None,
     max_condition: None,
@@ -733,20 +733,20 @@ const EXACT_MODEL: Policy = Policy {
 #[test]
 fn exact_hard_cases_f64_agree_or_are_refused() {
     assert_exact(F64, EXACT_MODEL, "exact");
-    assert_exact(F64, Policy::default(), "exact_base_jitter");
+    assert_exact(F64, ConditioningOptions::default(), "exact_base_jitter");
 }
 
 #[test]
 fn exact_hard_cases_f32_agree_or_are_refused() {
     assert_exact(F32, EXACT_MODEL, "exact");
-    assert_exact(F32, Policy::default(), "exact_base_jitter");
+    assert_exact(F32, ConditioningOptions::default(), "exact_base_jitter");
 }
 
 /// Without the policy's limits (the core before it had one) f32 returns wrong numbers on
 /// these cases: the test above would catch it.
 #[test]
 fn without_limits_f32_gives_wrong_answers_the_policy_refuses() {
-    let unbounded = Policy {
+    let unbounded = ConditioningOptions {
         base_jitter: false,
         max_jitter_ratio: Some(f64::INFINITY),
         max_condition: Some(f64::INFINITY),

@@ -1,6 +1,6 @@
 //! Every section reference (the section sign followed by a number, as in "spec" + sign +
 //! "7.3") in the repository's code, scripts and Markdown names a numbered heading of the
-//! algorithm reference, `docs/algorithms.md` (issue 16).
+//! algorithm reference, `docs/algorithms.md`.
 //!
 //! Conventions the check applies (stated at the top of `docs/algorithms.md`):
 //! - a section is a Markdown heading that starts with its number: `## 7. IWFQI …` is

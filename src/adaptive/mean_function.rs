@@ -1,7 +1,7 @@
 //! A GP that only predicts its posterior mean: the inputs, the mean weights `α = K⁻¹y` and
 //! the hyperparameters, without the `N × N` factor.
 //!
-//! The adaptive kernel needs every source's reward-GP mean at every candidate row and at
+//! Adaptive AWFQI needs every source's reward-GP mean at every candidate row and at
 //! every target record, all the time; keeping one [`Gp`] per source would cost `N²` floats
 //! each (17 704 bytes for `Gp<f32, 64, 3>`), a mean function costs `N·(I + 1) + I + 2`
 //! floats (1 048 bytes for `f32`, `N = 64`, `I = 3`). It is set-up data, like the stored

@@ -1,8 +1,7 @@
-//! Adaptive AWFQI (issue 11; not a thesis algorithm): the query distribution is recomputed
+//! Adaptive AWFQI (not a thesis algorithm): the query distribution is recomputed
 //! from what the target has answered, several times per step, and aims at what decides the
-//! greedy policy. The harness's `awfqi-adaptive` (`docs/active-budget.md`) in fixed memory,
-//! for any plant with a `D`-dimensional state; the harness runs it as
-//! `awfqi-adaptive-kernel`.
+//! greedy policy, in fixed memory, for any plant with a `D`-dimensional state; the harness
+//! runs it as `awfqi-adaptive` (`docs/active-budget.md`).
 //!
 //! Each step's budget `n` is spent in [`AdaptiveConfig::sub_batches`] sub-batches; in each:
 //!
@@ -133,7 +132,7 @@ pub enum Refit {
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The recommended configuration (`docs/embedded-adaptive.md`, the harness's
-    /// `awfqi-adaptive-kernel`): 3 sub-batches, 70 % verification, surprise, uncertainty
+    /// `awfqi-adaptive`): 3 sub-batches, 70 % verification, surprise, uncertainty
     /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
     /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
     /// each GP's first fit), on the thesis's AWFQI settings for `budget`
@@ -322,7 +321,7 @@ impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig
     }
 }
 
-/// The adaptive AWFQI kernel: configuration, borrowed storage and the state of a run.
+/// The adaptive AWFQI learner: configuration, borrowed storage and the state of a run.
 ///
 /// Generic like [`crate::Awfqi`]: scalar `T`, target model `G`, state dimension `D`, GP
 /// input dimension `I = D + 1`, GP capacity `N` (the target GP's and the sources' mean
@@ -358,7 +357,7 @@ where
     G: GenerativeModel<T, State = [T; D]>,
     Dims<D, I>: StatePlusAction,
 {
-    /// A kernel for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
+    /// A learner for a fresh run (`D₀` empty, Q = 0) over `buffers`: the sources with their
     /// stored reward posteriors, one mean function per source (`means`, e.g.
     /// [`MeanFunction::fit_rewards`] on each source), the candidate `rows`, the FQI
     /// `approximator` and the `target` model.
@@ -426,7 +425,7 @@ where
         let beliefs = beliefs
             .get_mut(..m)
             .ok_or(Error::CapacityExceeded { capacity: m })?;
-        let mut kernel = Self {
+        let mut learner = Self {
             config,
             rows,
             means,
@@ -442,8 +441,8 @@ where
             last: None,
             run: Transfer::new(target, sources, samples, weights, gp, fqi),
         };
-        kernel.reset();
-        Ok(kernel)
+        learner.reset();
+        Ok(learner)
     }
 
     /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
@@ -527,7 +526,7 @@ where
     /// yet; [`AdaptiveAwfqi::step`] does it otherwise. It depends on the set-up only, so a
     /// firmware can run it at boot and keep it out of the first step's time.
     ///
-    /// Errors: those of FQI; the kernel is unchanged then.
+    /// Errors: those of FQI; the learner is unchanged then.
     pub fn plan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<()> {
         if !self.planned {
             self.replan(rng)?;

@@ -69,7 +69,7 @@ impl<
         }
     }
 
-    /// The block as the slices a kernel borrows.
+    /// The block as the slices a learner borrows.
     pub fn buffers(&mut self) -> AdaptiveBuffers<'_, T, D, I, N> {
         AdaptiveBuffers {
             gp: &mut self.gp,
@@ -103,7 +103,7 @@ where
     }
 }
 
-/// The memory of an adaptive kernel as borrowed slices, whatever owns it (an
+/// The memory of an adaptive learner as borrowed slices, whatever owns it (an
 /// [`AdaptiveStorage`], or a host's vectors sized at run time).
 #[derive(Debug)]
 pub struct AdaptiveBuffers<'a, T, const D: usize, const I: usize, const N: usize> {

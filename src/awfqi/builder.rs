@@ -30,7 +30,7 @@ use rand_core::Rng;
 /// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
 /// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
 /// (39 096 bytes on a Cortex-M4F, see [`crate::awfqi`]). The builder hands out its parts as
-/// slices, so the kernel's code does not depend on the capacities.
+/// slices, so the learner's code does not depend on the capacities.
 #[derive(Debug, Clone)]
 pub struct AwfqiStorage<
     T,
@@ -60,7 +60,7 @@ impl<
     const E: usize,
 > AwfqiStorage<T, D, I, N, Q, W, R, E>
 {
-    /// Empty, all-zero storage (the GP's hyperparameters are set when a kernel is built).
+    /// Empty, all-zero storage (the GP's hyperparameters are set when a learner is built).
     /// `I` must be `D + 1` ([`Dims`]).
     pub const fn new() -> Self
     where
@@ -75,7 +75,7 @@ impl<
         }
     }
 
-    /// The block as the slices a kernel borrows.
+    /// The block as the slices a learner borrows.
     pub fn buffers(&mut self) -> AwfqiBuffers<'_, T, D, I, N> {
         AwfqiBuffers {
             gp: &mut self.gp,
@@ -105,7 +105,7 @@ where
     }
 }
 
-/// The memory of a kernel as borrowed slices, whatever owns it: an [`AwfqiStorage`]
+/// The memory of a learner as borrowed slices, whatever owns it: an [`AwfqiStorage`]
 /// (`(&mut storage).into()`, or [`AwfqiStorage::buffers`]) or buffers sized at run time
 /// (a host's vectors).
 #[derive(Debug)]
@@ -162,7 +162,7 @@ enum ScoreValues<'a, T, const D: usize> {
     Realistic(&'a mut [Scores<T, D>]),
 }
 
-/// The set-up of an AWFQI kernel, performed once by [`AwfqiBuilder::build`] (the
+/// The set-up of an AWFQI learner, performed once by [`AwfqiBuilder::build`] (the
 /// [crate docs](crate) show it on a plant of their own).
 ///
 /// Required: the validated configuration, the FQI grid, the source records (one slice per
@@ -216,7 +216,7 @@ where
 
     /// Turns transition weights on (§7.2 step 4 with every next-state dimension on; off
     /// by default, every `w_s = 1`, the shared-dynamics configuration of §7.6): every step
-    /// fits one target GP per next-state coordinate in turn (in the kernel's GP, before
+    /// fits one target GP per next-state coordinate in turn (in the learner's GP, before
     /// the reward GP), weighs each source record's coordinate by `params` against the
     /// stored source posterior, and FQI uses the product over coordinates from its second
     /// iteration on.
@@ -247,7 +247,7 @@ where
     }
 
     /// Fits one reward GP per source at build time and stores the posteriors at its records
-    /// in `storage` (one per source record), where the kernel then reads them.
+    /// in `storage` (one per source record), where the learner then reads them.
     pub fn fit_posteriors(mut self, storage: &'a mut [Posterior<T>]) -> Self {
         self.posteriors = Posteriors::Fit(storage);
         self
@@ -281,7 +281,7 @@ where
         self
     }
 
-    /// Performs the set-up in `buffers` and returns the kernel, ready for its first step:
+    /// Performs the set-up in `buffers` and returns the learner, ready for its first step:
     /// checks every size, fits the source GPs (posteriors, realistic scores) drawing from
     /// `rng`, builds the score table and its sampler, pairs the sources with their
     /// posteriors and clears the FQI table and the target GP.

@@ -1,7 +1,7 @@
-//! What every AWFQI kernel holds and does with it, once: the target model and its dataset
+//! What every AWFQI learner holds and does with it, once: the target model and its dataset
 //! `D₀`, the sources with their stored posteriors, one value per source record (a reward
 //! weight, or a relabelled reward), the target GP, the Q-function and the step count; and
-//! the passes over them that the kernels share — a query appended to `D₀`, the reward
+//! the passes over them that the learners share — a query appended to `D₀`, the reward
 //! weights, weighted FQI, a step's report. [`crate::Awfqi`] adds the score table's sampler
 //! and transition weights, [`crate::AdaptiveAwfqi`] its adaptive query rule.
 
@@ -15,8 +15,8 @@ use crate::record_gp::{Dims, StatePlusAction, visit_posteriors};
 use crate::weights::{NoiseSubtraction, Posterior, WeightParams, WeightSummary, WeightTally};
 use rand_core::Rng;
 
-/// The state of a transfer run that every kernel has (module docs). Its fields are the
-/// kernels' to borrow apart.
+/// The state of a transfer run that every learner has (module docs). Its fields are the
+/// learners' to borrow apart.
 #[derive(Debug)]
 pub(crate) struct Transfer<'a, T, G, const D: usize, const I: usize, const N: usize> {
     /// The target's generative model.

@@ -17,13 +17,13 @@
 
 mod acrobot;
 mod dam;
-mod grid;
+mod grid_world;
 mod puddle;
 
 pub use acrobot::*;
 pub use dam::*;
-pub use grid::GridWorld;
-pub use grid::{GRID_ACTIONS, THESIS_GOALS};
+pub use grid_world::GridWorld;
+pub use grid_world::{GRID_WORLD_ACTIONS, THESIS_GOALS};
 pub use puddle::*;
 
 pub use crate::model::{FiniteMdp, GenerativeModel, Transition};

@@ -33,7 +33,7 @@
 //!
 //! **Memory.** One [`KnnRecord`] per record (`2D + 4` scalars and 4 bytes: 36 bytes for
 //! `f32`, `D = 2`) and `records · actions · k` links of 2 bytes; at most 65 534 records.
-//! Puddle World's adaptive kernel (300 target + 1 033 source records, 4 actions, `k = 4`):
+//! Puddle World's adaptive AWFQI (300 target + 1 033 source records, 4 actions, `k = 4`):
 //! 47 988 + 42 656 bytes. Fit cost: `O(records² · actions)` for the links (once), then
 //! `O(records · actions · k)` per iteration; a prediction scans the records, `O(records)`.
 
@@ -730,7 +730,7 @@ impl<T: Real, const D: usize> Regressor<T, D> for KnnFqi<'_, T, D> {
     }
 }
 
-/// The memory of a kernel-averaging Q as one block with const-generic capacities (`R`
+/// The memory of a learner-averaging Q as one block with const-generic capacities (`R`
 /// record slots, `L` links), all-zero so it can be a `static` in `.bss`.
 #[derive(Debug, Clone)]
 pub struct KnnStorage<T, const D: usize, const R: usize, const L: usize> {

@@ -1,4 +1,4 @@
-//! Where `awfqi-adaptive-kernel` loses against `awfqi-adaptive`: the approximator, on the
+//! Where the core's adaptive AWFQI (`awfqi-adaptive`) loses against Extra-Trees FQI: the approximator, on the
 //! same data. Runs the core's adaptive kernel (f32, the harness's configuration: 64-point
 //! GPs, 12 × 12 tiles × 8 tilings, 6 steps of 50 queries on shared-dynamics Puddle World,
 //! the published sources, grid rows of spacing 0.1), then fits the harness's weighted

@@ -1,5 +1,5 @@
 //! Host timing of the core's Extra-Trees Q-function (`awfqi::TreeFqi`, f32) at the size of
-//! `awfqi-adaptive-kernel`'s last re-plan on Puddle World: the 1 033 published source records
+//! `awfqi-adaptive`'s last re-plan on Puddle World: the 1 033 published source records
 //! and 300 target records (uniform states and actions, queried from the target), 60 FQI
 //! iterations; then greedy decisions at 1 000 uniform states. One thread, one repetition
 //! per configuration (the fits take seconds).

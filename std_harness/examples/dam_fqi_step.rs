@@ -52,7 +52,7 @@ struct Cli {
 #[derive(Parser)]
 struct DamCommand {
     #[command(flatten)]
-    args: transfer::Args,
+    args: dam::Args,
 }
 
 /// This thread's CPU time in seconds, or `None` off Linux.
@@ -77,8 +77,16 @@ fn main() -> anyhow::Result<()> {
         &seed,
     ]);
     let domain = awfqi_harness::domains::dam::domain();
-    let config = transfer::Config::resolve(&command.args, &domain, &dam::DEFAULTS, false)?;
-    let experiment = transfer::build_experiment(&config, Arc::new(domain), None, None)?;
+    let config = transfer::Config::resolve(
+        &command.args.common,
+        command.args.fixed_gp,
+        &domain,
+        &[Algorithm::Iwfqi],
+        false,
+    )?;
+    let data = awfqi_harness::transfer::domain_data::dam::data();
+    let experiment =
+        transfer::build_experiment(&config, Arc::new(domain), Arc::new(data), None, None)?;
     let gp = experiment
         .options
         .gp

@@ -1,4 +1,4 @@
-//! Wall time of the faithful FQI path on one core (issue 7's target: one run of the puddle
+//! Wall time of the faithful FQI path on one core (the target: one run of the puddle
 //! reference configuration, 6 steps × 10 episodes, 60 iterations, 50 trees, evaluation
 //! included, in at most 5 s).
 //!

@@ -23,9 +23,9 @@ use rand_core::Rng;
 use serde::{Deserialize, Serialize};
 
 /// How FQI represents its Q-function.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum QFunctionKind {
+pub enum ForestLayout {
     /// One forest per action (spec §5).
     #[default]
     PerAction,
@@ -33,7 +33,7 @@ pub enum QFunctionKind {
     Joint,
 }
 
-impl QFunctionKind {
+impl ForestLayout {
     /// Whether this is the spec's per-action representation (kept out of result files).
     pub fn is_per_action(&self) -> bool {
         *self == Self::PerAction
@@ -42,20 +42,20 @@ impl QFunctionKind {
 
 /// A fitted Q-function of either kind.
 #[derive(Debug, Clone)]
-pub enum QFunction<const D: usize> {
+pub enum ForestQ<const D: usize> {
     /// Per-action forests (spec §5).
     PerAction(ActionForests<D>),
     /// One forest over `(state, action value)`.
     Joint(JointQ),
 }
 
-impl<const D: usize> From<ActionForests<D>> for QFunction<D> {
+impl<const D: usize> From<ActionForests<D>> for ForestQ<D> {
     fn from(q: ActionForests<D>) -> Self {
         Self::PerAction(q)
     }
 }
 
-impl<const D: usize> QFunction<D> {
+impl<const D: usize> ForestQ<D> {
     /// `argmax_a Q(state, a)`, ties to the smallest action index.
     pub fn greedy_action(&self, state: &[f64; D]) -> usize {
         match self {
@@ -328,7 +328,7 @@ mod tests {
             assert!((q.predict(&[0.5, 1.0], 1) - 5.25).abs() < 1e-12);
             assert!((q.predict(&[0.5, 1.0], 0) - 3.25).abs() < 1e-12);
             assert_eq!(q.greedy_action(&[0.5, 1.0]), 1);
-            let wrapped = QFunction::<2>::Joint(q);
+            let wrapped = ForestQ::<2>::Joint(q);
             assert_eq!(wrapped.greedy_action(&[0.5, 1.0]), 1);
         }
     }

@@ -22,11 +22,11 @@ enum Command {
     /// Finite-MDP identification on the Grid World (thesis Figs. 4.2 and 4.3).
     Identify(commands::identify::Args),
     /// Puddle World transfer experiments: every algorithm on the protocol of spec §3.
-    Puddle(commands::puddle::Args),
+    Puddle(Box<commands::puddle::Args>),
     /// The IWFQI paper's water reservoir (Dam): every algorithm on the protocol of spec §3.
-    Dam(commands::transfer::Args),
+    Dam(commands::dam::Args),
     /// The IWFQI paper's multitask Acrobot: every algorithm on the protocol of spec §3.
-    Acrobot(commands::transfer::Args),
+    Acrobot(commands::acrobot::Args),
     /// Combines the result files of shard directories (same configuration, disjoint runs)
     /// into OUT and regenerates the summary, metrics and plots.
     Merge(commands::merge::Args),
@@ -40,15 +40,15 @@ fn main() -> anyhow::Result<()> {
         Command::Gp(args) => commands::gp::run(&args),
         Command::Identify(args) => commands::identify::run(&args),
         Command::Puddle(mut args) => {
-            args.command = typed();
+            args.common.command = typed();
             commands::puddle::run(&args)
         }
         Command::Dam(mut args) => {
-            args.command = typed();
+            args.common.command = typed();
             commands::dam::run(&args)
         }
         Command::Acrobot(mut args) => {
-            args.command = typed();
+            args.common.command = typed();
             commands::acrobot::run(&args)
         }
         Command::Merge(args) => commands::merge::run(&args),

@@ -20,9 +20,9 @@ static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 /// Family name under which the embedded font is registered.
 pub const FONT_FAMILY: &str = "sans-serif";
 
-/// The Okabe–Ito colour-blind-safe palette (black eighth), then a crimson for a ninth
-/// series (awfqi-adaptive's).
-pub const PALETTE: [RGBColor; 9] = [
+/// The Okabe–Ito colour-blind-safe palette (black eighth), then a crimson, a purple and a
+/// grey, so each of the transfer algorithms has a colour of its own.
+pub const PALETTE: [RGBColor; 11] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
     RGBColor(0, 158, 115),
@@ -32,6 +32,8 @@ pub const PALETTE: [RGBColor; 9] = [
     RGBColor(240, 228, 66),
     RGBColor(0, 0, 0),
     RGBColor(170, 0, 60),
+    RGBColor(117, 112, 179),
+    RGBColor(120, 120, 120),
 ];
 
 fn ensure_font() -> anyhow::Result<()> {
@@ -53,6 +55,9 @@ pub enum SeriesStyle {
     Line,
     /// Markers only (scatter plots).
     Points,
+    /// A thin line without band or markers, in the legend only when labelled (the
+    /// outlines of regions on a map).
+    Outline,
 }
 
 /// One named data series.
@@ -91,6 +96,8 @@ pub struct Panel {
     pub y_label: String,
     /// x-axis scale.
     pub x_scale: XScale,
+    /// Fixed x range (linear scale); computed from the data when `None`.
+    pub x_range: Option<(f64, f64)>,
     /// Fixed y range; computed from the data (with errors) when `None`.
     pub y_range: Option<(f64, f64)>,
     /// The series.
@@ -230,7 +237,10 @@ fn draw_panel<DB: DrawingBackend>(
     let (x_lo, x_hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
         (a.min(x), b.max(x))
     });
-    let (x_lo, x_hi) = padded(x_lo, x_hi);
+    let (x_lo, x_hi) = match panel.x_range {
+        Some((lo, hi)) => (transform(scale, lo), transform(scale, hi)),
+        None => padded(x_lo, x_hi),
+    };
     let (y_lo, y_hi) = match panel.y_range {
         Some(range) => range,
         None => {
@@ -319,6 +329,17 @@ fn draw_panel<DB: DrawingBackend>(
                     .label(&series.label)
                     .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
             }
+            SeriesStyle::Outline => {
+                let style = color.stroke_width(1);
+                let drawn = chart
+                    .draw_series(LineSeries::new(points.clone(), style))
+                    .map_err(plot_error)?;
+                if !series.label.is_empty() {
+                    drawn
+                        .label(&series.label)
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+                }
+            }
         }
     }
     for (label, y) in &panel.references {
@@ -363,6 +384,7 @@ mod tests {
             x_label: "budget".into(),
             y_label: "value".into(),
             x_scale: XScale::Log2,
+            x_range: None,
             y_range: None,
             series: vec![
                 Series {

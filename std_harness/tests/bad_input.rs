@@ -422,7 +422,7 @@ fn acrobot_sources_outside_the_arms_state_space_are_named() {
 
 #[test]
 fn the_published_dam_and_acrobot_sources_pass_the_same_checks() {
-    use awfqi_harness::domains::{acrobot, dam};
+    use awfqi_harness::transfer::domain_data::{acrobot, dam};
     use awfqi_harness::transfer::sources::SourceSet;
     let dir = scratch("iwfqi-published");
     // Unchanged copies (line 1 edited by nothing), read through the `--sources DIR` door.

@@ -8,8 +8,8 @@
 
 use std::path::Path;
 
+use awfqi_harness::commands::acrobot::Args;
 use awfqi_harness::commands::acrobot::run;
-use awfqi_harness::commands::puddle::Args;
 
 mod common;
 

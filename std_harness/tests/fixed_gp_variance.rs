@@ -9,8 +9,8 @@
 
 use std::path::Path;
 
+use awfqi_harness::commands::dam::Args;
 use awfqi_harness::commands::dam::run;
-use awfqi_harness::commands::puddle::Args;
 
 mod common;
 

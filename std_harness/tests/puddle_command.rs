@@ -108,34 +108,34 @@ fn outputs_are_complete_deterministic_and_mergeable() {
     let summary = read(&a, "summary.csv");
     assert!(summary.starts_with("algorithm,step,n_episodes,n_target_samples,mean,stderr,runs\n"));
     assert_eq!(summary.lines().count(), 1 + 2 * algorithms.len());
-    // IWFQI and the kernel report their weight diagnostics, RBT its compliances.
+    // IWFQI and the core's algorithms report their weight diagnostics, RBT its compliances.
     let d = base.join("d");
-    run(&args(&d, "1", "iwfqi,awfqi-kernel,awfqi-adaptive-kernel")).unwrap();
-    for name in ["iwfqi", "awfqi-kernel", "awfqi-adaptive-kernel"] {
+    run(&args(&d, "1", "iwfqi,awfqi-embedded,awfqi-adaptive")).unwrap();
+    for name in ["iwfqi", "awfqi-embedded", "awfqi-adaptive"] {
         let json: serde_json::Value =
             serde_json::from_str(&read(&d, &format!("{name}.json"))).unwrap();
         let step = &json["runs"][0]["steps"][1];
         assert!(step["wr_eff"].as_f64().unwrap() > 0.0, "{name}");
         assert!(step["reward_gp"]["noise_variance"].is_number(), "{name}");
     }
-    // The adaptive kernel spends 50 queries per step and names its own approximator and
-    // GPs (the recommended model sweep, 32 points, warm refits).
+    // The adaptive AWFQI spends 50 queries per step and names its own approximator and GPs
+    // (the recommended model sweep, 32 points, warm refits).
     let adaptive: serde_json::Value =
-        serde_json::from_str(&read(&d, "awfqi-adaptive-kernel.json")).unwrap();
+        serde_json::from_str(&read(&d, "awfqi-adaptive.json")).unwrap();
     let steps = &adaptive["runs"][0]["steps"];
     assert_eq!(steps[0]["n_target_samples"].as_f64(), Some(50.0));
     assert_eq!(steps[1]["n_target_samples"].as_f64(), Some(100.0));
-    let kernel = &adaptive["runs"][0]["parameters"]["kernel"];
-    assert_eq!(kernel["fqi_sweep_cells"], serde_json::json!(12), "{kernel}");
-    assert_eq!(kernel["fqi_sweep_rewards"], serde_json::json!("Pooled"));
-    assert_eq!(kernel["gp_capacity"], serde_json::json!(32));
-    let options = &adaptive["runs"][0]["parameters"]["adaptive"];
+    let embedded = &adaptive["runs"][0]["parameters"]["embedded"];
     assert_eq!(
-        options["kernel_candidates"],
-        serde_json::json!(250),
-        "{options}"
+        embedded["fqi_sweep_cells"],
+        serde_json::json!(12),
+        "{embedded}"
     );
-    assert_eq!(options["kernel_refit"], serde_json::json!([30, 0]));
+    assert_eq!(embedded["fqi_sweep_rewards"], serde_json::json!("Pooled"));
+    assert_eq!(embedded["gp_capacity"], serde_json::json!(32));
+    let options = &adaptive["runs"][0]["parameters"]["adaptive"];
+    assert_eq!(options["candidates"], serde_json::json!(250), "{options}");
+    assert_eq!(options["refit"], serde_json::json!([30, 0]));
     let rbt: serde_json::Value = serde_json::from_str(&read(&a, "rbt.json")).unwrap();
     let c0 = rbt["runs"][0]["steps"][0]["compliances"]
         .as_array()
@@ -260,38 +260,33 @@ fn the_joint_q_function_runs_the_baselines_and_refuses_active_algorithms() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
-/// `--adaptive-final-trees` changes only the trees of each step's last fit: set to the
-/// protocol's count it reproduces the default run, set to another count it is recorded
-/// in the run's parameters and changes what follows (the next step's queries).
+/// Each subcommand offers only the flags that apply to it: Puddle World's dynamics and the
+/// core algorithms' options (Puddle World only) are not in `dam --help` or `acrobot --help`.
 #[test]
-fn awfqi_adaptive_final_trees_is_the_last_fit_only() {
-    let base = std::env::temp_dir().join(format!("awfqi-final-trees-{}", std::process::id()));
-    let small = ["--adaptive-candidates", "200"];
-    let run_with = |name: &str, final_trees: Option<&str>| {
-        let dir = base.join(name);
-        let mut extra = small.to_vec();
-        if let Some(t) = final_trees {
-            extra.extend(["--adaptive-final-trees", t]);
-        }
-        run(&args_with(&dir, "1", "awfqi-adaptive", &extra)).unwrap();
-        let json: serde_json::Value =
-            serde_json::from_str(&read(&dir, "awfqi-adaptive.json")).unwrap();
-        json["runs"][0].clone()
+fn dam_and_acrobot_offer_no_puddle_world_flags() {
+    let help = |command: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_awfqi-harness"))
+            .args([command, "--help"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{command} --help");
+        String::from_utf8(out.stdout).unwrap()
     };
-    let default = run_with("default", None);
-    let same = run_with("same", Some("3")); // the protocol's --trees 3
-    let more = run_with("more", Some("9"));
-    assert!(
-        default["parameters"]["adaptive"]
-            .get("final_trees")
-            .is_none()
-    );
-    assert_eq!(same["steps"], default["steps"]);
-    assert_eq!(same["samples"], default["samples"]);
-    assert_eq!(
-        more["parameters"]["adaptive"]["final_trees"],
-        serde_json::json!(9)
-    );
-    assert_ne!(more["samples"], default["samples"]);
-    std::fs::remove_dir_all(&base).unwrap();
+    let puddle_only = [
+        "--dynamics",
+        "--embedded-q",
+        "--adaptive-q",
+        "--adaptive-sweep-cells",
+    ];
+    let puddle = help("puddle");
+    for flag in puddle_only {
+        assert!(puddle.contains(flag), "puddle --help lacks {flag}");
+    }
+    for command in ["dam", "acrobot"] {
+        let text = help(command);
+        assert!(text.contains("--algorithms") && text.contains("--fixed-gp-variance"));
+        for flag in puddle_only {
+            assert!(!text.contains(flag), "{command} --help offers {flag}");
+        }
+    }
 }

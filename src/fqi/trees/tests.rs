@@ -1,4 +1,5 @@
 extern crate std;
+use super::growth::{LANES, Sides, predict_lanes};
 use super::*;
 use crate::fqi::{EmptyCells, QFunction, QStorage};
 use crate::model::Transition;

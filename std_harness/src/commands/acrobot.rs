@@ -7,22 +7,21 @@
 
 use crate::domains::acrobot;
 
-use super::transfer::{Args, Config, Defaults};
+use super::transfer::{BASELINES_AND_AWFQI, Config, PaperArgs};
 
-/// The command's defaults (the published configuration).
-pub const DEFAULTS: Defaults = Defaults {
-    episodes_per_step: 10,
-    steps: 20,
-    runs: 20,
-    threshold: -50.0,
-};
+/// Arguments of `awfqi-harness acrobot`.
+pub type Args = PaperArgs;
 
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    if args.dynamics.is_some() {
-        anyhow::bail!("--dynamics applies to Puddle World only");
-    }
     let domain = acrobot::domain();
-    let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
-    super::transfer::run(&config, domain, None, None)
+    let config = Config::resolve(
+        &args.common,
+        args.fixed_gp,
+        &domain,
+        &BASELINES_AND_AWFQI,
+        false,
+    )?;
+    let data = crate::transfer::domain_data::acrobot::data();
+    super::transfer::run(&config, domain, data, None, None)
 }

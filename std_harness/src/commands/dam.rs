@@ -6,22 +6,21 @@
 
 use crate::domains::dam;
 
-use super::transfer::{Args, Config, Defaults};
+use super::transfer::{BASELINES_AND_AWFQI, Config, PaperArgs};
 
-/// The command's defaults (the published configuration).
-pub const DEFAULTS: Defaults = Defaults {
-    episodes_per_step: 1,
-    steps: 10,
-    runs: 20,
-    threshold: -1000.0,
-};
+/// Arguments of `awfqi-harness dam`.
+pub type Args = PaperArgs;
 
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    if args.dynamics.is_some() {
-        anyhow::bail!("--dynamics applies to Puddle World only");
-    }
     let domain = dam::domain();
-    let config = Config::resolve(args, &domain, &DEFAULTS, false)?;
-    super::transfer::run(&config, domain, None, None)
+    let config = Config::resolve(
+        &args.common,
+        args.fixed_gp,
+        &domain,
+        &BASELINES_AND_AWFQI,
+        false,
+    )?;
+    let data = crate::transfer::domain_data::dam::data();
+    super::transfer::run(&config, domain, data, None, None)
 }

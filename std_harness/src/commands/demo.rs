@@ -1,4 +1,4 @@
-//! `awfqi-harness demo`: the kernel in thirty seconds.
+//! `awfqi-harness demo`: the core in thirty seconds.
 //!
 //! Runs one Puddle World episode on the target task, then spends a small budget of
 //! generative-model queries on the target, fits the core's fixed-capacity `f32` GP to the
@@ -232,6 +232,7 @@ fn plot(
         x_label: "s_x".into(),
         y_label: "s_y".into(),
         x_scale: XScale::Linear,
+        x_range: None,
         y_range: Some((0.0, 10.0)),
         series: vec![
             Series {
@@ -265,6 +266,7 @@ fn plot(
         x_label: "s_x".into(),
         y_label: "reward".into(),
         x_scale: XScale::Linear,
+        x_range: None,
         y_range: None,
         series: vec![
             Series {

@@ -83,7 +83,7 @@ pub enum Precision {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Engine {
     /// The core `awfqi::gp::Gp` in the given precision, under a conditioning policy.
-    Core(Precision, Policy),
+    Core(Precision, ConditioningOptions),
     /// The reference GP, with `extra_diagonal` added to the training diagonal.
     Reference {
         /// Added to the diagonal beyond the noise variance (≥ 0).
@@ -180,7 +180,7 @@ pub enum CaseOutput {
 
 /// The whole output document.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-pub struct Output {
+pub struct OutputFile {
     /// One entry per input case, in input order.
     pub cases: Vec<CaseOutput>,
 }
@@ -194,7 +194,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     } else {
         Engine::Core(
             args.precision,
-            Policy {
+            ConditioningOptions {
                 base_jitter: !args.no_base_jitter,
                 max_jitter_ratio: args.max_jitter_ratio,
                 max_condition: args.max_condition,
@@ -239,7 +239,7 @@ pub fn check_document(text: &str) -> anyhow::Result<()> {
 
 /// Computes every case of an input document. Fails only when the document is not
 /// `{"cases":[…]}`; a malformed or failing case becomes an `error` entry.
-pub fn run_json(text: &str, engine: Engine) -> anyhow::Result<Output> {
+pub fn run_json(text: &str, engine: Engine) -> anyhow::Result<OutputFile> {
     #[derive(Deserialize)]
     struct Input {
         cases: Vec<serde_json::Value>,
@@ -263,7 +263,7 @@ pub fn run_json(text: &str, engine: Engine) -> anyhow::Result<Output> {
             }
         })
         .collect();
-    Ok(Output { cases })
+    Ok(OutputFile { cases })
 }
 
 /// Computes one case with `engine`, turning an error into an `error` entry.
@@ -314,7 +314,7 @@ pub fn fit_reference(case: &Case, extra_diagonal: f64) -> Result<Fit, CaseError>
 /// [`CaseError::Core`]. With `f32` the inputs are rounded to `f32` first and the outputs
 /// widened back to `f64` exactly.
 pub fn fit_core(case: &Case, precision: Precision) -> Result<Fit, CaseError> {
-    fit_core_under(case, precision, &Policy::default())
+    fit_core_under(case, precision, &ConditioningOptions::default())
 }
 
 /// The core GP's conditioning policy for a case (`awfqi::gp::Conditioning`, in f64 so one
@@ -322,7 +322,7 @@ pub fn fit_core(case: &Case, precision: Precision) -> Result<Fit, CaseError> {
 /// relative to the noise variance and the largest trusted condition estimate (`None`: the
 /// precision's default).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Policy {
+pub struct ConditioningOptions {
     /// Add the base jitter `1e-10` (the reference's `alpha`).
     pub base_jitter: bool,
     /// `Conditioning::with_max_jitter_ratio`, when set.
@@ -331,7 +331,7 @@ pub struct Policy {
     pub max_condition: Option<f64>,
 }
 
-impl Default for Policy {
+impl Default for ConditioningOptions {
     fn default() -> Self {
         Self {
             base_jitter: true,
@@ -341,7 +341,7 @@ impl Default for Policy {
     }
 }
 
-impl Policy {
+impl ConditioningOptions {
     fn conditioning<T: Real>(&self) -> awfqi::Result<Conditioning<T>> {
         let mut c = Conditioning::DEFAULT;
         if !self.base_jitter {
@@ -357,11 +357,11 @@ impl Policy {
     }
 }
 
-/// [`fit_core`] under a conditioning [`Policy`].
+/// [`fit_core`] under [`ConditioningOptions`].
 pub fn fit_core_under(
     case: &Case,
     precision: Precision,
-    policy: &Policy,
+    policy: &ConditioningOptions,
 ) -> Result<Fit, CaseError> {
     check_shape(case)?;
     let capacity = capacity_for(case.x.len())?;
@@ -415,7 +415,7 @@ fn check_shape(case: &Case) -> Result<(), CaseError> {
 fn dispatch_dimension<T: Real>(
     case: &Case,
     capacity: usize,
-    policy: &Policy,
+    policy: &ConditioningOptions,
 ) -> Result<Fit, CaseError> {
     match case.length_scales.len() {
         1 => dispatch_capacity::<T, 1>(case, capacity, policy),
@@ -435,7 +435,7 @@ fn dispatch_dimension<T: Real>(
 fn dispatch_capacity<T: Real, const D: usize>(
     case: &Case,
     capacity: usize,
-    policy: &Policy,
+    policy: &ConditioningOptions,
 ) -> Result<Fit, CaseError> {
     match capacity {
         16 => on_large_stack::<T, 16, D>(case, policy),
@@ -459,7 +459,7 @@ const BASE_STACK_BYTES: usize = 4 << 20;
 /// the GP's size of stack, in debug and release alike.
 fn on_large_stack<T: Real, const N: usize, const D: usize>(
     case: &Case,
-    policy: &Policy,
+    policy: &ConditioningOptions,
 ) -> Result<Fit, CaseError> {
     let stack = BASE_STACK_BYTES + 8 * std::mem::size_of::<Gp<T, N, D>>();
     std::thread::scope(|scope| {
@@ -477,7 +477,7 @@ fn on_large_stack<T: Real, const N: usize, const D: usize>(
 /// Fits `Gp<T, N, D>` to the case and predicts at every test input.
 fn fit_core_with<T: Real, const N: usize, const D: usize>(
     case: &Case,
-    policy: &Policy,
+    policy: &ConditioningOptions,
 ) -> Result<Fit, CaseError> {
     let to_point = |row: &[f64]| -> [T; D] { std::array::from_fn(|d| T::from_f64(row[d])) };
     let hyper = Hyperparameters {

@@ -4,13 +4,85 @@
 //! fill one file; writers to one directory take its lock.
 
 use std::collections::BTreeSet;
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
 
-pub use crate::identification::Args;
-use crate::identification::{assemble, config, run_records, stored, table, write_outputs};
+use crate::identification::{
+    CriterionName, Design, PolicyName, StudyConfig, assemble, run_records, stored, table,
+    write_outputs,
+};
+use crate::run_range::RunRange;
 use crate::store::{self, DirLock, refusal};
+
+/// Arguments of `awfqi-harness identify` (defaults: [`StudyConfig::default`], the
+/// thesis's study).
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Query budgets n.
+    #[arg(long, value_delimiter = ',', default_values_t = StudyConfig::default().budgets)]
+    pub budgets: Vec<usize>,
+    /// Runs: a count N (runs 0..N) or a range A..B of run indices (for splitting a
+    /// sweep over machines; each run's record does not depend on the range).
+    #[arg(long, default_value_t = StudyConfig::default().runs)]
+    pub runs: RunRange,
+    /// Score criteria.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = StudyConfig::default().criteria)]
+    pub criteria: Vec<CriterionName>,
+    /// Policies evaluated from the final belief.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = StudyConfig::default().policies)]
+    pub policy: Vec<PolicyName>,
+    /// Experiment seed.
+    #[arg(long, default_value_t = StudyConfig::default().seed)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long, default_value = "results/identify")]
+    pub out: PathBuf,
+    /// Use the variant with absorbing goals (candidates then differ in transitions too).
+    #[arg(long)]
+    pub absorbing: bool,
+    /// Discount factor γ.
+    #[arg(long, default_value_t = StudyConfig::default().gamma)]
+    pub gamma: f64,
+    /// Monte-Carlo draws m of the reward mutual-information estimator.
+    #[arg(long, default_value_t = StudyConfig::default().mi_samples)]
+    pub mi_samples: usize,
+    /// Common histogram bins B of the reward mutual-information estimator.
+    #[arg(long, default_value_t = StudyConfig::default().mi_bins)]
+    pub mi_bins: usize,
+    /// Independent experiments per budget, or nested prefixes of one query sequence.
+    #[arg(long, value_enum, default_value_t = StudyConfig::default().design)]
+    pub design: Design,
+    /// Skip writing the plots.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// Recompute runs already in `identify.json`, and start anew a file that holds another
+    /// configuration or cannot be read, keeping the old one as
+    /// `identify.json.<timestamp>.bak`. Without it such a file is an error (nothing is
+    /// written) and runs already there are kept.
+    #[arg(long)]
+    pub replace: bool,
+}
+
+impl Args {
+    /// The study these arguments ask for, as `identify.json` records it.
+    pub fn config(&self) -> StudyConfig {
+        StudyConfig {
+            budgets: self.budgets.clone(),
+            runs: self.runs,
+            criteria: self.criteria.clone(),
+            policies: self.policy.clone(),
+            seed: self.seed,
+            absorbing: self.absorbing,
+            gamma: self.gamma,
+            mi_samples: self.mi_samples,
+            mi_bins: self.mi_bins,
+            design: self.design,
+            ..StudyConfig::default()
+        }
+    }
+}
 
 /// Runs the subcommand.
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -18,7 +90,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let path = out.join(stored::FILE);
-    let wanted = config(args);
+    let wanted = args.config();
     let present: BTreeSet<usize> = {
         let _lock = DirLock::acquire(out)?;
         match stored::check(&path, &wanted) {
@@ -46,7 +118,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let (todo, kept): (Vec<usize>, Vec<usize>) =
         (args.runs.start..args.runs.end).partition(|r| args.replace || !present.contains(r));
-    let records = run_records(args, &todo, true)?;
+    let records = run_records(&wanted, &todo, true)?;
     let elapsed = start.elapsed();
 
     let _lock = DirLock::acquire(out)?;

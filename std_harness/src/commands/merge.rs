@@ -226,9 +226,9 @@ struct Recorded {
 
 #[derive(Subcommand)]
 enum Experiment {
-    Puddle(super::puddle::Args),
-    Dam(super::transfer::Args),
-    Acrobot(super::transfer::Args),
+    Puddle(Box<super::puddle::Args>),
+    Dam(super::dam::Args),
+    Acrobot(super::acrobot::Args),
 }
 
 /// Regenerates OUT's summary, metrics and plots: the shards' command with `--no-run`.
@@ -273,7 +273,7 @@ fn merge_identify(args: &Args, paths: &[PathBuf]) -> anyhow::Result<()> {
         return Ok(());
     };
     let config = first.config.clone();
-    let mut records: BTreeMap<usize, (identification::RunRecord, &Path)> = BTreeMap::new();
+    let mut records: BTreeMap<usize, (identification::IdentificationRun, &Path)> = BTreeMap::new();
     for (path, study) in &studies {
         if let Err(conflict) = stored::check(path, &config) {
             return Err(conflict_error(
@@ -299,7 +299,7 @@ fn merge_identify(args: &Args, paths: &[PathBuf]) -> anyhow::Result<()> {
     let out = &args.out;
     let _lock = DirLock::acquire(out)?;
     let target = out.join(stored::FILE);
-    let mut all: BTreeMap<usize, identification::RunRecord> = BTreeMap::new();
+    let mut all: BTreeMap<usize, identification::IdentificationRun> = BTreeMap::new();
     match stored::check(&target, &config) {
         Ok(None) => {}
         Ok(Some(old)) => {

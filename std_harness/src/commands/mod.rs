@@ -1,6 +1,7 @@
 //! One module per subcommand of `awfqi-harness`.
 
 pub mod acrobot;
+pub mod choices;
 pub mod dam;
 pub mod demo;
 pub mod gp;

@@ -1,43 +1,99 @@
 //! `awfqi-harness puddle`: the Puddle World transfer experiments (spec §3–§9, §11–§13) —
 //! every algorithm on the common protocol ([`super::transfer`]), including the core's
-//! embedded AWFQI (`awfqi-kernel`). Defaults: thesis setting 2, sub-setting (b): shared
-//! dynamics, 1 episode per step, 6 steps, 10 runs.
+//! embedded ones. Defaults: thesis setting 2, sub-setting (b): shared dynamics, 1 episode
+//! per step, 6 steps, 10 runs of the headline comparison ([`HEADLINE`]);
+//! `--algorithms all` runs every algorithm.
 
+use clap::ValueEnum;
 use rand_chacha::ChaCha8Rng;
 
+use awfqi::env::Dynamics;
+
 use crate::domains::puddle;
-use crate::transfer::algorithms::adaptive_kernel;
-use crate::transfer::algorithms::awfqi_kernel::{self, KernelConfig, KernelSetup};
+use crate::transfer::algorithms::Algorithm;
+use crate::transfer::algorithms::embedded::{self, EmbeddedConfig, EmbeddedSetup};
 use crate::transfer::sources::SourceSet;
 
-pub use super::transfer::{Args, DynamicsArg, NoiseArg};
-use super::transfer::{Config, Defaults, KernelHooks};
-
-/// The command's defaults (thesis setting 2 (b), spec §13.2).
-pub const DEFAULTS: Defaults = Defaults {
-    episodes_per_step: 1,
-    steps: 6,
-    runs: 10,
-    threshold: -25.0,
+use super::transfer::{
+    AdaptiveArgs, CommonArgs, Config, EmbeddedArgs, EmbeddedPath, FixedGpArgs, embedded_config,
 };
 
-fn kernel_setup(
+/// The command's default algorithms, the headline comparison: FQI on the target alone,
+/// IWFQI, the thesis's AWFQI and the adaptive AWFQI.
+pub const HEADLINE: [Algorithm; 4] = [
+    Algorithm::Fqi,
+    Algorithm::Iwfqi,
+    Algorithm::Awfqi,
+    Algorithm::AwfqiAdaptive,
+];
+
+/// Puddle World's dynamics variants on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DynamicsArg {
+    /// κ = 0: all tasks share their transitions (the thesis's setting).
+    Shared,
+    /// κ = 5: puddles slow the agent down.
+    Puddle,
+}
+
+impl DynamicsArg {
+    /// The core's variant.
+    pub fn dynamics(self) -> Dynamics {
+        match self {
+            DynamicsArg::Shared => Dynamics::Shared,
+            DynamicsArg::Puddle => Dynamics::PuddleBased,
+        }
+    }
+}
+
+/// Arguments of `awfqi-harness puddle`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// Every transfer command's options.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Puddle World's dynamics variant.
+    #[arg(long, value_enum, default_value = "shared")]
+    pub dynamics: DynamicsArg,
+    /// `awfqi-embedded`'s options.
+    #[command(flatten)]
+    pub embedded: EmbeddedArgs,
+    /// `awfqi-adaptive`'s options.
+    #[command(flatten)]
+    pub adaptive: AdaptiveArgs,
+}
+
+fn embedded_setup(
     sources: &SourceSet<2>,
-    config: KernelConfig,
+    config: EmbeddedConfig,
     rng: &mut ChaCha8Rng,
-) -> anyhow::Result<KernelSetup> {
-    KernelSetup::new(sources, config, rng)
+) -> anyhow::Result<EmbeddedSetup> {
+    EmbeddedSetup::new(sources, config, rng)
 }
 
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let dynamics = args.dynamics.unwrap_or(DynamicsArg::Shared).dynamics();
+    let dynamics = args.dynamics.dynamics();
     let domain = puddle::domain(dynamics);
-    let config = Config::resolve(args, &domain, &DEFAULTS, true)?;
-    let hooks = KernelHooks {
-        setup: kernel_setup,
-        learner: awfqi_kernel::with_learner,
-        adaptive_learner: adaptive_kernel::with_learner,
+    let config = Config::resolve(
+        &args.common,
+        FixedGpArgs::default(),
+        &domain,
+        &HEADLINE,
+        true,
+    )?;
+    let embedded = EmbeddedPath {
+        setup: embedded_setup,
+        learner: embedded::thesis::with_learner,
+        adaptive_learner: embedded::adaptive::with_learner,
+        config: embedded_config(
+            &args.embedded,
+            &args.adaptive,
+            config.setting,
+            config.spacing,
+        )?,
+        adaptive: args.adaptive.options(),
     };
-    super::transfer::run(&config, domain, Some(dynamics), Some(hooks))
+    let data = crate::transfer::domain_data::puddle::data(dynamics);
+    super::transfer::run(&config, domain, data, Some(dynamics), Some(embedded))
 }

@@ -1,8 +1,9 @@
 //! The tasks the transfer experiments run on, behind one abstraction: a [`Domain`] is a
 //! target and its source MDPs ([`Task`]s, in `f64`), the action set, the horizon and
 //! discount, the evaluation start states, and the configuration the published experiments
-//! used ([`Published`]). The protocol, the algorithms and the result files
-//! (`crate::transfer`) are written once over `Domain<D>`, `D` the state dimension.
+//! used ([`Published`]). A domain knows nothing of the experiments run on it: the
+//! protocol, the algorithms, the source datasets and the result files are written above
+//! it, once over `Domain<D>`, `D` the state dimension.
 //!
 //! - [`puddle`]: the continuous Puddle World (spec §2), both dynamics variants, D = 2;
 //! - [`dam`]: the IWFQI paper's water reservoir, D = 2;
@@ -20,11 +21,10 @@ use std::fmt::Debug;
 use std::sync::Arc;
 
 use awfqi::env::Transition;
+use awfqi::evaluation::Evaluation;
 use awfqi::policy::Policy;
 use rand_chacha::ChaCha8Rng;
 
-use crate::transfer::gp::GpSpec;
-use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
 use crate::trees::TreeParams;
 
 /// One transition record `(s, a, r, s′, ω)` in `f64`.
@@ -40,12 +40,15 @@ pub const GP_INPUT: usize = 5;
 /// A GP input `z = (s, value(a), 0, …)`.
 pub type GpInput = [f64; GP_INPUT];
 
-/// One MDP of an experiment (the target or a source), as the harness drives it.
+/// One MDP of an experiment (the target or a source), as the harness drives it: the core
+/// plant's [`GenerativeModel::query`](awfqi::env::GenerativeModel::query), its mean
+/// functions and its first state, under the same names, behind one object-safe trait in
+/// `f64` with the harness's generator.
 pub trait Task<const D: usize>: Send + Sync + Debug {
     /// One sampled transition from `state` under `action` (the generative model).
     ///
     /// Errors: the core's, for a state or action outside the task's spaces.
-    fn step(
+    fn query(
         &self,
         state: [f64; D],
         action: usize,
@@ -54,12 +57,12 @@ pub trait Task<const D: usize>: Send + Sync + Debug {
 
     /// The noise-free mean reward `r̄(s, a)`.
     ///
-    /// Errors: as [`Task::step`].
+    /// Errors: as [`Task::query`].
     fn mean_reward(&self, state: [f64; D], action: usize) -> awfqi::Result<f64>;
 
     /// The mean next state `s̄′(s, a)`.
     ///
-    /// Errors: as [`Task::step`].
+    /// Errors: as [`Task::query`].
     fn mean_next_state(&self, state: [f64; D], action: usize) -> awfqi::Result<[f64; D]>;
 
     /// The first state of an episode (drawn from `rng` when the start is random).
@@ -67,7 +70,7 @@ pub trait Task<const D: usize>: Send + Sync + Debug {
 }
 
 /// How the ideal weights (spec §7.7) get the models' mean next states.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum IdealMeans {
     /// The exact mean functions ([`Task::mean_next_state`]).
@@ -78,7 +81,8 @@ pub enum IdealMeans {
     Sampled,
 }
 
-/// The configuration of a domain's published experiments: the defaults of its command.
+/// The configuration of a domain's published experiments: the defaults of its command,
+/// owned here once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Published {
     /// Steps `K`.
@@ -87,6 +91,8 @@ pub struct Published {
     pub episodes_per_step: usize,
     /// Runs.
     pub runs: usize,
+    /// The discounted return the "time to threshold" metric waits for.
+    pub threshold: f64,
     /// ε of the ε-greedy collection after the first step.
     pub epsilon: f64,
     /// FQI iterations.
@@ -107,17 +113,16 @@ pub struct Published {
     pub rbt_total: usize,
 }
 
-/// How IWFQI weighs the source records of a domain: the GP of the reward and, per state
-/// dimension, the GP of the next-state coordinate when that dimension is weighted.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Weighting<const D: usize> {
-    /// The reward GP.
-    pub reward: GpSpec,
-    /// Per state dimension: `Some(GP)` when the published runs weighed it.
-    pub transition: [Option<GpSpec>; D],
-    /// The GP of a dimension the published runs did not weigh, used when transition
-    /// weights are forced on (`--transition-weights true`).
-    pub transition_fallback: GpSpec,
+/// A disc in the first two state coordinates worth marking on a map of the states (Puddle
+/// World's puddles and goal).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Region {
+    /// What it is (`puddle`, `goal`).
+    pub name: &'static str,
+    /// Its centre.
+    pub centre: [f64; 2],
+    /// Its radius.
+    pub radius: f64,
 }
 
 /// A task with its experiment constants (see the [module docs](self)).
@@ -147,16 +152,11 @@ pub struct Domain<const D: usize> {
     /// `true` when the evaluation also records the average reward per step
     /// (`perf_avg_greedy`, the Dam's second criterion).
     pub average_reward: bool,
-    /// The IWFQI weighting of the published runs.
-    pub weighting: Weighting<D>,
+    /// The target's regions worth marking on a map of its states (none where the first two
+    /// coordinates are no map).
+    pub target_regions: Vec<Region>,
     /// The published configuration.
     pub published: Published,
-    /// The CSV layout of the domain's source files.
-    pub source_layout: SourceLayout,
-    /// The published source datasets (embedded).
-    pub load_published: fn() -> anyhow::Result<SourceSet<D>>,
-    /// How fresh source data are generated (`--sources generate`).
-    pub generation: Generation,
     /// The grid rows `(state, action)` of the score tables for a spacing (grid and both
     /// modes, spec §11.1).
     pub grid_rows: fn(f64) -> anyhow::Result<Rows<D>>,
@@ -164,17 +164,12 @@ pub struct Domain<const D: usize> {
     pub grid_spacing: f64,
 }
 
-/// What the evaluation rollouts of one step produced (spec §3.3).
+/// What the evaluation rollouts of one step produced (spec §3.3): the core's
+/// [`Evaluation`] and, where the domain records it, the average reward per step.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Evaluation {
-    /// Mean discounted return.
-    pub mean_return: f64,
-    /// Population std of the returns / √rollouts.
-    pub standard_error: f64,
-    /// Mean rollout length.
-    pub mean_steps: f64,
-    /// Rollouts whose last step was absorbing.
-    pub reached_goal: usize,
+pub struct StepEvaluation {
+    /// Discounted returns: mean, standard error, mean length, absorbed rollouts.
+    pub returns: Evaluation<f64>,
     /// Mean and standard error of the average reward per step, when the domain records it.
     pub average_reward: Option<(f64, f64)>,
 }
@@ -239,7 +234,7 @@ impl<const D: usize> Domain<D> {
         let mut state = start;
         for t in 0..self.horizon {
             let action = policy.action(&state, rng)?;
-            let record = task.step(state, action, rng)?;
+            let record = task.query(state, action, rng)?;
             visit(t, record)?;
             if record.absorbing {
                 return Ok(t + 1);
@@ -258,7 +253,7 @@ impl<const D: usize> Domain<D> {
         &self,
         greedy: &dyn Fn(&[f64; D]) -> usize,
         rng: &mut ChaCha8Rng,
-    ) -> awfqi::Result<Evaluation> {
+    ) -> awfqi::Result<StepEvaluation> {
         if self.evaluation_starts.is_empty() {
             return Err(awfqi::Error::EmptyData);
         }
@@ -289,11 +284,13 @@ impl<const D: usize> Domain<D> {
             (mean, (variance / n).sqrt())
         };
         let (mean_return, standard_error) = stats(sum, sum_sq);
-        Ok(Evaluation {
-            mean_return,
-            standard_error,
-            mean_steps: steps / n,
-            reached_goal: goals,
+        Ok(StepEvaluation {
+            returns: Evaluation {
+                mean_return,
+                standard_error,
+                mean_steps: steps / n,
+                absorbed: goals,
+            },
             average_reward: self.average_reward.then(|| stats(avg_sum, avg_sq)),
         })
     }

@@ -1,22 +1,21 @@
 //! The continuous Puddle World of spec §2 as a [`Domain`]: target and sources of §2.6 in
 //! either dynamics variant, 4 actions, horizon 50, γ = 0.99, 5 evaluation rollouts from
-//! (0, 0), and the reference configuration of §13.1.
+//! (0, 0), and the published configuration: the thesis's setting 2 (b) (§13.2) with the
+//! reference runs' FQI (§13.1).
 
 use std::sync::Arc;
 
 use awfqi::env::{
-    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON,
-    PUDDLE_INITIAL_STATE, PuddleWorld,
+    Dynamics, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_GOAL_RADIUS,
+    PUDDLE_HORIZON, PUDDLE_INITIAL_STATE, PuddleWorld,
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{Domain, IdealMeans, Published, Record, Task, Weighting};
-use crate::transfer::gp::GpSpec;
-use crate::transfer::sources::{Generation, SourceLayout, SourceSet};
+use super::{Domain, IdealMeans, Published, Record, Region, Task};
 use crate::trees::TreeParams;
 
 impl Task<2> for PuddleWorld<f64> {
-    fn step(
+    fn query(
         &self,
         state: [f64; 2],
         action: usize,
@@ -44,15 +43,15 @@ impl Task<2> for PuddleWorld<f64> {
     }
 }
 
-/// Puddle World with `dynamics`: the target and sources 1–3 of spec §2.6; IWFQI's GPs are
-/// fitted by marginal likelihood (§4.2), transition weights on both coordinates in the
-/// puddle-based variant (§7.6).
+/// Grid spacing of the thesis's score tables (`dx = dy = 0.1`).
+pub const GRID_SPACING: f64 = 0.1;
+
+/// Puddle World with `dynamics`: the target and sources 1–3 of spec §2.6.
 pub fn domain(dynamics: Dynamics) -> Domain<2> {
     let sources: Vec<Arc<dyn Task<2>>> = PuddleWorld::<f64>::sources(dynamics)
         .into_iter()
         .map(|w| Arc::new(w) as Arc<dyn Task<2>>)
         .collect();
-    let weighted = (dynamics == Dynamics::PuddleBased).then_some(GpSpec::fitted());
     Domain {
         name: "puddle world",
         command: "puddle",
@@ -65,15 +64,14 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
         discount: PUDDLE_DISCOUNT,
         evaluation_starts: vec![PUDDLE_INITIAL_STATE; PUDDLE_EVALUATION_ROLLOUTS],
         average_reward: false,
-        weighting: Weighting {
-            reward: GpSpec::fitted(),
-            transition: [weighted.clone(), weighted],
-            transition_fallback: GpSpec::fitted(),
-        },
+        target_regions: target_regions(dynamics),
         published: Published {
+            // The thesis's Chapter 5, setting 2 (b): one episode per step, 10 runs (the
+            // IWFQI reference configuration has 10 episodes and 20 runs, spec §13.1).
             steps: 6,
-            episodes_per_step: 10,
-            runs: 20,
+            episodes_per_step: 1,
+            runs: 10,
+            threshold: -25.0,
             epsilon: 0.3,
             iterations: 60,
             trees: 50,
@@ -84,15 +82,28 @@ pub fn domain(dynamics: Dynamics) -> Domain<2> {
             max_gp: crate::gp_large::MAX_GP,
             rbt_total: 500,
         },
-        source_layout: SourceLayout::puddle(dynamics),
-        load_published: match dynamics {
-            Dynamics::Shared => || SourceSet::published(Dynamics::Shared),
-            Dynamics::PuddleBased => || SourceSet::published(Dynamics::PuddleBased),
-        },
-        generation: Generation::puddle(),
         grid_rows,
-        grid_spacing: crate::transfer::score_tables::GRID_SPACING,
+        grid_spacing: GRID_SPACING,
     }
+}
+
+/// The target's puddles, each a disc of one standard deviation around its centre, and its
+/// goal region.
+fn target_regions(dynamics: Dynamics) -> Vec<Region> {
+    let target = PuddleWorld::<f64>::target(dynamics);
+    target
+        .puddles()
+        .map(|p| Region {
+            name: "puddle",
+            centre: p.mean,
+            radius: p.variance.sqrt(),
+        })
+        .chain(std::iter::once(Region {
+            name: "goal",
+            centre: target.goal(),
+            radius: PUDDLE_GOAL_RADIUS,
+        }))
+        .collect()
 }
 
 /// Spec §11.1's grid rows: `(0.1 i, 0.1 j)` for `i, j ∈ 0..=10/spacing`, borders included,

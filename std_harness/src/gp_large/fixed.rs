@@ -123,17 +123,7 @@ impl FixedKernel {
 }
 
 /// How [`FixedGp`] computes its predictive variance (see the [module docs](self)).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PredictiveVariance {
     /// `k(z, z) − ‖L⁻¹k*‖²` (one triangular solve per query).

@@ -23,8 +23,6 @@
 //!   run, criterion) in the `nested` design (one query sequence per run whose prefixes
 //!   give all budgets: cheaper, and smoother curves, but budgets are then correlated).
 
-use std::path::PathBuf;
-
 use anyhow::{anyhow, bail};
 use awfqi::env::{FiniteMdp, GridWorld};
 use awfqi::identify::{
@@ -52,7 +50,7 @@ const MI_SCORE: u64 = 2;
 const QUERIES: u64 = 3;
 
 /// A score criterion of the study.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum CriterionName {
     /// Uniform over all state-action pairs.
@@ -104,7 +102,7 @@ impl CriterionName {
 }
 
 /// How a policy is chosen from the final belief.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PolicyName {
     /// Optimal policy of the MAP candidate (thesis).
@@ -124,73 +122,13 @@ impl PolicyName {
 }
 
 /// How budgets relate within a run.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Design {
     /// Each budget is its own experiment with its own query stream.
     Independent,
     /// One query sequence per run and criterion; budget n uses its first n queries.
     Nested,
-}
-
-/// Arguments of `awfqi-harness identify`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// Query budgets n.
-    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32, 64, 128])]
-    pub budgets: Vec<usize>,
-    /// Runs: a count N (runs 0..N) or a range A..B of run indices (for splitting a
-    /// sweep over machines; each run's record does not depend on the range).
-    #[arg(long, default_value = "100")]
-    pub runs: RunRange,
-    /// Score criteria.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [CriterionName::Uniform, CriterionName::Variance, CriterionName::Mi, CriterionName::Adaptive])]
-    pub criteria: Vec<CriterionName>,
-    /// Policies evaluated from the final belief.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [PolicyName::Map, PolicyName::Belief])]
-    pub policy: Vec<PolicyName>,
-    /// Experiment seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Output directory.
-    #[arg(long, default_value = "results/identify")]
-    pub out: PathBuf,
-    /// Use the variant with absorbing goals (candidates then differ in transitions too).
-    #[arg(long)]
-    pub absorbing: bool,
-    /// Discount factor γ.
-    #[arg(long, default_value_t = 0.9)]
-    pub gamma: f64,
-    /// Monte-Carlo draws m of the reward mutual-information estimator.
-    #[arg(long, default_value_t = 1000)]
-    pub mi_samples: usize,
-    /// Common histogram bins B of the reward mutual-information estimator.
-    #[arg(long, default_value_t = 30)]
-    pub mi_bins: usize,
-    /// Independent experiments per budget, or nested prefixes of one query sequence.
-    #[arg(long, value_enum, default_value_t = Design::Independent)]
-    pub design: Design,
-    /// Skip writing the plots.
-    #[arg(long)]
-    pub no_plots: bool,
-    /// Recompute runs already in `identify.json`, and start anew a file that holds another
-    /// configuration or cannot be read, keeping the old one as
-    /// `identify.json.<timestamp>.bak`. Without it such a file is an error (nothing is
-    /// written) and runs already there are kept.
-    #[arg(long)]
-    pub replace: bool,
-}
-
-impl Default for Args {
-    fn default() -> Self {
-        use clap::Parser;
-        #[derive(clap::Parser)]
-        struct Wrapper {
-            #[command(flatten)]
-            args: Args,
-        }
-        Wrapper::parse_from(["identify"]).args
-    }
 }
 
 /// The outcome of one (run, criterion, budget).
@@ -216,7 +154,7 @@ pub struct Outcome {
 
 /// Everything about one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunRecord {
+pub struct IdentificationRun {
     /// Run index.
     pub run: usize,
     /// True candidate θ*.
@@ -276,6 +214,32 @@ pub struct StudyConfig {
     pub goals: Vec<(usize, usize)>,
 }
 
+impl Default for StudyConfig {
+    /// The thesis's study (Figs. 4.2 and 4.3): budgets 1 to 128, 100 runs, the uniform,
+    /// variance, mutual-information and adaptive criteria, both policies, γ = 0.9, 1 000 MI
+    /// draws in 30 bins, independent budgets.
+    fn default() -> Self {
+        Self {
+            budgets: vec![1, 2, 4, 8, 16, 32, 64, 128],
+            runs: RunRange { start: 0, end: 100 },
+            criteria: vec![
+                CriterionName::Uniform,
+                CriterionName::Variance,
+                CriterionName::Mi,
+                CriterionName::Adaptive,
+            ],
+            policies: vec![PolicyName::Map, PolicyName::Belief],
+            seed: 0,
+            absorbing: false,
+            gamma: 0.9,
+            mi_samples: 1000,
+            mi_bins: 30,
+            design: Design::Independent,
+            goals: awfqi::env::THESIS_GOALS.to_vec(),
+        }
+    }
+}
+
 /// The whole study: configuration, aggregated rows and per-run records.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Study {
@@ -284,7 +248,7 @@ pub struct Study {
     /// Aggregated rows (criterion × policy × budget).
     pub rows: Vec<Row>,
     /// Per-run records (re-plot or merge from these).
-    pub records: Vec<RunRecord>,
+    pub records: Vec<IdentificationRun>,
 }
 
 /// What every run shares: candidates, optimal Q tables, MAP returns, fixed scores.
@@ -306,8 +270,8 @@ fn core_error(e: awfqi::Error) -> anyhow::Error {
 }
 
 impl Shared {
-    fn new(args: &Args) -> anyhow::Result<Self> {
-        let candidates = GridWorld::<f64>::thesis_candidates(args.absorbing);
+    fn new(config: &StudyConfig) -> anyhow::Result<Self> {
+        let candidates = GridWorld::<f64>::thesis_candidates(config.absorbing);
         let rule = StoppingRule::default();
         let mut q_tables = vec![0.0; K * PAIRS];
         let mut optimal = [0.0; K];
@@ -315,7 +279,7 @@ impl Shared {
         for (k, mdp) in candidates.iter().enumerate() {
             let q = &mut q_tables[k * PAIRS..(k + 1) * PAIRS];
             let mut v = vec![0.0; STATES];
-            let c = value_iteration(mdp, args.gamma, rule, &mut v, q).map_err(core_error)?;
+            let c = value_iteration(mdp, config.gamma, rule, &mut v, q).map_err(core_error)?;
             if !c.converged {
                 bail!("value iteration did not converge for candidate {k}");
             }
@@ -326,7 +290,7 @@ impl Shared {
         for (guess, policy) in policies.iter().enumerate() {
             for (truth, mdp) in candidates.iter().enumerate() {
                 let mut v = vec![0.0; STATES];
-                evaluate_policy(mdp, policy, args.gamma, rule, &mut v).map_err(core_error)?;
+                evaluate_policy(mdp, policy, config.gamma, rule, &mut v).map_err(core_error)?;
                 map_return[guess][truth] = v[mdp.initial_state()];
             }
         }
@@ -362,10 +326,10 @@ impl Shared {
     }
 }
 
-fn mi_config(args: &Args, entropy: RewardEntropy, skip: bool) -> MiConfig {
+fn mi_config(config: &StudyConfig, entropy: RewardEntropy, skip: bool) -> MiConfig {
     MiConfig {
-        samples: args.mi_samples,
-        bins: args.mi_bins,
+        samples: config.mi_samples,
+        bins: config.mi_bins,
         reward_entropy: entropy,
         skip_identical_rewards: skip,
     }
@@ -374,16 +338,16 @@ fn mi_config(args: &Args, entropy: RewardEntropy, skip: bool) -> MiConfig {
 /// The scoring of a criterion: a fixed score (computed here, for random ones from the
 /// run's MI stream) or an adaptive rule.
 fn scoring_for(
-    args: &Args,
+    config: &StudyConfig,
     shared: &Shared,
     run: usize,
     criterion: CriterionName,
 ) -> anyhow::Result<(Scoring, Vec<f64>)> {
     let prior = [1.0 / K as f64; K];
     let fixed_mi = |entropy, skip| -> anyhow::Result<(Scoring, Vec<f64>)> {
-        let mut rng = stream(args.seed, &[MI_SCORE, run as u64, criterion.id()]);
+        let mut rng = stream(config.seed, &[MI_SCORE, run as u64, criterion.id()]);
         let mut score = vec![0.0; PAIRS];
-        let c = Criterion::MutualInformation(mi_config(args, entropy, skip));
+        let c = Criterion::MutualInformation(mi_config(config, entropy, skip));
         compute_score(&c, &shared.candidates, &prior, &mut rng, &mut score).map_err(core_error)?;
         Ok((Scoring::Fixed, score))
     };
@@ -395,7 +359,7 @@ fn scoring_for(
         CriterionName::MiSkip => fixed_mi(RewardEntropy::Differential, true)?,
         CriterionName::Adaptive => (
             Scoring::Adaptive(Criterion::MutualInformation(mi_config(
-                args,
+                config,
                 RewardEntropy::Differential,
                 true,
             ))),
@@ -409,7 +373,7 @@ fn scoring_for(
 
 /// MAP and belief-weighted evaluation of one final belief.
 fn evaluate(
-    args: &Args,
+    config: &StudyConfig,
     shared: &Shared,
     theta_star: usize,
     criterion: CriterionName,
@@ -418,7 +382,7 @@ fn evaluate(
 ) -> anyhow::Result<Outcome> {
     let map = belief.map();
     let probabilities = belief.probability_array();
-    let return_belief = if args.policy.contains(&PolicyName::Belief) {
+    let return_belief = if config.policies.contains(&PolicyName::Belief) {
         let mut q = vec![0.0; PAIRS];
         let mut policy = vec![0usize; STATES];
         belief_weighted_policy(
@@ -431,7 +395,7 @@ fn evaluate(
         .map_err(core_error)?;
         let truth = &shared.candidates[theta_star];
         let mut v = vec![0.0; STATES];
-        evaluate_policy(truth, &policy, args.gamma, shared.rule, &mut v).map_err(core_error)?;
+        evaluate_policy(truth, &policy, config.gamma, shared.rule, &mut v).map_err(core_error)?;
         v[truth.initial_state()]
     } else {
         f64::NAN
@@ -449,18 +413,18 @@ fn evaluate(
 }
 
 /// One run: θ*, then every criterion and budget.
-fn run_one(args: &Args, shared: &Shared, run: usize) -> anyhow::Result<RunRecord> {
-    let mut truth_rng = stream(args.seed, &[TRUTH, run as u64]);
+fn run_one(config: &StudyConfig, shared: &Shared, run: usize) -> anyhow::Result<IdentificationRun> {
+    let mut truth_rng = stream(config.seed, &[TRUTH, run as u64]);
     let theta_star = ((rng::uniform_f64(&mut truth_rng) * K as f64) as usize).min(K - 1);
     let truth = &shared.candidates[theta_star];
     let mut outcomes = Vec::new();
-    for &criterion in &args.criteria {
-        let (scoring, mut score) = scoring_for(args, shared, run, criterion)?;
-        match args.design {
+    for &criterion in &config.criteria {
+        let (scoring, mut score) = scoring_for(config, shared, run, criterion)?;
+        match config.design {
             Design::Independent => {
-                for &budget in &args.budgets {
+                for &budget in &config.budgets {
                     let parts = [QUERIES, run as u64, criterion.id(), budget as u64];
-                    let mut rng = stream(args.seed, &parts);
+                    let mut rng = stream(config.seed, &parts);
                     let mut belief = Belief::<f64, K>::uniform(K).map_err(core_error)?;
                     let mut work = score.clone();
                     run_queries(
@@ -475,13 +439,13 @@ fn run_one(args: &Args, shared: &Shared, run: usize) -> anyhow::Result<RunRecord
                     )
                     .map_err(core_error)?;
                     outcomes.push(evaluate(
-                        args, shared, theta_star, criterion, budget, &belief,
+                        config, shared, theta_star, criterion, budget, &belief,
                     )?);
                 }
             }
             Design::Nested => {
-                let longest = args.budgets.iter().copied().max().unwrap_or(0);
-                let mut rng = stream(args.seed, &[QUERIES, run as u64, criterion.id()]);
+                let longest = config.budgets.iter().copied().max().unwrap_or(0);
+                let mut rng = stream(config.seed, &[QUERIES, run as u64, criterion.id()]);
                 let mut belief = Belief::<f64, K>::uniform(K).map_err(core_error)?;
                 let mut snapshots = vec![None; longest + 1];
                 snapshots[0] = Some(belief);
@@ -494,20 +458,20 @@ fn run_one(args: &Args, shared: &Shared, run: usize) -> anyhow::Result<RunRecord
                     &mut score,
                     &mut rng,
                     |done, b| {
-                        if args.budgets.contains(&done) {
+                        if config.budgets.contains(&done) {
                             snapshots[done] = Some(*b);
                         }
                     },
                 )
                 .map_err(core_error)?;
-                for &budget in &args.budgets {
+                for &budget in &config.budgets {
                     let b = snapshots[budget].ok_or_else(|| anyhow!("missing snapshot"))?;
-                    outcomes.push(evaluate(args, shared, theta_star, criterion, budget, &b)?);
+                    outcomes.push(evaluate(config, shared, theta_star, criterion, budget, &b)?);
                 }
             }
         }
     }
-    Ok(RunRecord {
+    Ok(IdentificationRun {
         run,
         theta_star,
         optimal_return: shared.optimal[theta_star],
@@ -526,7 +490,7 @@ fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
 }
 
 /// Aggregates per-run records into criterion × policy × budget rows.
-pub fn aggregate(config: &StudyConfig, records: &[RunRecord]) -> Vec<Row> {
+pub fn aggregate(config: &StudyConfig, records: &[IdentificationRun]) -> Vec<Row> {
     let optimal = mean_and_stderr(&records.iter().map(|r| r.optimal_return).collect::<Vec<_>>()).0;
     let mut rows = Vec::new();
     for &criterion in &config.criteria {
@@ -565,32 +529,15 @@ pub fn aggregate(config: &StudyConfig, records: &[RunRecord]) -> Vec<Row> {
 
 /// Runs the study (in parallel over runs, on the current rayon pool) without writing
 /// anything.
-pub fn study(args: &Args, progress: bool) -> anyhow::Result<Study> {
-    let runs: Vec<usize> = (args.runs.start..args.runs.end).collect();
-    let records = run_records(args, &runs, progress)?;
-    Ok(assemble(config(args), records))
-}
-
-/// The configuration of `args` as `identify.json` records it.
-pub fn config(args: &Args) -> StudyConfig {
-    StudyConfig {
-        budgets: args.budgets.clone(),
-        runs: args.runs,
-        criteria: args.criteria.clone(),
-        policies: args.policy.clone(),
-        seed: args.seed,
-        absorbing: args.absorbing,
-        gamma: args.gamma,
-        mi_samples: args.mi_samples,
-        mi_bins: args.mi_bins,
-        design: args.design,
-        goals: awfqi::env::THESIS_GOALS.to_vec(),
-    }
+pub fn study(config: &StudyConfig, progress: bool) -> anyhow::Result<Study> {
+    let runs: Vec<usize> = (config.runs.start..config.runs.end).collect();
+    let records = run_records(config, &runs, progress)?;
+    Ok(assemble(config.clone(), records))
 }
 
 /// The study of `config` over `records` (any order, distinct runs): records by run index,
 /// `config.runs` their hull, and the aggregated rows.
-pub fn assemble(mut config: StudyConfig, mut records: Vec<RunRecord>) -> Study {
+pub fn assemble(mut config: StudyConfig, mut records: Vec<IdentificationRun>) -> Study {
     records.sort_by_key(|r| r.run);
     if let (Some(first), Some(last)) = (records.first(), records.last()) {
         config.runs = RunRange {
@@ -607,11 +554,17 @@ pub fn assemble(mut config: StudyConfig, mut records: Vec<RunRecord>) -> Study {
 }
 
 /// The records of `runs` (in parallel, on the current rayon pool), in that order.
-pub fn run_records(args: &Args, runs: &[usize], progress: bool) -> anyhow::Result<Vec<RunRecord>> {
-    if args.budgets.is_empty() || args.criteria.is_empty() || args.policy.is_empty() {
-        bail!("--budgets, --criteria and --policy need at least one value each");
+pub fn run_records(
+    config: &StudyConfig,
+    runs: &[usize],
+    progress: bool,
+) -> anyhow::Result<Vec<IdentificationRun>> {
+    if config.budgets.is_empty() || config.criteria.is_empty() || config.policies.is_empty() {
+        bail!(
+            "the study needs at least one budget, criterion and policy (--budgets, --criteria, --policy)"
+        );
     }
-    let shared = Shared::new(args)?;
+    let shared = Shared::new(config)?;
     let bar = if progress {
         let bar = ProgressBar::new(runs.len() as u64);
         bar.set_style(
@@ -627,7 +580,7 @@ pub fn run_records(args: &Args, runs: &[usize], progress: bool) -> anyhow::Resul
     let records = runs
         .par_iter()
         .map(|&run| {
-            let record = run_one(args, &shared, run);
+            let record = run_one(config, &shared, run);
             bar.inc(1);
             record
         })

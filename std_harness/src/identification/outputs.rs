@@ -78,6 +78,7 @@ pub fn identification_figure(study: &Study) -> Figure {
         x_label: "budget n (queries)".into(),
         y_label: "runs with MAP = θ* (%)".into(),
         x_scale: XScale::Log2,
+        x_range: None,
         y_range: Some((0.0, 105.0)),
         series,
         references: vec![(format!("chance (1/{K})"), 100.0 / K as f64)],
@@ -112,6 +113,7 @@ pub fn return_figure(study: &Study) -> Figure {
             x_label: "budget n (queries)".into(),
             y_label: "return from (0,0) in the true MDP".into(),
             x_scale: XScale::Log2,
+            x_range: None,
             y_range: Some((lo - pad, hi + pad)),
             series: study
                 .config

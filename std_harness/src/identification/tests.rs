@@ -2,8 +2,8 @@ use std::fs;
 
 use super::*;
 
-fn small(runs: &str) -> Args {
-    Args {
+fn small(runs: &str) -> StudyConfig {
+    StudyConfig {
         budgets: vec![1, 4, 16],
         runs: runs.parse().unwrap(),
         criteria: vec![
@@ -16,7 +16,7 @@ fn small(runs: &str) -> Args {
             CriterionName::AdaptiveVariance,
         ],
         mi_samples: 50,
-        ..Args::default()
+        ..StudyConfig::default()
     }
 }
 
@@ -29,12 +29,12 @@ fn with_threads<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
 }
 
 #[test]
-fn defaults_are_the_issue_s() {
-    let a = Args::default();
+fn defaults_are_the_thesis_study() {
+    let a = StudyConfig::default();
     assert_eq!(a.budgets, [1, 2, 4, 8, 16, 32, 64, 128]);
     assert_eq!(a.runs, RunRange { start: 0, end: 100 });
     assert_eq!(a.criteria.len(), 4);
-    assert_eq!(a.policy, [PolicyName::Map, PolicyName::Belief]);
+    assert_eq!(a.policies, [PolicyName::Map, PolicyName::Belief]);
     assert_eq!(
         "20..40".parse::<RunRange>().unwrap(),
         RunRange { start: 20, end: 40 }
@@ -45,7 +45,7 @@ fn defaults_are_the_issue_s() {
 #[test]
 fn same_seed_same_files_whatever_the_thread_count() {
     for design in [Design::Independent, Design::Nested] {
-        let args = Args {
+        let args = StudyConfig {
             design,
             ..small("6")
         };
@@ -82,7 +82,7 @@ fn a_split_sweep_reproduces_the_whole_one() {
     assert_eq!(merged, whole.records);
     // Other seeds give other runs.
     let other = study(
-        &Args {
+        &StudyConfig {
             seed: 1,
             ..small("6")
         },

@@ -28,6 +28,7 @@ fn curve_panel(title: String, curves: &Curves) -> Panel {
         x_label: "episodes (equivalent episodes for the active algorithms)".into(),
         y_label: "discounted greedy return".into(),
         x_scale: XScale::Linear,
+        x_range: None,
         y_range: None,
         series,
         references: vec![],
@@ -99,38 +100,39 @@ pub const PUDDLE_CLIP: Clip = Clip {
     zoom_floor: -50.0,
 };
 
-/// Learning curves: the faithful std algorithms with the main panel clipped at
-/// `clip.below` (clipped means marked; no clip with `None`) and a zoom on the asymptote
-/// (the second half of the steps, as the thesis's figures do, floored at
-/// `clip.zoom_floor`); FQI, AWFQI, AWFQI_oracle, awfqi-adaptive and the core's embedded
-/// versions of AWFQI and of awfqi-adaptive in a last panel (omitted without either
-/// kernel).
+/// Learning curves: every algorithm's, the main panel clipped at `clip.below` (clipped
+/// means marked; no clip with `None`), a zoom on the asymptote (the second half of the
+/// steps, as the thesis's figures do, floored at `clip.zoom_floor`), and, when `curves`
+/// hold baselines besides FQI, a last panel with the `active` ones (FQI and the algorithms
+/// that query the generative model).
 pub fn learning_curves(
     title: &str,
-    std_path: &Curves,
-    embedded: &Curves,
+    curves: &Curves,
+    active: &Curves,
     clip: Option<Clip>,
 ) -> Figure {
     let below = clip.map_or(f64::NEG_INFINITY, |c| c.below);
     let zoom_floor = clip.map_or(f64::NEG_INFINITY, |c| c.zoom_floor);
-    let full = curve_panel(title.to_string(), std_path);
-    let min = std_path
-        .iter()
-        .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))
-        .fold(f64::INFINITY, f64::min);
-    let last = std_path
+    let full = curve_panel(title.to_string(), curves);
+    let lowest = |curves: &Curves| {
+        curves
+            .iter()
+            .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let last = curves
         .iter()
         .flat_map(|(_, _, rows)| rows.iter().map(|r| r.n_episodes as f64))
         .fold(0.0, f64::max);
     let mut panels = Vec::new();
-    if min < below {
+    if lowest(curves) < below {
         panels.push(clipped(full.clone(), below, None, 0.0));
     } else {
         panels.push(full.clone());
     }
     // The zoom: from the middle step on, down to the lowest of those means (or the floor).
     let from = (last / 2.0).ceil();
-    let zoom_lo = std_path
+    let zoom_lo = curves
         .iter()
         .flat_map(|(_, _, rows)| rows.iter().filter(|r| r.n_episodes as f64 >= from))
         .map(|r| r.mean - r.stderr)
@@ -141,16 +143,9 @@ pub fn learning_curves(
         zoom.title = "zoom: the second half of the steps".into();
         panels.push(zoom);
     }
-    if embedded
-        .iter()
-        .any(|(name, ..)| name == "awfqi-kernel" || name == "awfqi-adaptive-kernel")
-    {
-        let panel = curve_panel("embedded kernel paths vs std AWFQI".into(), embedded);
-        let min = embedded
-            .iter()
-            .flat_map(|(_, _, rows)| rows.iter().map(|r| r.mean))
-            .fold(f64::INFINITY, f64::min);
-        panels.push(if min < below {
+    if !active.is_empty() && active.len() < curves.len() {
+        let panel = curve_panel("the active algorithms against FQI".into(), active);
+        panels.push(if lowest(active) < below {
             clipped(panel, below, None, 0.0)
         } else {
             panel
@@ -163,8 +158,45 @@ pub fn learning_curves(
     }
 }
 
+/// The outlines of the target's regions (Puddle World's puddles and goal), one closed
+/// polyline each, labelled once.
+fn region_outlines<const D: usize>(domain: &Domain<D>) -> Vec<Series> {
+    const SIDES: usize = 48;
+    domain
+        .target_regions
+        .iter()
+        .enumerate()
+        .map(|(i, region)| {
+            let points = (0..=SIDES)
+                .map(|k| {
+                    let angle = std::f64::consts::TAU * k as f64 / SIDES as f64;
+                    (
+                        region.centre[0] + region.radius * angle.cos(),
+                        region.centre[1] + region.radius * angle.sin(),
+                    )
+                })
+                .collect();
+            let first_of_its_kind = domain.target_regions[..i]
+                .iter()
+                .all(|r| r.name != region.name);
+            Series {
+                label: if first_of_its_kind {
+                    format!("target {}", region.name)
+                } else {
+                    String::new()
+                },
+                points,
+                errors: None,
+                style: SeriesStyle::Outline,
+                color: 7,
+            }
+        })
+        .collect()
+}
+
 /// One panel per algorithm: the source states (yellow) and the target states the algorithm
-/// collected in one run over all steps (coloured), on the first two state coordinates.
+/// collected in one run over all steps (coloured), on the first two state coordinates,
+/// with the outlines of the target's regions (Puddle World's puddles and goal).
 pub fn sample_scatter<const D: usize>(
     domain: &Domain<D>,
     sources: &SourceSet<D>,
@@ -173,11 +205,14 @@ pub fn sample_scatter<const D: usize>(
     let axis = |d: usize| domain.state_names.get(d).copied().unwrap_or("").to_string();
     let (lo, hi) = domain.state_bounds.get(1).copied().unwrap_or((0.0, 1.0));
     let pad = 0.05 * (hi - lo);
+    let (x_lo, x_hi) = domain.state_bounds.first().copied().unwrap_or((0.0, 1.0));
+    let x_pad = 0.05 * (x_hi - x_lo);
     let source_points: Vec<(f64, f64)> = sources
         .sources
         .iter()
         .flat_map(|s| s.records.iter().map(|r| (r.state[0], r.state[1])))
         .collect();
+    let outlines = region_outlines(domain);
     let panels = samples
         .iter()
         .map(|(name, color, pts)| Panel {
@@ -185,8 +220,9 @@ pub fn sample_scatter<const D: usize>(
             x_label: axis(0),
             y_label: axis(1),
             x_scale: XScale::Linear,
+            x_range: Some((x_lo - x_pad, x_hi + x_pad)),
             y_range: Some((lo - pad, hi + pad)),
-            series: vec![
+            series: [
                 Series {
                     label: "source states".into(),
                     points: source_points.clone(),
@@ -201,7 +237,10 @@ pub fn sample_scatter<const D: usize>(
                     style: SeriesStyle::Points,
                     color: *color,
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(outlines.iter().cloned())
+            .collect(),
             references: vec![],
             legend: LegendPosition::UpperLeft,
         })
@@ -257,6 +296,69 @@ mod tests {
         assert_eq!(zoom.series[0].points.len(), 3);
         assert_eq!(zoom.y_range.unwrap().0, -51.0);
         assert_eq!(zoom.series[1].points, vec![(2.0, -51.0)]);
+    }
+
+    #[test]
+    fn the_active_panel_comes_only_with_other_baselines() {
+        let curve = |name: &str| (name.to_string(), 0, rows(&[-40.0, -30.0]));
+        let every = vec![curve("fqi"), curve("rbt"), curve("awfqi-adaptive")];
+        let active = vec![curve("fqi"), curve("awfqi-adaptive")];
+        let figure = learning_curves("t", &every, &active, Some(PUDDLE_CLIP));
+        assert_eq!(figure.panels.len(), 3);
+        for panel in &figure.panels[..2] {
+            let names: Vec<&str> = panel.series.iter().map(|s| s.label.as_str()).collect();
+            assert_eq!(names, ["fqi", "rbt", "awfqi-adaptive"]);
+        }
+        let last: Vec<&str> = figure.panels[2]
+            .series
+            .iter()
+            .map(|s| s.label.as_str())
+            .collect();
+        assert_eq!(last, ["fqi", "awfqi-adaptive"]);
+        // The same set in both: no third panel.
+        assert_eq!(learning_curves("t", &active, &active, None).panels.len(), 2);
+    }
+
+    #[test]
+    fn the_sample_scatter_outlines_the_target_s_puddles_and_goal() {
+        let domain = crate::domains::puddle::domain(awfqi::env::Dynamics::Shared);
+        let sources = SourceSet {
+            sources: Vec::new(),
+            origin: String::new(),
+        };
+        let samples = vec![("a".to_string(), 8, vec![[1.0, 2.0, 0.0]])];
+        let figure = sample_scatter(&domain, &sources, &samples);
+        let outlines: Vec<&Series> = figure.panels[0]
+            .series
+            .iter()
+            .filter(|s| s.style == SeriesStyle::Outline)
+            .collect();
+        let target = awfqi::env::PuddleWorld::<f64>::target(awfqi::env::Dynamics::Shared);
+        assert_eq!(outlines.len(), target.num_puddles() + 1);
+        let labels: Vec<&str> = outlines
+            .iter()
+            .map(|s| s.label.as_str())
+            .filter(|l| !l.is_empty())
+            .collect();
+        assert_eq!(labels, ["target puddle", "target goal"]);
+        // Each outline is a closed circle around its region's centre.
+        for (outline, puddle) in outlines.iter().zip(target.puddles()) {
+            let radius = puddle.variance.sqrt();
+            assert_eq!(outline.points.first(), outline.points.last());
+            for &(x, y) in &outline.points {
+                let r = (x - puddle.mean[0]).hypot(y - puddle.mean[1]);
+                assert!((r - radius).abs() < 1e-9, "{r} vs {radius}");
+            }
+        }
+        let goal = outlines.last().unwrap();
+        let (x, y) = goal.points[0];
+        let [gx, gy] = target.goal();
+        assert!(((x - gx).hypot(y - gy) - awfqi::env::PUDDLE_GOAL_RADIUS).abs() < 1e-9);
+        // The whole state space is shown, wherever one run's samples lie (here one point).
+        let (lo, hi) = figure.panels[0].x_range.unwrap();
+        assert!(lo < 0.0 && hi > 10.0, "{lo}..{hi}");
+        let (lo, hi) = figure.panels[0].y_range.unwrap();
+        assert!(lo < 0.0 && hi > 10.0, "{lo}..{hi}");
     }
 
     #[test]

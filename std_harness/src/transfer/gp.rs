@@ -13,24 +13,8 @@ use crate::gp_large::fixed::{FixedGp, FixedKernel, PredictiveVariance};
 use crate::gp_large::growing::GrowingFixedGp;
 use crate::gp_large::{self, FitOptions, LargeGp};
 
-/// Which value of a record a GP models.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Output {
-    /// The reward `r`.
-    Reward,
-    /// Next-state coordinate `d`.
-    Next(usize),
-}
-
-impl Output {
-    /// The modelled value of `r`.
-    pub fn of<const D: usize>(self, r: &Record<D>) -> f64 {
-        match self {
-            Output::Reward => r.reward,
-            Output::Next(d) => r.next_state.get(d).copied().unwrap_or(f64::NAN),
-        }
-    }
-}
+/// Which value of a record a GP models: the core's.
+pub use awfqi::record_gp::Output;
 
 /// How a GP's kernel is obtained.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -79,6 +63,35 @@ impl GpSpec {
     }
 }
 
+/// How IWFQI weighs the source records of a domain: the GP of the reward and, per state
+/// dimension, the GP of the next-state coordinate when that dimension is weighted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Weighting<const D: usize> {
+    /// The reward GP.
+    pub reward: GpSpec,
+    /// Per state dimension: `Some(GP)` when the published runs weighed it.
+    pub transition: [Option<GpSpec>; D],
+    /// The GP of a dimension the published runs did not weigh, used when transition
+    /// weights are forced on (`--transition-weights true`).
+    pub transition_fallback: GpSpec,
+}
+
+impl<const D: usize> Weighting<D> {
+    /// The GP of `output`: the reward GP, the weighted dimension's GP, or the fallback for
+    /// an unweighted dimension.
+    pub fn gp_spec(&self, output: Output) -> GpSpec {
+        match output {
+            Output::Reward => self.reward.clone(),
+            Output::NextState(d) => self
+                .transition
+                .get(d)
+                .cloned()
+                .flatten()
+                .unwrap_or_else(|| self.transition_fallback.clone()),
+        }
+    }
+}
+
 /// How the fitted GPs are fitted: restarts, the training cap and the search strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct GpOptions {
@@ -108,17 +121,7 @@ pub struct GpOptions {
 
 /// How a fixed-kernel target GP (the Dam's and Acrobot's) follows the target data, which
 /// only grows from step to step.
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FixedGpUpdate {
     /// Append each step's records to the factor and to the posterior at the source
@@ -159,17 +162,7 @@ pub fn search_checks() -> Vec<SearchCheck> {
 }
 
 /// How the hyperparameter optimisations are spent.
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum GpSearch {
     /// Spec §4.2: every start optimised on all the data.
@@ -312,7 +305,10 @@ impl RecordGp {
         rng: &mut R,
     ) -> anyhow::Result<Self> {
         let inputs: Vec<GpInput> = records.iter().map(|r| domain.input(r)).collect();
-        let targets: Vec<f64> = records.iter().map(|r| output.of(r)).collect();
+        let targets = records
+            .iter()
+            .map(|r| output.of(r))
+            .collect::<awfqi::Result<Vec<f64>>>()?;
         Self::fit(&inputs, &targets, spec, options, Some(D), rng)
     }
 
@@ -425,14 +421,14 @@ pub struct GrowingRecordGp {
 }
 
 impl GrowingRecordGp {
-    /// The domain's GP of `output`, to be predicted at `batches` of inputs (one per
-    /// source); `None` when that GP's kernel is fitted, not fixed.
+    /// The GP `spec` of `output` on `domain`, to be predicted at `batches` of inputs (one
+    /// per source); `None` when that GP's kernel is fitted, not fixed.
     pub fn new<const D: usize>(
-        domain: &Domain<D>,
+        _domain: &Domain<D>,
+        spec: &GpSpec,
         output: Output,
         batches: &[Vec<GpInput>],
     ) -> Option<anyhow::Result<Self>> {
-        let spec = domain.gp_spec(output);
         let KernelSpec::Fixed(kernel) = &spec.kernel else {
             return None;
         };
@@ -471,7 +467,10 @@ impl GrowingRecordGp {
         }
         let new = &records[known..];
         let inputs: Vec<GpInput> = new.iter().map(|r| domain.input(r)).collect();
-        let targets: Vec<f64> = new.iter().map(|r| self.output.of(r)).collect();
+        let targets = new
+            .iter()
+            .map(|r| self.output.of(r))
+            .collect::<awfqi::Result<Vec<f64>>>()?;
         self.gp.extend(&inputs, &targets)?;
         Ok(true)
     }
@@ -523,15 +522,16 @@ pub struct SourceGps {
 
 impl SourceGps {
     /// Fits one GP per output on all `records` of a source, in the order of `outputs`,
-    /// with the domain's GP of each output.
+    /// with `weighting`'s GP of each output.
     pub fn fit<const D: usize, R: Rng + ?Sized>(
         domain: &Domain<D>,
+        weighting: &Weighting<D>,
         records: &[Record<D>],
         outputs: &[Output],
         options: &GpOptions,
         rng: &mut R,
     ) -> anyhow::Result<Self> {
-        let specs: Vec<GpSpec> = outputs.iter().map(|&o| domain.gp_spec(o)).collect();
+        let specs: Vec<GpSpec> = outputs.iter().map(|&o| weighting.gp_spec(o)).collect();
         let gps = outputs
             .iter()
             .zip(&specs)
@@ -564,23 +564,6 @@ impl SourceGps {
     /// the realistic score table (§11.2), in batch.
     pub fn means_at(&self, zs: &[GpInput]) -> Vec<Vec<f64>> {
         self.gps.iter().map(|g| g.means(zs)).collect()
-    }
-}
-
-impl<const D: usize> Domain<D> {
-    /// The GP the domain uses for `output`: the weighting's reward GP, the weighted
-    /// dimension's GP, or the fallback for an unweighted dimension.
-    pub fn gp_spec(&self, output: Output) -> GpSpec {
-        match output {
-            Output::Reward => self.weighting.reward.clone(),
-            Output::Next(d) => self
-                .weighting
-                .transition
-                .get(d)
-                .cloned()
-                .flatten()
-                .unwrap_or_else(|| self.weighting.transition_fallback.clone()),
-        }
     }
 }
 

@@ -4,13 +4,16 @@
 //! dimension; the commands that run them are [`crate::commands::transfer`] and its
 //! per-domain front ends.
 //!
+//! - [`domain_data`]: each domain's published source data, their layout, their
+//!   generation and IWFQI's GPs;
 //! - [`sources`]: source datasets (the published ones, a user's own in the same CSV layout,
 //!   or freshly generated as each domain's paper says);
 //! - [`gp`]: the GP fits (§4.2, or the published fixed kernels) on records;
 //! - [`protocol`]: the common experiment protocol of §3 (episodic collection, evaluation,
 //!   per-step records);
 //! - [`algorithms`]: FQI, IWFQI (mean, heuristic, ideal weights), RBT, SDT, AWFQI and
-//!   AWFQI_oracle on the faithful std path, and `awfqi-kernel`, the core's embedded path;
+//!   AWFQI_oracle on the faithful std path, and `awfqi-embedded` and `awfqi-adaptive`, the
+//!   core's algorithms;
 //! - [`score_tables`]: the oracle and realistic score tables (§11), built once per
 //!   experiment and shared by all runs;
 //! - [`results`]: result files in the reference's layout, summaries, merging of run ranges;
@@ -27,6 +30,7 @@
 //! as `--runs 0..10`.
 
 pub mod algorithms;
+pub mod domain_data;
 pub mod figures;
 pub mod gp;
 pub mod metrics;

@@ -14,7 +14,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::domains::{Domain, Record};
-use crate::joint_q::QFunctionKind;
+use crate::joint_q::ForestLayout;
 use crate::trees::TreeParams;
 
 /// The protocol's parameters (spec §3.2, §13).
@@ -33,7 +33,7 @@ pub struct Protocol {
     pub episodes_per_step: usize,
     /// ε of the ε-greedy collection policy after the first step (0.3).
     pub epsilon: f64,
-    /// Greedy evaluation rollouts per step (5).
+    /// GreedyFn evaluation rollouts per step (5).
     pub rollouts: usize,
     /// FQI iterations (60).
     pub iterations: usize,
@@ -47,8 +47,8 @@ pub struct Protocol {
     pub first_step: FirstStep,
     /// How FQI represents Q (absent when per action, spec §5; `joint` is the reference
     /// code's single forest over state and action value on the Dam, an ablation).
-    #[serde(default, skip_serializing_if = "QFunctionKind::is_per_action")]
-    pub q_function: QFunctionKind,
+    #[serde(default, skip_serializing_if = "ForestLayout::is_per_action")]
+    pub q_function: ForestLayout,
     /// FQI keeps the trees of this iteration and only refits their leaf values afterwards
     /// (absent: new trees every iteration, spec §5).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -56,7 +56,7 @@ pub struct Protocol {
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum FirstStep {
     /// Each action with probability 1/n (spec §3.2).
@@ -98,7 +98,7 @@ impl Protocol {
             trees: p.trees,
             tree: p.tree,
             first_step: FirstStep::Uniform,
-            q_function: QFunctionKind::PerAction,
+            q_function: ForestLayout::PerAction,
             freeze_trees_after: None,
         }
     }
@@ -262,10 +262,10 @@ pub fn evaluate_step<const D: usize>(
         step: k,
         n_episodes: k * protocol.episodes_per_step,
         n_target_samples,
-        perf_disc_greedy_mean: eval.mean_return,
-        perf_disc_greedy_std: eval.standard_error,
-        perf_disc_greedy_steps: eval.mean_steps,
-        perf_disc_greedy_goals: eval.reached_goal,
+        perf_disc_greedy_mean: eval.returns.mean_return,
+        perf_disc_greedy_std: eval.returns.standard_error,
+        perf_disc_greedy_steps: eval.returns.mean_steps,
+        perf_disc_greedy_goals: eval.returns.absorbed,
         perf_avg_greedy_mean: eval.average_reward.map(|a| a.0),
         perf_avg_greedy_std: eval.average_reward.map(|a| a.1),
         seconds: start.elapsed().as_secs_f64(),
@@ -274,7 +274,7 @@ pub fn evaluate_step<const D: usize>(
 }
 
 /// A greedy policy: the action in a state.
-pub type Greedy<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
+pub type GreedyFn<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
 
 /// Appends `B` episodes on the target to `data` (§3.2): uniform at step 1 (`greedy` is
 /// `None`; or ε-greedy around a zero Q-function with [`FirstStep::ZeroQ`]), ε-greedy around
@@ -282,7 +282,7 @@ pub type Greedy<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
 pub fn collect_episodes<const D: usize>(
     domain: &Domain<D>,
     protocol: &Protocol,
-    greedy: Option<Greedy<'_, D>>,
+    greedy: Option<GreedyFn<'_, D>>,
     rng: &mut ChaCha8Rng,
     data: &mut Vec<Record<D>>,
 ) -> anyhow::Result<()> {
@@ -328,7 +328,7 @@ mod tests {
     impl Learner for Fixed {
         fn step(&mut self, k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
             let g = |s: &[f64; 2]| if s[0] < 4.5 { 0 } else { 2 };
-            let greedy: Option<Greedy<'_>> = if k == 1 { None } else { Some(&g) };
+            let greedy: Option<GreedyFn<'_>> = if k == 1 { None } else { Some(&g) };
             collect_episodes(&self.domain, &self.protocol, greedy, rng, &mut self.data)?;
             Ok(Diagnostics::default())
         }
@@ -424,10 +424,16 @@ mod tests {
         let mut policy = |s: &[f64; 2]| Ok(greedy(s));
         let protocol = target.evaluation_protocol();
         let core = awfqi::evaluation::evaluate(&target, &mut policy, &protocol, &mut b).unwrap();
-        assert_eq!(ours.mean_return.to_bits(), core.mean_return.to_bits());
-        assert_eq!(ours.standard_error.to_bits(), core.standard_error.to_bits());
-        assert_eq!(ours.mean_steps, core.mean_steps);
-        assert_eq!(ours.reached_goal, core.absorbed);
+        assert_eq!(
+            ours.returns.mean_return.to_bits(),
+            core.mean_return.to_bits()
+        );
+        assert_eq!(
+            ours.returns.standard_error.to_bits(),
+            core.standard_error.to_bits()
+        );
+        assert_eq!(ours.returns.mean_steps, core.mean_steps);
+        assert_eq!(ours.returns.absorbed, core.absorbed);
         assert_eq!(a, b);
     }
 }

@@ -13,12 +13,12 @@ use awfqi::score::{PointGrid, RowSet};
 use awfqi::{Real, Transition};
 use rand_chacha::ChaCha8Rng;
 
-use super::gp::{GpOptions, Output, SourceGps};
+use super::gp::{GpOptions, Output, SourceGps, Weighting};
 use super::sources::SourceSet;
 use crate::domains::{Domain, GpInput, Record};
 
 /// Which rows a table has (§11.1); the thesis's settings 1–3.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// The `(s, a)` of every source record (setting 1).
@@ -41,11 +41,8 @@ impl Mode {
     }
 }
 
-/// Grid spacing of the thesis (`dx = dy = 0.1`).
-pub const GRID_SPACING: f64 = 0.1;
-
 /// The grid part of a score table's rows (§11.1): a core point grid with its action count
-/// (the kernel's `f32` grid) or explicit `(state, action)` pairs (a domain's
+/// (the embedded path's `f32` grid) or explicit `(state, action)` pairs (a domain's
 /// [`grid_rows`](crate::domains::Domain::grid_rows)).
 #[derive(Debug, Clone, Copy)]
 pub enum GridRows<'a, T, const D: usize> {
@@ -218,6 +215,7 @@ impl<const D: usize> ScoreTableData<D> {
 /// parallel.
 pub fn fit_source_gps<const D: usize>(
     domain: &Domain<D>,
+    weighting: &Weighting<D>,
     sources: &SourceSet<D>,
     options: &GpOptions,
     seed: u64,
@@ -234,7 +232,14 @@ pub fn fit_source_gps<const D: usize>(
                 max_gp: usize::MAX,
                 ..*options
             };
-            SourceGps::fit(domain, &s.records, &[Output::Reward], &all, &mut rng)
+            SourceGps::fit(
+                domain,
+                weighting,
+                &s.records,
+                &[Output::Reward],
+                &all,
+                &mut rng,
+            )
         })
         .collect()
 }

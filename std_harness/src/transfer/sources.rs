@@ -14,7 +14,7 @@
 //! and in the Dam's `a`, which holds the release rather than the action index.
 //!
 //! The published datasets are embedded in the binary ([`SourceSet::published`] for Puddle
-//! World, [`crate::domains::Domain::load_published`] for every domain), so the experiments
+//! World, [`crate::transfer::domain_data::DomainData::published`] for every domain), so the experiments
 //! run from a fresh clone.
 
 use std::fmt::Write as _;
@@ -26,7 +26,7 @@ use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
 use awfqi::weights::Posterior;
 use rand_chacha::ChaCha8Rng;
 
-use super::gp::{GpOptions, Output, SourceGps};
+use super::gp::{GpOptions, Output, SourceGps, Weighting};
 use crate::domains::{Domain, Task};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
 use crate::trees::{ActionForests, TreeParams};
@@ -570,11 +570,13 @@ pub fn learn_source_policy<const D: usize>(
     q.context("no learning step")
 }
 
-/// Generates source `k`'s dataset as `generation` says, with the GP posteriors of
-/// `domain`'s source GPs at the records (source GPs use every record: `max_gp` caps
-/// target GPs only, §4.2).
+/// Generates source `k`'s dataset as `generation` says, with the posteriors of
+/// `weighting`'s source GPs at the records that `layout` stores (source GPs use every
+/// record: `max_gp` caps target GPs only, §4.2).
 pub fn generate_source<const D: usize>(
     domain: &Domain<D>,
+    weighting: &Weighting<D>,
+    layout: &SourceLayout,
     k: usize,
     generation: &Generation,
     gp: &GpOptions,
@@ -617,7 +619,7 @@ pub fn generate_source<const D: usize>(
                 let s: [f64; D] = std::array::from_fn(|d| s.get(d).copied().unwrap_or(0.0));
                 let a = awfqi::rng::uniform_index(rng, n);
                 times.push(0);
-                records.push(env.step(s, a, rng)?);
+                records.push(env.query(s, a, rng)?);
             }
         }
     }
@@ -628,8 +630,8 @@ pub fn generate_source<const D: usize>(
         max_gp: usize::MAX,
         ..*gp
     };
-    let outputs = domain.source_layout.posterior_outputs();
-    let gps = SourceGps::fit(domain, &records, &outputs, &all, rng)?;
+    let outputs = layout.posterior_outputs();
+    let gps = SourceGps::fit(domain, weighting, &records, &outputs, &all, rng)?;
     let mut posteriors = gps.posteriors_at(domain, &records)?;
     let reward = posteriors.remove(0);
     Ok(SourceDataset {
@@ -645,15 +647,18 @@ impl SourceLayout {
     /// next-state coordinate.
     pub fn posterior_outputs(&self) -> Vec<Output> {
         std::iter::once(Output::Reward)
-            .chain((0..self.posterior_dims).map(Output::Next))
+            .chain((0..self.posterior_dims).map(Output::NextState))
             .collect()
     }
 }
 
-/// Generates every source dataset of `domain`, each from its own seeded stream (seed,
-/// SOURCE_GENERATION, source), in parallel.
+/// Generates every source dataset of `domain` (with `weighting`'s GPs, the posteriors
+/// `layout` stores), each from its own seeded stream (seed, SOURCE_GENERATION, source), in
+/// parallel.
 pub fn generate<const D: usize>(
     domain: &Domain<D>,
+    weighting: &Weighting<D>,
+    layout: &SourceLayout,
     generation: &Generation,
     gp: &GpOptions,
     seed: u64,
@@ -663,7 +668,7 @@ pub fn generate<const D: usize>(
         .into_par_iter()
         .map(|k| {
             let mut rng = super::stream(seed, &[super::SOURCE_GENERATION, k as u64]);
-            generate_source(domain, k, generation, gp, &mut rng)
+            generate_source(domain, weighting, layout, k, generation, gp, &mut rng)
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     Ok(SourceSet {

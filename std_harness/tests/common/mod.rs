@@ -1,18 +1,17 @@
 //! Helpers shared by the harness's end-to-end tests.
 
-use awfqi_harness::commands::puddle::Args;
-use clap::Parser;
+use clap::{Args, FromArgMatches, Parser};
 
-/// The command line as `awfqi-harness` parses it.
+/// The command line as `awfqi-harness` parses it for one subcommand's arguments `A`.
 #[derive(Parser)]
-struct Cli {
+struct Cli<A: Args + FromArgMatches> {
     #[command(flatten)]
-    args: Args,
+    args: A,
 }
 
-/// Parses `words` (the subcommand first) into the harness's arguments.
-pub fn parse(words: &[&str]) -> Args {
-    Cli::parse_from(words).args
+/// Parses `words` (the subcommand first) into that subcommand's arguments.
+pub fn parse<A: Args + FromArgMatches>(words: &[&str]) -> A {
+    Cli::<A>::parse_from(words).args
 }
 
 /// Options that make a run quick and silent: 2 FQI iterations of 2 trees, one thread, no

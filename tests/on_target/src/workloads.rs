@@ -191,7 +191,7 @@ pub fn awfqi_puddle<
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
-/// The recommended Puddle World configuration in 32 KiB of RAM (issue 12 item 7): the
+/// The recommended Puddle World configuration in 32 KiB of RAM: the
 /// kernel's whole memory, `AwfqiStorage<f32, 2, 3, 24, 300, 1033, 324, 484>` = 27 616 B on
 /// this target — a 24-point target GP, 6 steps × 50 target records, one weight per
 /// published source record (1033), the sampler over the 324 rows of the spacing-1.25
@@ -201,7 +201,7 @@ pub type Storage32k = AwfqiStorage<f32, 2, 3, 24, 300, 1033, 324, 484>;
 
 /// The main job's AWFQI on the device in the 32 KiB configuration: the builder over the
 /// flash tables, 6 steps of 50 queries (thesis configuration, §4.2 search), the greedy
-/// policy's evaluation. `std_harness/examples/kernel_capacity.rs` (`24 11 1.25`) measures
+/// policy's evaluation. `std_harness/examples/embedded_capacity.rs` (`24 11 1.25`) measures
 /// the return of this configuration on the host.
 pub fn awfqi_puddle_32k(
     storage: &mut Storage32k,
@@ -647,8 +647,8 @@ pub fn adaptive_puddle<
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
-/// The trees' configuration of adaptive AWFQI (the harness's `awfqi-adaptive-kernel` with
-/// `--adaptive-kernel-q trees`): the sources' 64-point mean functions and the kernel's
+/// The trees' configuration of adaptive AWFQI (the harness's `awfqi-adaptive` with
+/// `--adaptive-q trees`): the sources' 64-point mean functions and the kernel's
 /// memory — a 64-point target GP, 6 steps × 50 target records, one weight per published
 /// source record, 4 000 candidate slots (and their alias table), 50 verified states, 3
 /// beliefs — with [`AdaptiveTreeMemory`] lent beside it.
@@ -681,7 +681,7 @@ pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
 };
 
 /// The recommended configuration of adaptive AWFQI on Puddle World (what the harness's
-/// `awfqi-adaptive-kernel` runs by default, the footprint image `adaptive_puddle` and the
+/// `awfqi-adaptive` runs by default, the footprint image `adaptive_puddle` and the
 /// instruction-count image `m4_adaptive`): the sources' 32-point mean functions and the
 /// kernel's memory — a 32-point target GP, 6 steps × 50 target records, one weight per
 /// published source record, 250 candidate slots, 50 verified states, 3 beliefs — with

@@ -7,8 +7,8 @@ use rand_chacha::ChaCha8Rng;
 use super::Experiment;
 use crate::domains::{Domain, Record};
 use crate::forest_fqi::{Dataset, FqiOptions, fqi};
-use crate::joint_q::{QFunction, QFunctionKind, fqi_joint};
-use crate::transfer::protocol::{Diagnostics, Greedy, Learner, Protocol, collect_episodes};
+use crate::joint_q::{ForestLayout, ForestQ, fqi_joint};
+use crate::transfer::protocol::{Diagnostics, GreedyFn, Learner, Protocol, collect_episodes};
 
 /// The episodic part every baseline shares: the domain, `D₀` and the last Q-function.
 #[derive(Debug, Clone)]
@@ -20,7 +20,7 @@ pub struct Episodic<'e, const D: usize = 2> {
     /// `D₀`.
     pub data: Vec<Record<D>>,
     /// The Q-function of the last step (`None` before the first).
-    pub q: Option<QFunction<D>>,
+    pub q: Option<ForestQ<D>>,
 }
 
 impl<'e, const D: usize> Episodic<'e, D> {
@@ -40,7 +40,7 @@ impl<'e, const D: usize> Episodic<'e, D> {
             .q
             .as_ref()
             .map(|q| move |s: &[f64; D]| q.greedy_action(s));
-        let greedy: Option<Greedy<'_, D>> = greedy.as_ref().map(|g| g as Greedy<'_, D>);
+        let greedy: Option<GreedyFn<'_, D>> = greedy.as_ref().map(|g| g as GreedyFn<'_, D>);
         collect_episodes(self.domain, &self.protocol, greedy, rng, &mut self.data)
     }
 
@@ -67,11 +67,11 @@ impl<'e, const D: usize> Episodic<'e, D> {
         data: &Dataset<D>,
         options: &FqiOptions<'_>,
         rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<QFunction<D>> {
+    ) -> anyhow::Result<ForestQ<D>> {
         Ok(match self.protocol.q_function {
-            QFunctionKind::PerAction => fqi(data, options, rng)?.q.into(),
-            QFunctionKind::Joint => {
-                QFunction::Joint(fqi_joint(data, options, &self.domain.action_values, rng)?)
+            ForestLayout::PerAction => fqi(data, options, rng)?.q.into(),
+            ForestLayout::Joint => {
+                ForestQ::Joint(fqi_joint(data, options, &self.domain.action_values, rng)?)
             }
         })
     }

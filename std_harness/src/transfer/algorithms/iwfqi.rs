@@ -15,7 +15,7 @@
 //! 5. weighted FQI on target then sources 1..m: iteration 1 fits the reward model with the
 //!    reward weights, later iterations use its predictions and the transition weights.
 //!
-//! The GPs are the domain's ([`crate::domains::Weighting`]): fitted by marginal likelihood
+//! The GPs are the domain's ([`crate::transfer::gp::Weighting`]): fitted by marginal likelihood
 //! for Puddle World, the published fixed kernels for the Dam and Acrobot. The
 //! ideal-weights variant (§7.7) computes the weights once per experiment, from the true
 //! models, with the domain's ideal variances (Puddle World's true 0.01 and 0.04) and no
@@ -127,7 +127,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         let rows = table.draw(self.experiment.budget(), rng)?;
         for r in rows {
             let (state, action) = table.rows[r];
-            let record = self.run.domain.target.step(state, action, rng)?;
+            let record = self.run.domain.target.query(state, action, rng)?;
             self.run.data.push(record);
         }
         Ok(())
@@ -143,6 +143,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         rng: &mut ChaCha8Rng,
     ) -> anyhow::Result<(Vec<Vec<Posterior<f64>>>, GpSummary)> {
         let domain = &*self.experiment.domain;
+        let weighting = &self.experiment.data.weighting;
         let noise = self.experiment.options.noise;
         let target = &self.run.data;
         // The growing GP keeps no `K⁻¹`, so the explicit-inverse variance always refits.
@@ -150,7 +151,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         {
             let index = match self.growing.iter().position(|(o, _)| *o == output) {
                 Some(i) => Some(i),
-                None => GrowingRecordGp::new(domain, output, zs)
+                None => GrowingRecordGp::new(domain, &weighting.gp_spec(output), output, zs)
                     .transpose()?
                     .map(|gp| {
                         self.growing.push((output, gp));
@@ -166,7 +167,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
                 self.growing.remove(i);
             }
         }
-        let spec = domain.gp_spec(output);
+        let spec = weighting.gp_spec(output);
         let gp = RecordGp::fit_records(domain, target, output, &spec, &self.gp, rng)?;
         let posteriors = zs
             .iter()
@@ -207,7 +208,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         }
         let mut ws = vec![1.0; self.sources.len()];
         for d in transition_dims {
-            let output = Output::Next(d);
+            let output = Output::NextState(d);
             let (posteriors, _) = self.target_posteriors(output, &zs, rng)?;
             let mut offset = 0;
             for (k, (s, post)) in sources.iter().zip(&posteriors).enumerate() {
@@ -217,7 +218,11 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
                         k + 1
                     )
                 })?;
-                let ys: Vec<f64> = s.records.iter().map(|r| output.of(r)).collect();
+                let ys = s
+                    .records
+                    .iter()
+                    .map(|r| output.of(r))
+                    .collect::<awfqi::Result<Vec<f64>>>()?;
                 let mut out = vec![0.0; ys.len()];
                 transition.weights_into(&ys, post, stored, &mut out)?;
                 for (w, o) in ws[offset..offset + out.len()].iter_mut().zip(out) {
@@ -285,8 +290,8 @@ pub fn ideal_weights<const D: usize>(
                     model.mean_next_state(r.state, r.action)?,
                 ),
                 IdealMeans::Sampled => (
-                    target.step(r.state, r.action, rng)?.next_state,
-                    model.step(r.state, r.action, rng)?.next_state,
+                    target.query(r.state, r.action, rng)?.next_state,
+                    model.query(r.state, r.action, rng)?.next_state,
                 ),
             };
             let mut w = 1.0;

@@ -1,12 +1,9 @@
 //! The algorithms compared on the protocol of §3, one module each, and the experiment
 //! context they share ([`Experiment`]).
 
-pub mod adaptive;
-pub mod adaptive_kernel;
-pub mod awfqi_kernel;
+pub mod embedded;
 pub mod episodic;
 pub mod iwfqi;
-pub mod nearest_model;
 pub mod plain_fqi;
 pub mod rbt;
 pub mod sdt;
@@ -18,14 +15,16 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use self::rbt::ComplianceSum;
+use super::domain_data::DomainData;
 use super::gp::{GpOptions, GpSearch};
 use super::protocol::{Learner, Protocol};
 use super::score_tables::ScoreTableData;
 use super::sources::SourceSet;
 use crate::domains::{Domain, IdealMeans};
 
-/// The algorithms of issue 5, in the order the outputs list them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, clap::ValueEnum, Serialize)]
+/// The algorithms compared, in the order the outputs list them; their names, seed ids,
+/// plot colours and descriptions are one table ([`Algorithm::row`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 pub enum Algorithm {
     /// Plain FQI on target episodes (§5).
     Fqi,
@@ -43,19 +42,31 @@ pub enum Algorithm {
     Awfqi,
     /// AWFQI with the oracle score table (§12).
     AwfqiOracle,
-    /// The core's embedded AWFQI (fixed-capacity f32 GP, tabular FQI) on the same protocol.
-    AwfqiKernel,
-    /// AWFQI with a query distribution recomputed from the target's answers within every
-    /// step (issue 11; not a thesis algorithm).
+    /// The thesis's AWFQI as the core runs it (`awfqi::Awfqi`: f32, fixed memory).
+    AwfqiEmbedded,
+    /// The adaptive AWFQI as the core runs it (`awfqi::AdaptiveAwfqi`: f32, fixed memory):
+    /// queries re-planned from the target's answers within every step (not a thesis
+    /// algorithm).
     AwfqiAdaptive,
-    /// The core's adaptive AWFQI (`awfqi::AdaptiveAwfqi`, f32, fixed memory) on the same
-    /// protocol as `awfqi-adaptive`.
-    AwfqiAdaptiveKernel,
+}
+
+/// One row of the algorithm table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AlgorithmRow {
+    /// The name in file names, tables, plots and on the command line.
+    pub name: &'static str,
+    /// The seed stream's identifier: never changed, never reused.
+    pub id: u64,
+    /// Colour index in the plot palette ([`crate::plot::PALETTE`]; the yellow one, 6, is
+    /// left for the source states of the scatter plots).
+    pub color: usize,
+    /// One line on what it is (the command line's help).
+    pub description: &'static str,
 }
 
 impl Algorithm {
     /// Every algorithm.
-    pub const ALL: [Algorithm; 11] = [
+    pub const ALL: [Algorithm; 10] = [
         Algorithm::Fqi,
         Algorithm::Iwfqi,
         Algorithm::IwfqiHeuristic,
@@ -64,43 +75,83 @@ impl Algorithm {
         Algorithm::Sdt,
         Algorithm::Awfqi,
         Algorithm::AwfqiOracle,
-        Algorithm::AwfqiKernel,
+        Algorithm::AwfqiEmbedded,
         Algorithm::AwfqiAdaptive,
-        Algorithm::AwfqiAdaptiveKernel,
     ];
+
+    /// The algorithm table. Each algorithm has a colour of its own (the headline, the
+    /// adaptive AWFQI, the crimson). Seed id 10 belonged to a retired std version of the
+    /// adaptive AWFQI: never reuse it.
+    pub const fn row(self) -> AlgorithmRow {
+        let (name, id, color, description) = match self {
+            Algorithm::Fqi => ("fqi", 1, 7, "FQI on the target's episodes alone (spec §5)"),
+            Algorithm::Iwfqi => ("iwfqi", 2, 0, "IWFQI, mean estimator (spec §7)"),
+            Algorithm::IwfqiHeuristic => (
+                "iwfqi-heuristic",
+                3,
+                10,
+                "IWFQI, heuristic estimator (spec §7.5)",
+            ),
+            Algorithm::IwfqiIdeal => (
+                "iwfqi-ideal",
+                4,
+                5,
+                "IWFQI with the ideal weights from the true models (spec §7.7)",
+            ),
+            Algorithm::Rbt => ("rbt", 5, 4, "Relevance-based transfer (spec §8)"),
+            Algorithm::Sdt => ("sdt", 6, 3, "Shared-dynamics transfer (spec §9)"),
+            Algorithm::Awfqi => (
+                "awfqi",
+                7,
+                1,
+                "The thesis's AWFQI: queries drawn from the realistic score table (spec §12)",
+            ),
+            Algorithm::AwfqiOracle => (
+                "awfqi-oracle",
+                8,
+                2,
+                "AWFQI with the oracle score table (spec §12)",
+            ),
+            Algorithm::AwfqiEmbedded => (
+                "awfqi-embedded",
+                9,
+                9,
+                "The thesis's AWFQI as the core runs it: f32, fixed memory, tile-coded FQI",
+            ),
+            Algorithm::AwfqiAdaptive => (
+                "awfqi-adaptive",
+                11,
+                8,
+                "AWFQI re-planning its queries from the target's answers within every step, \
+                 as the core runs it (f32, fixed memory)",
+            ),
+        };
+        AlgorithmRow {
+            name,
+            id,
+            color,
+            description,
+        }
+    }
 
     /// The name used in file names, tables and on the command line.
     pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Fqi => "fqi",
-            Algorithm::Iwfqi => "iwfqi",
-            Algorithm::IwfqiHeuristic => "iwfqi-heuristic",
-            Algorithm::IwfqiIdeal => "iwfqi-ideal",
-            Algorithm::Rbt => "rbt",
-            Algorithm::Sdt => "sdt",
-            Algorithm::Awfqi => "awfqi",
-            Algorithm::AwfqiOracle => "awfqi-oracle",
-            Algorithm::AwfqiKernel => "awfqi-kernel",
-            Algorithm::AwfqiAdaptive => "awfqi-adaptive",
-            Algorithm::AwfqiAdaptiveKernel => "awfqi-adaptive-kernel",
-        }
+        self.row().name
     }
 
     /// Stable identifier used in seeding (never reorder).
     pub fn id(self) -> u64 {
-        match self {
-            Algorithm::Fqi => 1,
-            Algorithm::Iwfqi => 2,
-            Algorithm::IwfqiHeuristic => 3,
-            Algorithm::IwfqiIdeal => 4,
-            Algorithm::Rbt => 5,
-            Algorithm::Sdt => 6,
-            Algorithm::Awfqi => 7,
-            Algorithm::AwfqiOracle => 8,
-            Algorithm::AwfqiKernel => 9,
-            Algorithm::AwfqiAdaptive => 10,
-            Algorithm::AwfqiAdaptiveKernel => 11,
-        }
+        self.row().id
+    }
+
+    /// Colour index in the plot palette.
+    pub fn color(self) -> usize {
+        self.row().color
+    }
+
+    /// One line on what the algorithm is.
+    pub fn description(self) -> &'static str {
+        self.row().description
     }
 
     /// `true` for the algorithms whose target data are generative-model queries.
@@ -109,9 +160,8 @@ impl Algorithm {
             self,
             Algorithm::Awfqi
                 | Algorithm::AwfqiOracle
-                | Algorithm::AwfqiKernel
+                | Algorithm::AwfqiEmbedded
                 | Algorithm::AwfqiAdaptive
-                | Algorithm::AwfqiAdaptiveKernel
         )
     }
 
@@ -120,45 +170,15 @@ impl Algorithm {
         matches!(self, Algorithm::Awfqi)
     }
 
-    /// The default set of the command: every algorithm but the heuristic-estimator IWFQI
-    /// (a variant of the shared-dynamics reference runs only, §13.1). `awfqi-kernel`,
-    /// `awfqi-adaptive` and `awfqi-adaptive-kernel` are in Puddle World's default set only
-    /// (the kernels run nowhere else yet; the adaptive algorithm's re-planning multiplies the Dam's and Acrobot's
-    /// large FQI fits, so there it is asked for by name).
-    pub const DEFAULT: [Algorithm; 10] = [
-        Algorithm::Fqi,
-        Algorithm::Iwfqi,
-        Algorithm::IwfqiIdeal,
-        Algorithm::Rbt,
-        Algorithm::Sdt,
-        Algorithm::Awfqi,
-        Algorithm::AwfqiOracle,
-        Algorithm::AwfqiKernel,
-        Algorithm::AwfqiAdaptive,
-        Algorithm::AwfqiAdaptiveKernel,
-    ];
-
-    /// Colour index in the plot palette (9 colours; the yellow one is left for the source
-    /// states of the scatter plots, the crimson one is awfqi-adaptive's). The kernel shares the blue of IWFQI: the learning
-    /// curves draw it in a separate panel, next to AWFQI, where IWFQI is absent; the
-    /// heuristic IWFQI shares it too (not in the default set). The adaptive kernel, also in
-    /// that panel only, shares IWFQI-ideal's sky blue (the kernels in blues).
-    pub fn color(self) -> usize {
-        match self {
-            Algorithm::Fqi => 7,
-            Algorithm::Iwfqi | Algorithm::IwfqiHeuristic | Algorithm::AwfqiKernel => 0,
-            Algorithm::IwfqiIdeal | Algorithm::AwfqiAdaptiveKernel => 5,
-            Algorithm::Rbt => 4,
-            Algorithm::Sdt => 3,
-            Algorithm::Awfqi => 1,
-            Algorithm::AwfqiOracle => 2,
-            Algorithm::AwfqiAdaptive => 8,
-        }
+    /// `true` for the core's algorithms, which run on Puddle World only until the
+    /// harness's embedded path is generic over the state dimension.
+    pub fn is_embedded(self) -> bool {
+        matches!(self, Algorithm::AwfqiEmbedded | Algorithm::AwfqiAdaptive)
     }
 }
 
 /// IWFQI's estimator variances (§7.1, §14.6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Variances {
     /// The published runs' values: Puddle World's `v_r = 0.1`, `v_s = 0.2` (standard
@@ -229,10 +249,10 @@ impl Default for TransferOptions {
     }
 }
 
-/// A learner that borrows run-long storage (the core kernel's memory and source slices):
+/// A learner that borrows run-long storage (the core's memory and source slices):
 /// the hook allocates the storage in its own frame, builds the learner from the stream and
 /// hands it to the continuation, which runs the protocol on it. Puddle World only until the
-/// kernel is generic over the state dimension.
+/// embedded path is generic over the state dimension.
 pub type ScopedLearner<const D: usize> = fn(
     &Experiment<D>,
     &mut ChaCha8Rng,
@@ -244,6 +264,8 @@ pub type ScopedLearner<const D: usize> = fn(
 pub struct Experiment<const D: usize = 2> {
     /// The domain.
     pub domain: Arc<Domain<D>>,
+    /// The domain's source data and weighting.
+    pub data: Arc<DomainData<D>>,
     /// The protocol.
     pub protocol: Protocol,
     /// The source datasets.
@@ -256,16 +278,14 @@ pub struct Experiment<const D: usize = 2> {
     pub realistic_table: Option<Arc<ScoreTableData<D>>>,
     /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
     pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
-    /// The core kernel's own set-up (awfqi-kernel).
-    pub kernel: Option<Arc<awfqi_kernel::KernelSetup>>,
-    /// The kernel's learner on this domain (`None`: not available).
-    pub kernel_learner: Option<ScopedLearner<D>>,
-    /// The adaptive kernel's learner on this domain (`None`: not available).
-    pub adaptive_kernel_learner: Option<ScopedLearner<D>>,
-    /// The shared set-up of awfqi-adaptive (its rows and source GPs).
-    pub adaptive: Option<Arc<adaptive::AdaptiveSetup<D>>>,
-    /// awfqi-adaptive's options.
-    pub adaptive_options: adaptive::AdaptiveOptions,
+    /// The embedded algorithms' shared set-up.
+    pub embedded: Option<Arc<embedded::EmbeddedSetup>>,
+    /// `awfqi-embedded`'s learner on this domain (`None`: not available).
+    pub embedded_learner: Option<ScopedLearner<D>>,
+    /// `awfqi-adaptive`'s learner on this domain (`None`: not available).
+    pub adaptive_learner: Option<ScopedLearner<D>>,
+    /// `awfqi-adaptive`'s options.
+    pub adaptive_options: embedded::adaptive::AdaptiveOptions,
 }
 
 impl<const D: usize> Experiment<D> {
@@ -299,7 +319,7 @@ impl<const D: usize> Experiment<D> {
     /// The state coordinates IWFQI weighs transitions on: the domain's published ones, all
     /// of them with `--transition-weights true`, none with `false`.
     pub fn transition_dims(&self) -> Vec<usize> {
-        let published = &self.domain.weighting.transition;
+        let published = &self.data.weighting.transition;
         match self.options.transition_weights {
             None => (0..D).filter(|&d| published[d].is_some()).collect(),
             Some(true) => (0..D).collect(),
@@ -393,18 +413,18 @@ impl<const D: usize> Experiment<D> {
                     o["compliance"] = "sums".into();
                 }
             }
-            Algorithm::AwfqiKernel => {
-                if let Some(k) = &self.kernel {
-                    o["kernel"] = k.parameters();
+            Algorithm::AwfqiEmbedded => {
+                if let Some(e) = &self.embedded {
+                    o["embedded"] = e.parameters(e.config.q);
                 }
             }
-            Algorithm::AwfqiAdaptiveKernel => {
-                if let Some(k) = &self.kernel {
-                    o["kernel"] = k.parameters_with(k.config.adaptive_q);
-                    // The adaptive kernel's own GPs, not the set-up's.
+            Algorithm::AwfqiAdaptive => {
+                if let Some(e) = &self.embedded {
+                    o["embedded"] = e.parameters(e.config.adaptive_q);
+                    // The adaptive algorithm's own GPs, not the set-up's.
                     let a = self.adaptive_options;
-                    o["kernel"]["gp_capacity"] = a.kernel_gp_points.into();
-                    o["kernel"]["gp_search"] = match a.kernel_refit {
+                    o["embedded"]["gp_capacity"] = a.gp_points.into();
+                    o["embedded"]["gp_search"] = match a.refit {
                         Some((e, r)) => format!(
                             "core Nelder-Mead, 10 restarts, then warm refits of {e} evaluations, {r} restarts"
                         ),
@@ -416,11 +436,6 @@ impl<const D: usize> Experiment<D> {
                 o["max_weight"] = self.options.max_weight.into();
                 o["adaptive"] = serde_json::to_value(self.adaptive_options).unwrap_or_default();
             }
-            Algorithm::AwfqiAdaptive => {
-                o["var_rw"] = v_r.into();
-                o["max_weight"] = self.options.max_weight.into();
-                o["adaptive"] = serde_json::to_value(self.adaptive_options).unwrap_or_default();
-            }
             Algorithm::Fqi | Algorithm::Sdt => {}
         }
         if algorithm.is_active() {
@@ -428,11 +443,11 @@ impl<const D: usize> Experiment<D> {
             let table = match algorithm {
                 Algorithm::AwfqiOracle => self.oracle_table.as_ref().map(|t| (t.mode, "oracle")),
                 Algorithm::Awfqi => self.realistic_table.as_ref().map(|t| (t.mode, "realistic")),
-                Algorithm::AwfqiAdaptive | Algorithm::AwfqiAdaptiveKernel => None,
-                _ => self
-                    .kernel
+                Algorithm::AwfqiEmbedded => self
+                    .embedded
                     .as_ref()
-                    .map(|k| (k.config.mode, "realistic (kernel GPs)")),
+                    .map(|e| (e.config.mode, "realistic (the core's f32 GPs)")),
+                _ => None,
             };
             if let Some((mode, kind)) = table {
                 o["score_table"] =
@@ -450,7 +465,7 @@ impl<const D: usize> Experiment<D> {
     }
 
     /// Hands a fresh learner of `algorithm` for one run to `f`, with the stream `rng`
-    /// (which the kernel's set-up draws from first): every algorithm, the kernel included,
+    /// (which an embedded set-up draws from first): every algorithm, the embedded ones included,
     /// through this one door.
     pub fn with_learner(
         &self,
@@ -458,16 +473,16 @@ impl<const D: usize> Experiment<D> {
         rng: &mut ChaCha8Rng,
         f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
-        if algorithm == Algorithm::AwfqiKernel {
-            let scoped = self.kernel_learner.ok_or_else(|| {
-                anyhow::anyhow!("awfqi-kernel is not available on {}", self.domain.name)
-            })?;
-            return scoped(self, rng, f);
-        }
-        if algorithm == Algorithm::AwfqiAdaptiveKernel {
-            let scoped = self.adaptive_kernel_learner.ok_or_else(|| {
+        let embedded = match algorithm {
+            Algorithm::AwfqiEmbedded => Some(self.embedded_learner),
+            Algorithm::AwfqiAdaptive => Some(self.adaptive_learner),
+            _ => None,
+        };
+        if let Some(scoped) = embedded {
+            let scoped = scoped.ok_or_else(|| {
                 anyhow::anyhow!(
-                    "awfqi-adaptive-kernel is not available on {}",
+                    "{} is not available on {}",
+                    algorithm.name(),
                     self.domain.name
                 )
             })?;
@@ -477,7 +492,7 @@ impl<const D: usize> Experiment<D> {
         f(learner.as_mut(), rng)
     }
 
-    /// A fresh learner of `algorithm` for one run (the kernel, which borrows its storage
+    /// A fresh learner of `algorithm` for one run (the embedded ones, which borrow their storage
     /// for the whole run, only through [`Experiment::with_learner`]).
     pub fn learner(&self, algorithm: Algorithm) -> anyhow::Result<Box<dyn Learner<D> + '_>> {
         use awfqi::weights::Estimator::{Heuristic, Mean};
@@ -502,8 +517,7 @@ impl<const D: usize> Experiment<D> {
                 let table = table.ok_or_else(|| anyhow::anyhow!("no oracle score table"))?;
                 Box::new(iwfqi::Iwfqi::estimated(self, Mean, Some(table), gp)?)
             }
-            Algorithm::AwfqiAdaptive => Box::new(adaptive::Adaptive::new(self)?),
-            Algorithm::AwfqiKernel | Algorithm::AwfqiAdaptiveKernel => {
+            Algorithm::AwfqiEmbedded | Algorithm::AwfqiAdaptive => {
                 anyhow::bail!("{} runs through with_learner", algorithm.name())
             }
         })

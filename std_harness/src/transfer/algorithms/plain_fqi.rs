@@ -1,6 +1,6 @@
 //! Plain FQI on the target's episodes (spec §5, §13.1): per-action Extra-Trees on `D₀`
 //! only, unweighted, from scratch every step (or, with the protocol's
-//! [`crate::joint_q::QFunctionKind::Joint`] ablation, one forest over state and action
+//! [`crate::joint_q::ForestLayout::Joint`] ablation, one forest over state and action
 //! value).
 
 use rand_chacha::ChaCha8Rng;

@@ -23,7 +23,7 @@ use crate::forest_fqi::{Dataset, FqiOptions};
 use crate::transfer::protocol::Diagnostics;
 
 /// How a target sample's compliance aggregates over a source's records (spec §8 step 2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ComplianceSum {
     /// `λᵢ = (1/N_k Σ_j W_ij P_ij)(1/N_k Σ_j W_ij Q_ij)`: the spec's and the kept reference

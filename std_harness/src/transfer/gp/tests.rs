@@ -14,7 +14,7 @@ fn target_records(n: usize) -> Vec<Record<4>> {
     let mut state = domain.target.initial_state(&mut rng);
     while records.len() < n {
         let action = (rng.next_u32() % 2) as usize;
-        let r = domain.target.step(state, action, &mut rng).unwrap();
+        let r = domain.target.query(state, action, &mut rng).unwrap();
         state = r.next_state;
         if r.absorbing || records.len() % 100 == 99 {
             state = domain.target.initial_state(&mut rng);
@@ -40,7 +40,8 @@ fn largest_difference(a: &[Vec<Posterior<f64>>], b: &[Vec<Posterior<f64>>]) -> (
 #[test]
 fn appended_batches_stay_within_the_refits_own_rounding() {
     let domain = acrobot::domain();
-    let sources = (domain.load_published)().unwrap();
+    let data = crate::transfer::domain_data::acrobot::data();
+    let sources = (data.published)().unwrap();
     let zs: Vec<Vec<GpInput>> = sources
         .sources
         .iter()
@@ -53,12 +54,12 @@ fn appended_batches_stay_within_the_refits_own_rounding() {
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     for output in [
         Output::Reward,
-        Output::Next(0),
-        Output::Next(1),
-        Output::Next(2),
-        Output::Next(3),
+        Output::NextState(0),
+        Output::NextState(1),
+        Output::NextState(2),
+        Output::NextState(3),
     ] {
-        let spec = domain.gp_spec(output);
+        let spec = data.weighting.gp_spec(output);
         let refit = |records: &[Record<4>], rng: &mut ChaCha8Rng| {
             let gp = RecordGp::fit_records(&domain, records, output, &spec, &options, rng).unwrap();
             zs.iter()
@@ -67,7 +68,9 @@ fn appended_batches_stay_within_the_refits_own_rounding() {
         };
         let in_order = refit(&records, &mut rng);
         let in_reverse = refit(&reversed, &mut rng);
-        let mut growing = GrowingRecordGp::new(&domain, output, &zs).unwrap().unwrap();
+        let mut growing = GrowingRecordGp::new(&domain, &spec, output, &zs)
+            .unwrap()
+            .unwrap();
         for end in [120, 250, 300] {
             assert!(growing.update(&domain, &records[..end], 10_000).unwrap());
         }
@@ -91,8 +94,16 @@ fn the_growing_gp_refuses_what_it_cannot_follow() {
     let zs = vec![records.iter().map(|r| domain.input(r)).collect::<Vec<_>>()];
     // A fitted kernel (Puddle World's) has no growing GP.
     let puddle = crate::domains::puddle::domain(awfqi::env::Dynamics::Shared);
-    assert!(GrowingRecordGp::new(&puddle, Output::Reward, &[vec![[0.0; GP_INPUT]]]).is_none());
-    let mut gp = GrowingRecordGp::new(&domain, Output::Reward, &zs)
+    let fitted = crate::transfer::domain_data::puddle::data(awfqi::env::Dynamics::Shared)
+        .weighting
+        .reward;
+    assert!(
+        GrowingRecordGp::new(&puddle, &fitted, Output::Reward, &[vec![[0.0; GP_INPUT]]]).is_none()
+    );
+    let reward = crate::transfer::domain_data::acrobot::data()
+        .weighting
+        .reward;
+    let mut gp = GrowingRecordGp::new(&domain, &reward, Output::Reward, &zs)
         .unwrap()
         .unwrap();
     assert!(gp.update(&domain, &records[..10], 10_000).unwrap());

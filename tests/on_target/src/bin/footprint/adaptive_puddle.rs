@@ -1,4 +1,4 @@
-//! Footprint image: adaptive AWFQI (`awfqi-adaptive-kernel`) on Puddle World in its
+//! Footprint image: adaptive AWFQI (`awfqi-adaptive`) on Puddle World in its
 //! recommended configuration (f32): the published source data and their posteriors in
 //! flash, each source's 32-point reward GP fitted on the device and kept as a mean
 //! function, a 32-point target GP, 250 candidate rows of the spacing-0.1 grid per

@@ -1,4 +1,4 @@
-//! Footprint image: adaptive AWFQI (`awfqi-adaptive-kernel --adaptive-kernel-q trees`) on
+//! Footprint image: adaptive AWFQI (`awfqi-adaptive --adaptive-q trees`) on
 //! Puddle World with the Extra-Trees FQI it had before the model sweep (f32): the published source data and their posteriors in
 //! flash, each source's 64-point reward GP fitted on the device and kept as a mean
 //! function, a 64-point target GP, 4 000 candidate rows of the spacing-0.1 grid per

@@ -1,18 +1,17 @@
-//! `awfqi-adaptive-kernel`: the core's adaptive AWFQI ([`awfqi::AdaptiveAwfqi`]) on the
-//! same protocol as `awfqi-adaptive`, so the embedded version of the algorithm is measured,
-//! not guessed.
+//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::AdaptiveAwfqi`]; not
+//! a thesis algorithm — the thesis's `awfqi` and `awfqi-oracle` stay as they are): the
+//! query distribution is recomputed from what the target has answered, several times per
+//! step, and aims at what decides the greedy policy.
 //!
-//! It runs as on a microcontroller, in `f32`, in fixed storage sized once per run: the
-//! kernel path's set-up ([`KernelSetup`]: the `f32` source records, their stored posteriors,
-//! the candidate rows of the setting and one `Gp<f32, 64, 3>` reward GP per source, whose
-//! posterior means are the sources' [`MeanFunction`]s), tile coding with
-//! [`ADAPTIVE_TILINGS`] offset tilings of [`ADAPTIVE_TILES`] tiles per axis (chosen on the
-//! tuning runs `--seed 100`, `docs/active-budget.md`; `--kernel-resolution` given
-//! explicitly sets the approximator of both kernels; `--adaptive-kernel-q knn|hybrid|trees`
-//! selects the core's kernel averaging over the records, its mean with the tiles, or
-//! per-action Extra-Trees forests, measured in `docs/active-budget.md`), and `awfqi-adaptive`'s options that the core has (`--adaptive-*`: sub-batches,
-//! verification share, surprise, uncertainty, decision relevance, floor, candidates,
-//! relevance width; the others must keep their defaults).
+//! It runs on the embedded set-up ([`EmbeddedSetup`]: the `f32` source records, their
+//! stored posteriors, the candidate rows of the setting and the sources' reward
+//! [`MeanFunction`]s) with the FQI approximator of [`EmbeddedConfig::adaptive_q`]
+//! (by default [`ADAPTIVE_Q`], chosen on the tuning runs `--seed 100`,
+//! `docs/active-budget.md`) and the loop's knobs of [`AdaptiveOptions`] (by default the
+//! core's recommended configuration).
+//!
+//! [`EmbeddedConfig::adaptive_q`]: super::EmbeddedConfig::adaptive_q
+//! [`ADAPTIVE_Q`]: super::ADAPTIVE_Q
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
@@ -20,69 +19,77 @@ use awfqi::{
     QStorage, SourceData, Transition, TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
 
-use super::Experiment;
-use super::adaptive::AdaptiveOptions;
-use super::awfqi_kernel::{
-    GP_POINTS, KernelQFunction, KernelSetup, Record32, SweepKnobs, T, print_warnings,
-    reward_gp_summary, row_set, to_f64,
+use super::{
+    EmbeddedSetup, GP_POINTS, Record32, T, print_warnings, reward_gp_summary, row_set, to_f64,
 };
+use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
 
-/// Trees per action of `--adaptive-kernel-q trees` by default: chosen on the tuning runs
-/// (`--seed 100`, 20 runs: 50 against 20, 10 stored and tiles; `docs/active-budget.md`).
-pub const ADAPTIVE_TREES: usize = 50;
-/// Nodes of the streamed trees' scratch tree by default (the FQI iterations' trees of the
-/// largest action are cut at this budget; the final trees are fully grown).
-pub const ADAPTIVE_TREE_NODES: usize = 1023;
-/// Cells per axis of the model sweep by default (13 × 13 nodes over `[0, 10]²`), chosen on
-/// the tuning runs (`docs/embedded-adaptive.md`).
-pub const ADAPTIVE_SWEEP_CELLS: usize = 12;
-/// The adaptive kernel's default approximator: a model sweep on [`ADAPTIVE_SWEEP_CELLS`]
-/// cells per axis with one reward model for every action (Puddle World's reward depends on
-/// the state only).
-pub const ADAPTIVE_Q: KernelQFunction = KernelQFunction::Sweep(SweepKnobs {
-    cells: ADAPTIVE_SWEEP_CELLS,
-    rewards: awfqi::RewardModel::Pooled,
-    min_mass: 0.0,
-    lookahead: false,
-});
+/// The adaptive loop's knobs a run may set (fields of the core's [`AdaptiveConfig`]), as
+/// the result files record them. The defaults are the core's recommended configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct AdaptiveOptions {
+    /// Sub-batches per step (re-planning points), ≥ 1.
+    pub sub_batches: usize,
+    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1].
+    pub verify: f64,
+    /// Score rows by residual surprise.
+    pub surprise: bool,
+    /// Scale scores by the residual GP's remaining variance.
+    pub uncertainty: bool,
+    /// Weight rows by their closeness to the verified greedy paths.
+    pub decision: bool,
+    /// Share of the drawn probability spread uniformly over the candidates, in [0, 1].
+    pub floor: f64,
+    /// Candidate rows scored per sub-batch.
+    pub candidates: usize,
+    /// Width of the relevance kernel, as a share of each state coordinate's range.
+    pub relevance_width: f64,
+    /// Relabel contradicted source rewards by the target GP instead of down-weighting
+    /// the records.
+    pub relabel: bool,
+    /// Warm refits: likelihood evaluations and restarts of every search after a GP's first
+    /// in a run (`None`: the thesis's search every time).
+    pub refit: Option<(usize, usize)>,
+    /// Capacity of the target GPs and of the sources' mean functions (16, 24, 32, 48 or
+    /// 64).
+    pub gp_points: usize,
+}
 
-/// Tiles per axis of the adaptive kernel's tile coding (`--adaptive-kernel-q tiles`, the
-/// default before the trees): chosen on the tuning runs
-/// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
-/// 16 × 8, 20 × 8; 12 × 8 best at every step but one, see `docs/active-budget.md`).
-pub const ADAPTIVE_TILES: usize = 12;
-/// Offset tilings of the adaptive kernel's tile coding.
-pub const ADAPTIVE_TILINGS: usize = 8;
+/// `awfqi-adaptive`'s GP capacity by default (the recommended configuration,
+/// `docs/embedded-adaptive.md`).
+pub const ADAPTIVE_GP_POINTS: usize = 32;
 
-/// The core's configuration for `experiment`: the recommended one with the harness's
+impl Default for AdaptiveOptions {
+    /// The core's [`AdaptiveConfig::recommended`].
+    fn default() -> Self {
+        let c = AdaptiveConfig::<f64, 2, 3>::recommended(1, [0.0; 2], 1, 0.0, [(0.0, 1.0); 2]);
+        Self {
+            sub_batches: c.sub_batches,
+            verify: c.verify,
+            surprise: c.surprise,
+            uncertainty: c.uncertainty,
+            decision: c.decision,
+            floor: c.floor,
+            candidates: c.candidates,
+            relevance_width: c.relevance_width,
+            relabel: c.relabel,
+            refit: match c.refit {
+                awfqi::adaptive::Refit::Warm(o) => Some((o.max_evaluations, o.restarts)),
+                awfqi::adaptive::Refit::Search => None,
+            },
+            gp_points: ADAPTIVE_GP_POINTS,
+        }
+    }
+}
+
+/// The core's configuration for `experiment`: the recommended one with the experiment's
 /// adaptive options.
-///
-/// Errors: an option the core does not have set away from its default, or an invalid one.
-fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
+fn config(experiment: &Experiment) -> AdaptiveConfig<T, 2, 3> {
     let o = experiment.adaptive_options;
-    let d = AdaptiveOptions::default();
-    anyhow::ensure!(
-        o.prior == d.prior
-            && o.model_rewards == d.model_rewards
-            && o.source_weights == d.source_weights
-            && o.surprise_stop == d.surprise_stop
-            && o.simulate == d.simulate
-            && o.resume == d.resume
-            && o.temperature == d.temperature
-            && o.consensus == d.consensus
-            && o.corroborate == d.corroborate
-            && o.oracle == d.oracle
-            && o.select == d.select
-            && o.final_trees == d.final_trees,
-        "awfqi-adaptive-kernel has the default configuration of awfqi-adaptive only \
-         (no --adaptive-prior, --adaptive-model-rewards, --adaptive-source-weights, \
-         --adaptive-surprise-stop, --adaptive-simulate, --adaptive-resume, \
-         --adaptive-temperature, --adaptive-consensus, --adaptive-corroborate, \
-         --adaptive-oracle, --adaptive-select, --adaptive-final-trees)"
-    );
     let domain = &experiment.domain;
     let mut bounds = [(0.0, 0.0); 2];
     for (b, &(lo, hi)) in bounds.iter_mut().zip(&domain.state_bounds) {
@@ -102,10 +109,10 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
     c.uncertainty = o.uncertainty;
     c.decision = o.decision;
     c.floor = o.floor as T;
-    c.candidates = o.kernel_candidates;
+    c.candidates = o.candidates;
     c.relevance_width = o.relevance_width as T;
-    c.relabel = o.kernel_relabel;
-    c.refit = match o.kernel_refit {
+    c.relabel = o.relabel;
+    c.refit = match o.refit {
         Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
             max_evaluations,
             restarts,
@@ -113,7 +120,7 @@ fn config(experiment: &Experiment) -> anyhow::Result<AdaptiveConfig<T, 2, 3>> {
         }),
         None => awfqi::adaptive::Refit::Search,
     };
-    Ok(c)
+    c
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
@@ -157,19 +164,19 @@ impl<const N: usize> Memory<N> {
     }
 }
 
-/// `awfqi-adaptive-kernel` as a [`Learner`]: each protocol step is one
+/// `awfqi-adaptive` as a [`Learner`]: each protocol step is one
 /// [`AdaptiveAwfqi::step`]; the greedy action is the `f32` Q-function's, and `D₀` is kept in
 /// `f64` for the result files.
-struct AdaptiveKernelLearner<'a, const N: usize> {
-    kernel: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
+struct AdaptiveLearner<'a, const N: usize> {
+    adaptive: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
     collected: Vec<Record>,
 }
 
-impl<const N: usize> Learner for AdaptiveKernelLearner<'_, N> {
+impl<const N: usize> Learner for AdaptiveLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
-        let report = self.kernel.step(rng)?;
-        print_warnings("awfqi-adaptive-kernel", &report);
-        let new = &self.kernel.target_samples()[self.collected.len()..];
+        let report = self.adaptive.step(rng)?;
+        print_warnings("awfqi-adaptive", &report);
+        let new = &self.adaptive.target_samples()[self.collected.len()..];
         self.collected.extend(new.iter().map(to_f64));
         Ok(Diagnostics {
             n_source_samples: Some(report.n_source_samples),
@@ -182,7 +189,7 @@ impl<const N: usize> Learner for AdaptiveKernelLearner<'_, N> {
 
     fn greedy_action(&self, s: &[f64; 2]) -> usize {
         let state = [s[0] as T, s[1] as T];
-        self.kernel.q().greedy_action(state).unwrap_or(0)
+        self.adaptive.q().greedy_action(state).unwrap_or(0)
     }
 
     fn target_samples(&self) -> &[Record] {
@@ -190,20 +197,20 @@ impl<const N: usize> Learner for AdaptiveKernelLearner<'_, N> {
     }
 }
 
-/// Hands a fresh learner for one run of `experiment` to `f` (the kernel borrows its memory
-/// and the set-up for the whole run, so they live in this frame).
+/// Hands a fresh learner for one run of `experiment` to `f` (the core's adaptive AWFQI
+/// borrows its memory and the set-up for the whole run, so they live in this frame).
 pub fn with_learner(
     experiment: &Experiment,
     rng: &mut ChaCha8Rng,
     f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    match experiment.adaptive_options.kernel_gp_points {
+    match experiment.adaptive_options.gp_points {
         GP_POINTS => with_learner_of::<GP_POINTS>(experiment, rng, f),
         16 => with_learner_of::<16>(experiment, rng, f),
         24 => with_learner_of::<24>(experiment, rng, f),
         32 => with_learner_of::<32>(experiment, rng, f),
         48 => with_learner_of::<48>(experiment, rng, f),
-        n => anyhow::bail!("--adaptive-kernel-gp-points {n}: 16, 24, 32, 48 or 64"),
+        n => anyhow::bail!("--adaptive-gp-points {n}: 16, 24, 32, 48 or 64"),
     }
 }
 
@@ -211,7 +218,7 @@ pub fn with_learner(
 /// capacity, else fitted here as the set-up fits its own (the published training, an even
 /// spread), from a stream of their own so every run has the same.
 fn means_of<const N: usize>(
-    setup: &KernelSetup,
+    setup: &EmbeddedSetup,
     sources: &[&[Record32]],
 ) -> anyhow::Result<Vec<MeanFunction<T, N, 3>>> {
     use rand_core::SeedableRng;
@@ -250,15 +257,15 @@ fn with_learner_of<const N: usize>(
     rng: &mut ChaCha8Rng,
     f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let setup: &KernelSetup = experiment
-        .kernel
+    let setup: &EmbeddedSetup = experiment
+        .embedded
         .as_deref()
-        .ok_or_else(|| anyhow::anyhow!("no kernel set-up"))?;
+        .ok_or_else(|| anyhow::anyhow!("no embedded set-up"))?;
     let dynamics: Dynamics = experiment
         .protocol
         .dynamics
-        .ok_or_else(|| anyhow::anyhow!("awfqi-adaptive-kernel runs on Puddle World only"))?;
-    let config = config(experiment)?.validate()?;
+        .ok_or_else(|| anyhow::anyhow!("awfqi-adaptive runs on Puddle World only"))?;
+    let config = config(experiment).validate()?;
     let sources = setup.source_slices();
     let rows = row_set(&setup.config, &sources)?;
     let approximator = setup.config.adaptive_q.approximator()?;
@@ -313,7 +320,7 @@ fn with_learner_of<const N: usize>(
     };
     let means = means_of::<N>(setup, &sources)?;
     let means: &[MeanFunction<T, N, 3>] = &means;
-    let kernel = AdaptiveAwfqi::new(
+    let adaptive = AdaptiveAwfqi::new(
         config,
         approximator,
         SourceData::new(&sources, setup.posteriors())?,
@@ -322,8 +329,8 @@ fn with_learner_of<const N: usize>(
         PuddleWorld::target(dynamics),
         memory.buffers(),
     )?;
-    let mut learner = AdaptiveKernelLearner {
-        kernel,
+    let mut learner = AdaptiveLearner {
+        adaptive,
         collected: Vec::new(),
     };
     f(&mut learner, rng)

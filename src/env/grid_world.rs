@@ -8,7 +8,7 @@ use crate::rng;
 use rand_core::Rng;
 
 /// Number of actions: 0 = x+1, 1 = x−1, 2 = y+1, 3 = y−1 (the Puddle World encoding).
-pub const GRID_ACTIONS: usize = 4;
+pub const GRID_WORLD_ACTIONS: usize = 4;
 
 /// A rectangular grid of cells `(x, y)`, state index `x + width·y`, with one goal cell
 /// giving mean reward 1 (0 elsewhere) and Gaussian reward noise.
@@ -176,7 +176,7 @@ impl<T: Real> GridWorld<T> {
 
     fn check(&self, state: usize, action: usize) -> Result<()> {
         self.check_state(state)?;
-        if action < GRID_ACTIONS {
+        if action < GRID_WORLD_ACTIONS {
             Ok(())
         } else {
             Err(Error::OutOfRange {
@@ -192,7 +192,7 @@ impl<T: Real> FiniteMdp<T> for GridWorld<T> {
     }
 
     fn num_actions(&self) -> usize {
-        GRID_ACTIONS
+        GRID_WORLD_ACTIONS
     }
 
     fn initial_state(&self) -> usize {
@@ -236,7 +236,7 @@ impl<T: Real> GenerativeModel<T> for GridWorld<T> {
     type State = usize;
 
     fn num_actions(&self) -> usize {
-        GRID_ACTIONS
+        GRID_WORLD_ACTIONS
     }
 
     /// Draws `S′ ~ p(· | s, a)` (deterministic here) and `R ~ 𝒩(r(s, a), v)` independently;

@@ -1,15 +1,15 @@
-//! The core's embedded AWFQI (`awfqi-kernel`) on the main job's protocol at other
+//! The core's thesis AWFQI (`awfqi-embedded`) on the main job's protocol at other
 //! capacities: target-GP points `N`, FQI cells per axis and score-grid spacing — what a
-//! smaller RAM budget costs in return (issue 12 item 7, the 32 KiB configuration).
+//! smaller RAM budget costs in return (the 32 KiB configuration).
 //!
 //! Same protocol, data and random streams as `awfqi-harness puddle --algorithms
-//! awfqi-kernel` (thesis setting 2 (b): shared dynamics, the published sources, grid rows,
-//! 50 queries per step, 6 steps, seed 0, run `i` from the stream (seed, RUN, awfqi-kernel, i), the
+//! awfqi-embedded --embedded-q tabular` (thesis setting 2 (b): shared dynamics, the published sources, grid rows,
+//! 50 queries per step, 6 steps, seed 0, run `i` from the stream (seed, RUN, awfqi-embedded, i), the
 //! realistic score table from (seed, SCORE_TABLE, 100), evaluation by the domain's 5 greedy
 //! rollouts); with `64 11 0.1` it reproduces that path's result files' returns exactly.
 //!
 //! ```sh
-//! cargo run --release -p awfqi-harness --example kernel_capacity -- N CELLS SPACING [RUNS | A..B]
+//! cargo run --release -p awfqi-harness --example embedded_capacity -- N CELLS SPACING [RUNS | A..B]
 //! ```
 //!
 //! `N` is one of 16, 24, 32, 48, 64. Prints the mean ± standard error of the greedy return
@@ -19,9 +19,8 @@
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS};
 use awfqi_harness::domains::puddle::domain;
 use awfqi_harness::transfer::algorithms::Algorithm;
-use awfqi_harness::transfer::algorithms::awfqi_kernel::{
-    KernelConfig, KernelLearner, KernelMemory, KernelQFunction, KernelSetup,
-};
+use awfqi_harness::transfer::algorithms::embedded::thesis::{EmbeddedLearner, EmbeddedMemory};
+use awfqi_harness::transfer::algorithms::embedded::{EmbeddedConfig, EmbeddedQ, EmbeddedSetup};
 use awfqi_harness::transfer::protocol::Learner;
 use awfqi_harness::transfer::score_tables::Mode;
 use awfqi_harness::transfer::sources::SourceSet;
@@ -30,8 +29,8 @@ use awfqi_harness::transfer::{RUN, SCORE_TABLE, stream};
 const STEPS: usize = 6;
 const BUDGET: usize = 50;
 
-/// The harness's kernel path (`awfqi-kernel`'s set-up, memory and learner, which build the
-/// kernel with the core's builder) at GP capacity `N`.
+/// The harness's embedded path (`awfqi-embedded`'s set-up, memory and learner, which build
+/// the core's AWFQI with its builder) at GP capacity `N`.
 fn run<const N: usize>(
     cells: usize,
     spacing: f64,
@@ -41,9 +40,9 @@ fn run<const N: usize>(
     let seed = 0;
     let sources = SourceSet::published(Dynamics::Shared)?;
     let domain = domain(Dynamics::Shared);
-    let config = KernelConfig::new(Mode::Grid, spacing).with_q(KernelQFunction::Tabular(cells));
-    // The realistic score table, once (as the harness's kernel set-up does).
-    let setup = KernelSetup::<N>::new(&sources, config, &mut stream(seed, &[SCORE_TABLE, 100]))?;
+    let config = EmbeddedConfig::new(Mode::Grid, spacing).with_q(EmbeddedQ::Tabular(cells));
+    // The realistic score table, once (as the harness's embedded set-up does).
+    let setup = EmbeddedSetup::<N>::new(&sources, config, &mut stream(seed, &[SCORE_TABLE, 100]))?;
     let slices = setup.source_slices();
     let rows = setup.score_rows();
     let records: usize = slices.iter().map(|s| s.len()).sum();
@@ -52,10 +51,10 @@ fn run<const N: usize>(
     for (i, out) in returns.iter_mut().enumerate() {
         let mut rng = stream(
             seed,
-            &[RUN, Algorithm::AwfqiKernel.id(), (first + i) as u64],
+            &[RUN, Algorithm::AwfqiEmbedded.id(), (first + i) as u64],
         );
-        let mut memory = KernelMemory::<N>::new(&setup, STEPS, BUDGET, false)?;
-        let mut learner = KernelLearner::new(
+        let mut memory = EmbeddedMemory::<N>::new(&setup, STEPS, BUDGET, false)?;
+        let mut learner = EmbeddedLearner::new(
             &setup,
             &slices,
             &mut memory,
@@ -67,7 +66,7 @@ fn run<const N: usize>(
         for (k, r) in out.iter_mut().enumerate() {
             learner.step(k, &mut rng)?;
             let greedy = |s: &[f64; 2]| learner.greedy_action(s);
-            *r = domain.evaluate(&greedy, &mut rng)?.mean_return;
+            *r = domain.evaluate(&greedy, &mut rng)?.returns.mean_return;
         }
     }
 
@@ -110,7 +109,7 @@ fn run<const N: usize>(
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: kernel_capacity N CELLS SPACING [RUNS | A..B]";
+    let usage = "usage: embedded_capacity N CELLS SPACING [RUNS | A..B]";
     let n: usize = args
         .first()
         .ok_or_else(|| anyhow::anyhow!(usage))?

@@ -1,0 +1,273 @@
+//! The options of the core's algorithms on Puddle World: `awfqi-embedded`'s FQI
+//! approximator ([`EmbeddedArgs`]) and `awfqi-adaptive`'s approximator and loop
+//! ([`AdaptiveArgs`]), each under its own heading of `puddle --help`.
+
+use clap::{Args, ValueEnum};
+
+use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
+use crate::transfer::algorithms::embedded::{
+    ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
+    EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
+};
+use crate::transfer::score_tables::Mode;
+
+/// The Q-function approximator of `awfqi-embedded`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EmbeddedQArg {
+    /// One table of `--embedded-resolution` cells per axis (spec §5.1).
+    Tabular,
+    /// Tile coding: `--embedded-tilings` offset tilings of `--embedded-resolution` tiles
+    /// per axis, averaged (the core's `TileFqi`).
+    Tiles,
+}
+
+/// The Q-function approximator of `awfqi-adaptive`'s FQI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AdaptiveQArg {
+    /// Tile coding: `--adaptive-tilings` offset tilings of `--adaptive-tiles` tiles per
+    /// axis.
+    Tiles,
+    /// Kernel averaging over the `--adaptive-knn-neighbours` nearest records (the core's
+    /// `KnnFqi`), uniform or Gaussian (`--adaptive-knn-bandwidth`).
+    Knn,
+    /// The mean of tiles and kernel averaging, each fitted on the same data.
+    Hybrid,
+    /// Per-action Extra-Trees forests in fixed memory (the core's `TreeFqi`):
+    /// `--adaptive-trees` trees, streamed through a scratch tree of `--adaptive-tree-nodes`
+    /// nodes (or stored, each of at most that many, with `--adaptive-tree-streamed false`).
+    Trees,
+    /// Value iteration on a grid model of the weighted records (the core's `SweepFqi`):
+    /// `--adaptive-sweep-cells` cells per axis, nodes at their corners.
+    Sweep,
+}
+
+/// Which records a model-sweep node's reward averages (the core's `RewardModel`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SweepRewardsArg {
+    /// The action's own records.
+    PerAction,
+    /// Every action's records.
+    Pooled,
+    /// The action's own where it has some, every action's elsewhere.
+    Backfilled,
+}
+
+impl From<SweepRewardsArg> for awfqi::RewardModel {
+    fn from(r: SweepRewardsArg) -> Self {
+        match r {
+            SweepRewardsArg::PerAction => Self::PerAction,
+            SweepRewardsArg::Pooled => Self::Pooled,
+            SweepRewardsArg::Backfilled => Self::Backfilled,
+        }
+    }
+}
+
+/// `awfqi-embedded`'s options.
+#[derive(Debug, Clone, Copy, Args)]
+#[command(next_help_heading = "awfqi-embedded (the core's thesis AWFQI)")]
+pub struct EmbeddedArgs {
+    /// Q-function approximator of awfqi-embedded's FQI (`tabular`: the 11 × 11 table of
+    /// spec §12.1, measured worse than tile coding).
+    #[arg(long, value_enum, default_value = "tiles")]
+    pub embedded_q: EmbeddedQArg,
+    /// Cells (tabular) or tiles (tiles) per axis. Default: 11 for the table, 6 for tiles.
+    #[arg(long)]
+    pub embedded_resolution: Option<usize>,
+    /// Offset tilings of `--embedded-q tiles`.
+    #[arg(long, default_value_t = TILINGS)]
+    pub embedded_tilings: usize,
+}
+
+/// `awfqi-adaptive`'s options.
+#[derive(Debug, Clone, Copy, Args)]
+#[command(next_help_heading = "awfqi-adaptive (the core's adaptive AWFQI)")]
+pub struct AdaptiveArgs {
+    /// Q-function approximator of awfqi-adaptive's FQI.
+    #[arg(long, value_enum, default_value = "sweep")]
+    pub adaptive_q: AdaptiveQArg,
+    /// Cells per axis of `--adaptive-q sweep` (its nodes: one more per axis).
+    #[arg(long, default_value_t = ADAPTIVE_SWEEP_CELLS)]
+    pub adaptive_sweep_cells: usize,
+    /// `--adaptive-q sweep`: which records a node's reward averages (`pooled`: every
+    /// action's, for rewards that depend on the state only; `backfilled`: the action's own
+    /// where it has some, every action's elsewhere).
+    #[arg(long, value_enum, default_value = "pooled")]
+    pub adaptive_sweep_rewards: SweepRewardsArg,
+    /// `--adaptive-q sweep`: the least reward weight of a node with data (a record at the
+    /// node weighs 1).
+    #[arg(long, default_value_t = 0.0)]
+    pub adaptive_sweep_min_mass: f64,
+    /// `--adaptive-q sweep`: decide by one step of lookahead at the state instead of
+    /// interpolating the node Q-values.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
+    pub adaptive_sweep_lookahead: bool,
+    /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
+    #[arg(long, default_value_t = ADAPTIVE_TILES)]
+    pub adaptive_tiles: usize,
+    /// Offset tilings of `--adaptive-q tiles` or `hybrid`.
+    #[arg(long, default_value_t = ADAPTIVE_TILINGS)]
+    pub adaptive_tilings: usize,
+    /// Neighbours per prediction of `--adaptive-q knn` or `hybrid`.
+    #[arg(long, default_value_t = 4)]
+    pub adaptive_knn_neighbours: usize,
+    /// Gaussian bandwidth of `--adaptive-q knn`, as a share of each coordinate's range
+    /// (absent: the neighbours weigh equally).
+    #[arg(long)]
+    pub adaptive_knn_bandwidth: Option<f64>,
+    /// Reach of `--adaptive-q knn`, as a share of each coordinate's range: an action whose
+    /// nearest record is farther, where another's is nearer, is valued at most that one's
+    /// value (absent: no cap).
+    #[arg(long)]
+    pub adaptive_knn_reach: Option<f64>,
+    /// `--adaptive-q knn`: one ball for every action (the radius of the
+    /// `--adaptive-knn-neighbours` nearest records of any action bounds every action's mean
+    /// and acts as the reach).
+    #[arg(long)]
+    pub adaptive_knn_common_ball: bool,
+    /// Trees per action of `--adaptive-q trees`.
+    #[arg(long, default_value_t = ADAPTIVE_TREES)]
+    pub adaptive_trees: usize,
+    /// Node budget of `--adaptive-q trees`: of the scratch tree when streamed, of each tree
+    /// when stored (at most 65 535; a tree is grown breadth first and cut when full).
+    #[arg(long, default_value_t = ADAPTIVE_TREE_NODES)]
+    pub adaptive_tree_nodes: usize,
+    /// `min_samples_split` of `--adaptive-q trees`.
+    #[arg(long, default_value_t = 2)]
+    pub adaptive_tree_min_samples_split: usize,
+    /// `min_samples_leaf` of `--adaptive-q trees`.
+    #[arg(long, default_value_t = 1)]
+    pub adaptive_tree_min_samples_leaf: usize,
+    /// `--adaptive-q trees`: stream the trees (grow each in one scratch tree of
+    /// `--adaptive-tree-nodes` nodes during FQI, and the final trees along each query's
+    /// path), so the memory does not grow with `--adaptive-trees`; `false`: store every
+    /// tree.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = true)]
+    pub adaptive_tree_streamed: bool,
+    /// Depth limit of `--adaptive-q trees` (absent: none; the root is at depth 0).
+    #[arg(long)]
+    pub adaptive_tree_max_depth: Option<usize>,
+    /// Sub-batches (re-planning points) per step.
+    #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
+    pub adaptive_sub_batches: usize,
+    /// Share of each sub-batch spent verifying the greedy policy.
+    #[arg(long, default_value_t = AdaptiveOptions::default().verify)]
+    pub adaptive_verify: f64,
+    /// Score rows by residual surprise.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise)]
+    pub adaptive_surprise: bool,
+    /// Scale scores by the residual GP's remaining variance.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().uncertainty)]
+    pub adaptive_uncertainty: bool,
+    /// Weight rows by closeness to the verified greedy paths.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().decision)]
+    pub adaptive_decision: bool,
+    /// Coverage floor (share of the drawn probability spread uniformly).
+    #[arg(long, default_value_t = AdaptiveOptions::default().floor)]
+    pub adaptive_floor: f64,
+    /// Candidate rows scored per sub-batch.
+    #[arg(long, default_value_t = AdaptiveOptions::default().candidates)]
+    pub adaptive_candidates: usize,
+    /// Relevance-kernel width (share of each state coordinate's range).
+    #[arg(long, default_value_t = AdaptiveOptions::default().relevance_width)]
+    pub adaptive_relevance_width: f64,
+    /// Relabel contradicted source rewards by the target GP instead of down-weighting the
+    /// records.
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().relabel)]
+    pub adaptive_relabel: bool,
+    /// After a target GP's first fit in a run, start each later search from its last
+    /// hyperparameters with this many likelihood evaluations (the core's `Refit::Warm`); 0:
+    /// every fit searches as the thesis does.
+    #[arg(long, default_value_t = AdaptiveOptions::default().refit.map_or(0, |r| r.0))]
+    pub adaptive_refit_evaluations: usize,
+    /// Random restarts of those warm searches.
+    #[arg(long, default_value_t = AdaptiveOptions::default().refit.map_or(0, |r| r.1))]
+    pub adaptive_refit_restarts: usize,
+    /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
+    #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
+    pub adaptive_gp_points: usize,
+}
+
+impl AdaptiveArgs {
+    /// The adaptive loop's knobs.
+    pub fn options(&self) -> AdaptiveOptions {
+        AdaptiveOptions {
+            sub_batches: self.adaptive_sub_batches,
+            verify: self.adaptive_verify,
+            surprise: self.adaptive_surprise,
+            uncertainty: self.adaptive_uncertainty,
+            decision: self.adaptive_decision,
+            floor: self.adaptive_floor,
+            candidates: self.adaptive_candidates,
+            relevance_width: self.adaptive_relevance_width,
+            relabel: self.adaptive_relabel,
+            refit: (self.adaptive_refit_evaluations > 0).then_some((
+                self.adaptive_refit_evaluations,
+                self.adaptive_refit_restarts,
+            )),
+            gp_points: self.adaptive_gp_points,
+        }
+    }
+
+    /// The FQI approximator the options name.
+    ///
+    /// Errors: an approximator the core refuses (zero tiles, neighbours or trees, …).
+    pub fn q(&self) -> anyhow::Result<EmbeddedQ> {
+        let knn = || {
+            EmbeddedQ::knn(
+                self.adaptive_knn_neighbours,
+                self.adaptive_knn_bandwidth,
+                self.adaptive_knn_reach,
+                self.adaptive_knn_common_ball,
+            )
+        };
+        let tiles = || EmbeddedQ::tiles(Some(self.adaptive_tiles), self.adaptive_tilings);
+        Ok(match self.adaptive_q {
+            AdaptiveQArg::Tiles => tiles()?,
+            AdaptiveQArg::Knn => knn()?,
+            AdaptiveQArg::Hybrid => match (tiles()?, knn()?) {
+                (EmbeddedQ::Tiles(n, t), EmbeddedQ::Knn(k, h, r, c)) => {
+                    EmbeddedQ::Hybrid((n, t), (k, h, r, c))
+                }
+                _ => anyhow::bail!("--adaptive-q hybrid needs tiles and kNN"),
+            },
+            AdaptiveQArg::Trees => EmbeddedQ::trees(TreeKnobs {
+                trees: self.adaptive_trees,
+                nodes: self.adaptive_tree_nodes,
+                min_samples_split: self.adaptive_tree_min_samples_split,
+                min_samples_leaf: self.adaptive_tree_min_samples_leaf,
+                max_depth: self.adaptive_tree_max_depth,
+                streamed: self.adaptive_tree_streamed,
+            })?,
+            AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
+                cells: self.adaptive_sweep_cells,
+                rewards: self.adaptive_sweep_rewards.into(),
+                min_mass: self.adaptive_sweep_min_mass,
+                lookahead: self.adaptive_sweep_lookahead,
+            })?,
+        })
+    }
+}
+
+/// The embedded path's configuration for a score table of `mode` at `spacing`.
+///
+/// Errors: those of [`EmbeddedQ::tabular`], [`EmbeddedQ::tiles`] and [`AdaptiveArgs::q`],
+/// each naming its option.
+pub fn embedded_config(
+    embedded: &EmbeddedArgs,
+    adaptive: &AdaptiveArgs,
+    mode: Mode,
+    spacing: f64,
+) -> anyhow::Result<EmbeddedConfig> {
+    use anyhow::Context;
+    let q = match embedded.embedded_q {
+        EmbeddedQArg::Tabular => EmbeddedQ::tabular(embedded.embedded_resolution),
+        EmbeddedQArg::Tiles => {
+            EmbeddedQ::tiles(embedded.embedded_resolution, embedded.embedded_tilings)
+        }
+    }
+    .context("--embedded-q, --embedded-resolution, --embedded-tilings")?;
+    let adaptive_q = adaptive.q().context("--adaptive-q and its options")?;
+    Ok(EmbeddedConfig::new(mode, spacing)
+        .with_q(q)
+        .with_adaptive_q(adaptive_q))
+}

@@ -1,0 +1,195 @@
+//! The experiment a transfer command runs: its source data, protocol, options, score
+//! tables, ideal weights and the embedded set-up, built once and shared by every run.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use awfqi::env::Dynamics;
+use awfqi::weights::NoiseSubtraction;
+use rand_chacha::ChaCha8Rng;
+
+use crate::domains::Domain;
+use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
+use crate::transfer::algorithms::embedded::{EmbeddedConfig, EmbeddedSetup};
+use crate::transfer::algorithms::{Algorithm, Experiment, ScopedLearner, TransferOptions};
+use crate::transfer::domain_data::DomainData;
+use crate::transfer::protocol::Protocol;
+use crate::transfer::score_tables::{self, ScoreTableData};
+use crate::transfer::sources::SourceSet;
+use crate::transfer::{IDEAL_WEIGHTS, SCORE_TABLE, stream};
+
+use super::Config;
+use super::args::NoiseArg;
+
+/// The core's algorithms on a domain (Puddle World only until the embedded path is generic
+/// over the state dimension): their set-up, their learners and the configuration the
+/// command line chose.
+#[derive(Debug, Clone, Copy)]
+pub struct EmbeddedPath<const D: usize> {
+    /// Builds the shared set-up from the sources, the configuration (its score table's
+    /// mode and spacing set from the experiment's) and a stream.
+    pub setup: fn(&SourceSet<D>, EmbeddedConfig, &mut ChaCha8Rng) -> anyhow::Result<EmbeddedSetup>,
+    /// Hands one run's `awfqi-embedded` learner to the protocol.
+    pub learner: ScopedLearner<D>,
+    /// Hands one run's `awfqi-adaptive` learner to the protocol.
+    pub adaptive_learner: ScopedLearner<D>,
+    /// The approximators.
+    pub config: EmbeddedConfig,
+    /// `awfqi-adaptive`'s loop.
+    pub adaptive: AdaptiveOptions,
+}
+
+/// The source datasets `--sources` names.
+fn load_sources<const D: usize>(
+    config: &Config,
+    domain: &Domain<D>,
+    data: &DomainData<D>,
+) -> anyhow::Result<SourceSet<D>> {
+    let args = &config.args;
+    match args.sources.as_str() {
+        "published" => (data.published)(),
+        "generate" => {
+            let generation = data.generation.with_budget(config.iterations, config.trees);
+            eprintln!("generating source data ({generation:?})…");
+            let start = Instant::now();
+            let set = crate::transfer::sources::generate(
+                domain,
+                &data.weighting,
+                &data.layout,
+                &generation,
+                &config.gp(),
+                args.seed,
+            )?;
+            let dir = config.out.join("sources");
+            set.write_dir(&dir, &data.layout)?;
+            eprintln!(
+                "source data: {:?} records, written to {} ({:.1} s)",
+                set.sources.iter().map(|s| s.len()).collect::<Vec<_>>(),
+                dir.display(),
+                start.elapsed().as_secs_f64()
+            );
+            Ok(set)
+        }
+        dir => SourceSet::read_layout(
+            Path::new(dir),
+            &data.layout,
+            domain.sources.len(),
+            domain.num_actions(),
+        ),
+    }
+}
+
+/// Builds the shared experiment context (sources, score tables, ideal weights, the
+/// embedded set-up) for the algorithms of `config`.
+pub fn build_experiment<const D: usize>(
+    config: &Config,
+    domain: Arc<Domain<D>>,
+    data: Arc<DomainData<D>>,
+    dynamics: Option<Dynamics>,
+    embedded: Option<EmbeddedPath<D>>,
+) -> anyhow::Result<Experiment<D>> {
+    let args = &config.args;
+    let sources = Arc::new(load_sources(config, &domain, &data)?);
+    let mut protocol = Protocol::published(&domain, config.steps, config.episodes_per_step);
+    protocol.dynamics = dynamics;
+    protocol.iterations = config.iterations;
+    protocol.trees = config.trees;
+    protocol.first_step = config.args.first_step.unwrap_or_default();
+    protocol.q_function = config.args.q_function.unwrap_or_default();
+    protocol.freeze_trees_after = config.args.freeze_trees_after.map(|k| k as usize);
+    anyhow::ensure!(
+        protocol.q_function.is_per_action()
+            || (D == 2 && config.algorithms.iter().all(|&a| !a.is_active())),
+        "--q-function joint (the reference's one forest over state and action value) applies \
+         to 2-D states and the episodic baselines (fqi, iwfqi, iwfqi-heuristic, iwfqi-ideal, \
+         rbt, sdt): use it on the Dam or Puddle World without the active algorithms"
+    );
+    let options = TransferOptions {
+        variances: args.variances,
+        noise: match args.noise {
+            NoiseArg::Reference => NoiseSubtraction::Reference,
+            NoiseArg::Principled => NoiseSubtraction::Principled,
+        },
+        gp: config.gp(),
+        transition_weights: args.transition_weights,
+        rbt_total: config.rbt_total,
+        rbt_compliance: args.rbt_compliance,
+        ideal_means: args.ideal_means,
+        ..TransferOptions::default()
+    };
+    let wants = |a: Algorithm| config.algorithms.contains(&a);
+    let start = Instant::now();
+    let oracle_table = if wants(Algorithm::AwfqiOracle) {
+        Some(Arc::new(ScoreTableData::oracle(
+            &domain,
+            config.setting,
+            &sources,
+            config.spacing,
+        )?))
+    } else {
+        None
+    };
+    let realistic_table = if wants(Algorithm::Awfqi) {
+        let gps = score_tables::fit_source_gps(
+            &domain,
+            &data.weighting,
+            &sources,
+            &options.gp,
+            args.seed,
+        )?;
+        Some(Arc::new(ScoreTableData::realistic(
+            &domain,
+            config.setting,
+            &sources,
+            &gps,
+            config.spacing,
+        )?))
+    } else {
+        None
+    };
+    let setup = match &embedded {
+        Some(e) if config.algorithms.iter().any(|a| a.is_embedded()) => {
+            let mut rng = stream(args.seed, &[SCORE_TABLE, 100]);
+            let mut c = e.config;
+            c.mode = config.setting;
+            c.spacing = config.spacing;
+            Some(Arc::new((e.setup)(&sources, c, &mut rng)?))
+        }
+        _ => None,
+    };
+    if oracle_table.is_some() || realistic_table.is_some() || setup.is_some() {
+        eprintln!(
+            "score tables ({} mode): built in {:.1} s",
+            config.setting.name(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    let mut experiment = Experiment {
+        domain,
+        data,
+        protocol,
+        sources,
+        options,
+        oracle_table,
+        realistic_table,
+        ideal_weights: None,
+        embedded: setup,
+        embedded_learner: embedded.as_ref().map(|e| e.learner),
+        adaptive_learner: embedded.as_ref().map(|e| e.adaptive_learner),
+        adaptive_options: embedded.map_or_else(AdaptiveOptions::default, |e| e.adaptive),
+    };
+    experiment.variances()?;
+    if wants(Algorithm::IwfqiIdeal) {
+        let mut rng = stream(args.seed, &[IDEAL_WEIGHTS]);
+        let weights = crate::transfer::algorithms::iwfqi::ideal_weights(
+            &experiment.domain,
+            &experiment.sources,
+            experiment.domain.published.ideal_variances,
+            experiment.ideal_means(),
+            &mut rng,
+        )?;
+        experiment.ideal_weights = Some(Arc::new(weights));
+    }
+    Ok(experiment)
+}

@@ -1,0 +1,197 @@
+//! `awfqi-embedded`: the thesis's AWFQI as the core runs it ([`awfqi::Awfqi`]): a target
+//! reward GP of capacity [`GP_POINTS`] fitted on an even spread of `D₀` (the core's
+//! [`awfqi::SubsetRule::Spread`]) with the core's bounded Nelder–Mead search, weighted FQI
+//! by tile coding ([`TILINGS`](super::TILINGS) offset tilings of [`TILES`](super::TILES)
+//! tiles per axis, or the [`CELLS`](super::CELLS) × `CELLS` table) instead of Extra-Trees,
+//! transition weights on request (`--transition-weights true`), and the realistic score
+//! table of the set-up ([`EmbeddedSetup`]).
+
+use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::{
+    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, Estimator, FqiEntry, Gp, Transition, WeightParams,
+};
+use rand_chacha::ChaCha8Rng;
+
+use super::{
+    EmbeddedSetup, GP_POINTS, Record32, T, print_warnings, reward_gp_summary, row_set, to_f64,
+};
+use crate::transfer::algorithms::Experiment;
+use crate::transfer::protocol::{Diagnostics, Learner};
+use crate::transfer::sources::Record;
+
+/// The memory one run writes, on the heap and sized at run time: what a
+/// firmware holds in an [`awfqi::AwfqiStorage`].
+#[derive(Debug)]
+pub struct EmbeddedMemory<const N: usize = GP_POINTS> {
+    gp: Box<Gp<T, N, 3>>,
+    samples: Vec<Record32>,
+    weights: Vec<T>,
+    alias: Vec<AliasEntry<T>>,
+    fqi: Vec<FqiEntry<T>>,
+    transition_weights: Vec<T>,
+}
+
+impl<const N: usize> EmbeddedMemory<N> {
+    /// Room for `steps × budget` target samples, one weight per stored posterior, one alias
+    /// entry per score row, the FQI entries of `setup`'s approximator and, with
+    /// `transition_weights`, one transition weight per source record.
+    ///
+    /// Errors: an approximator too large for memory.
+    pub fn new(
+        setup: &EmbeddedSetup<N>,
+        steps: usize,
+        budget: usize,
+        transition_weights: bool,
+    ) -> anyhow::Result<Self> {
+        let entries = setup
+            .config
+            .q
+            .approximator()?
+            .required_entries(PUDDLE_ACTIONS)
+            .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
+        let records = setup.posteriors.len();
+        Ok(Self {
+            gp: Box::new(Gp::<T, N, 3>::empty()),
+            samples: vec![Transition::EMPTY; steps * budget],
+            weights: vec![0.0; records],
+            alias: vec![AliasEntry::EMPTY; setup.values.len()],
+            fqi: vec![FqiEntry::EMPTY; entries],
+            transition_weights: vec![0.0; if transition_weights { records } else { 0 }],
+        })
+    }
+
+    /// The core's buffers and the transition-weight buffer.
+    fn buffers(&mut self) -> (AwfqiBuffers<'_, T, 2, 3, N>, &mut [T]) {
+        (
+            AwfqiBuffers {
+                gp: &mut self.gp,
+                samples: &mut self.samples,
+                weights: &mut self.weights,
+                alias: &mut self.alias,
+                fqi: &mut self.fqi,
+            },
+            &mut self.transition_weights,
+        )
+    }
+}
+
+/// `awfqi-embedded` as a [`Learner`]: each protocol step is one [`Awfqi::step`] (score →
+/// draw → query → weights → weighted FQI); the greedy action is the `f32` table's, and `D₀`
+/// is kept in `f64` for the result files.
+pub struct EmbeddedLearner<'a, const N: usize = GP_POINTS> {
+    awfqi: Awfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
+    collected: Vec<Record>,
+}
+
+impl<'a, const N: usize> EmbeddedLearner<'a, N> {
+    /// The builder's set-up from the shared source data and score values (`sources` are
+    /// `setup`'s [`EmbeddedSetup::source_slices`]) over `memory`, with a per-step budget, on
+    /// the Puddle World target of `dynamics`, from the stream `rng`; with `transition` (the
+    /// estimator variance `v_s`), transition weights on every coordinate.
+    pub fn new(
+        setup: &'a EmbeddedSetup<N>,
+        sources: &'a [&'a [Record32]],
+        memory: &'a mut EmbeddedMemory<N>,
+        budget: usize,
+        dynamics: Dynamics,
+        transition: Option<f64>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Self> {
+        let (buffers, transition_weights) = memory.buffers();
+        let mut builder = Awfqi::builder(
+            AwfqiConfig::thesis(budget).validate()?,
+            setup.config.q.approximator()?,
+            sources,
+            row_set(&setup.config, sources)?,
+        )
+        .stored_posteriors(&setup.posteriors)
+        .stored_scores(&setup.values);
+        if let Some(v_s) = transition {
+            if setup.transition_posteriors.len() != 2 * setup.posteriors.len() {
+                anyhow::bail!("transition weights need the sources' stored next-state posteriors");
+            }
+            builder = builder.transition_weights(
+                WeightParams::new(Estimator::Mean, v_s as T, 1000.0)?,
+                &setup.transition_posteriors,
+                transition_weights,
+            );
+        }
+        let awfqi = builder.build(PuddleWorld::target(dynamics), buffers, rng)?;
+        Ok(Self {
+            awfqi,
+            collected: Vec::new(),
+        })
+    }
+}
+
+impl<const N: usize> Learner for EmbeddedLearner<'_, N> {
+    fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
+        let report = self.awfqi.step(rng)?;
+        print_warnings("awfqi-embedded", &report);
+        let new = &self.awfqi.target_samples()[self.collected.len()..];
+        self.collected.extend(new.iter().map(to_f64));
+        Ok(Diagnostics {
+            n_source_samples: Some(report.n_source_samples),
+            wr_mean: Some(f64::from(report.wr_mean)),
+            wr_eff: Some(f64::from(report.wr_eff)),
+            ws_mean: Some(f64::from(report.ws_mean)),
+            ws_eff: Some(f64::from(report.ws_eff)),
+            reward_gp: Some(reward_gp_summary(&report)),
+            ..Diagnostics::default()
+        })
+    }
+
+    fn greedy_action(&self, s: &[f64; 2]) -> usize {
+        let state = [s[0] as T, s[1] as T];
+        self.awfqi.q().greedy_action(state).unwrap_or(0)
+    }
+
+    fn target_samples(&self) -> &[Record] {
+        &self.collected
+    }
+}
+
+/// Hands a fresh learner for one run of `experiment` to `f`: the core's AWFQI borrows its
+/// memory and the source data for the whole run, so they live in this frame while
+/// [`protocol::run`](crate::transfer::protocol::run) drives the learner inside `f`.
+pub fn with_learner(
+    experiment: &Experiment,
+    rng: &mut ChaCha8Rng,
+    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let setup = experiment
+        .embedded
+        .as_deref()
+        .ok_or_else(|| anyhow::anyhow!("no embedded set-up"))?;
+    let dynamics = experiment
+        .protocol
+        .dynamics
+        .ok_or_else(|| anyhow::anyhow!("awfqi-embedded runs on Puddle World only"))?;
+    let budget = experiment.budget();
+    let sources = setup.source_slices();
+    // Transition weights only on request (`--transition-weights true`), on every
+    // coordinate, with the estimator variance v_s of the experiment: the active algorithms
+    // run without them (§12), and on this small-GP path they were measured to hurt under
+    // puddle-based dynamics (§12.1).
+    let transition = if experiment.options.transition_weights == Some(true) {
+        Some(experiment.variances()?.1)
+    } else {
+        None
+    };
+    let mut memory = EmbeddedMemory::new(
+        setup,
+        experiment.protocol.steps,
+        budget,
+        transition.is_some(),
+    )?;
+    let mut learner = EmbeddedLearner::new(
+        setup,
+        &sources,
+        &mut memory,
+        budget,
+        dynamics,
+        transition,
+        rng,
+    )?;
+    f(&mut learner, rng)
+}
