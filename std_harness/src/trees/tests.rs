@@ -1,6 +1,9 @@
 //! Tests of the Extra-Trees rules of spec §4.1, each against a hand-derived expectation.
 
 use super::*;
+use awfqi::Error;
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
 use std::collections::HashMap;
 
 fn rng(seed: u64) -> ChaCha8Rng {
