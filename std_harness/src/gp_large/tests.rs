@@ -2,7 +2,10 @@
 //! implementation), finite differences, the optimiser's box, the `max_gp` cap, the
 //! noise-subtraction rule, and the reference's own source-GP predictions.
 
+use super::kernel::{exp_nonpositive, kernel_column};
 use super::*;
+use awfqi::Error;
+use faer::Par;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
