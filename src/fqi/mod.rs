@@ -47,7 +47,7 @@
 //!   slice in [`QStorage`] if it needs memory of a new kind), a variant in [`QFunction`]
 //!   (the `each!` macro in `q_function.rs` lists the variants once for all its methods,
 //!   `entries` and `as_tabular` aside), and its name in the `Greedy` macro there;
-//! - its public entry points in the no-panic image (`tests/on_target/src/bin/no_panic.rs`).
+//! - its public entry points in the no-panic image (`tests/on_target/src/bin/no_panic/`).
 
 mod argmax;
 mod config;
