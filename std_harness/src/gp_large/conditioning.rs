@@ -5,8 +5,9 @@ use super::JITTER;
 use awfqi::{Error, Result};
 use faer::Mat;
 
-/// The conditioning policy of a [`LargeGp`] (the core's `awfqi::gp::Conditioning` for f64):
-/// the jitter on the training diagonal and the largest trusted condition estimate.
+/// The conditioning policy of a [`LargeGp`](super::LargeGp) (the core's
+/// `awfqi::gp::Conditioning` for f64): the jitter on the training diagonal and the largest
+/// trusted condition estimate.
 ///
 /// The large GP never escalates its jitter: it factorises `K + (σ²ₙ + jitter) I` with
 /// exactly [`LargeConditioning::jitter`] or fails with [`Error::NotPositiveDefinite`], so the

@@ -44,7 +44,8 @@ pub struct LikelihoodEvaluator<'a, const D: usize> {
 impl<'a, const D: usize> LikelihoodEvaluator<'a, D> {
     /// Prepares the evaluation on `(inputs, targets)`.
     ///
-    /// Errors: empty data ([`Error::EmptyData`]), mismatched lengths, non-finite values.
+    /// Errors: empty data ([`Error::EmptyData`](awfqi::Error::EmptyData)), mismatched lengths,
+    /// non-finite values.
     pub fn new(inputs: &[[f64; D]], targets: &'a [f64], par: Par) -> Result<Self> {
         validate_data(inputs, targets)?;
         let n = inputs.len();
