@@ -23,26 +23,22 @@
 //! 3. **re-plan**: the target reward GP, then FQI on `D₀` and the sources (§12 steps 4–5,
 //!    the core's [`crate::Awfqi`] pieces). Without [`AdaptiveConfig::relabel`] (off in
 //!    [`AdaptiveConfig::recommended`]) the GP has the thesis's zero prior mean and the
-//!    source records get §7.3 reward weights. With it (the harness's `awfqi-adaptive`
-//!    default) the GP's prior mean is the target rewards' median, and every source record
-//!    keeps weight 1 with its reward relabelled towards the GP's mean where the GP
-//!    contradicts it ([`relabelled_reward`]). Then the residual GP for the next sub-batch,
-//!    in the same GP. Before any target data the plan is FQI on the unweighted sources.
+//!    source records get §7.3 reward weights. With it the GP's prior mean is the target
+//!    rewards' median, and every source record keeps weight 1 with its reward relabelled
+//!    towards the GP's mean where the GP contradicts it ([`relabelled_reward`]). Then the
+//!    residual GP for the next sub-batch, in the same GP. Before any target data the plan
+//!    is FQI on the unweighted sources.
 //!
 //! **What it needs beyond AWFQI's set-up:** one [`MeanFunction`] per source (its reward
 //! GP's posterior mean, 1 048 bytes for `f32`, `N = 64`), the candidate rows (a
 //! [`RowSet`]; no score table), the start state, horizon and exploration rate of the
 //! verification rollouts, and the state bounds.
 //!
-//! **Differences from the harness's `awfqi-adaptive`** (its default configuration is what is
-//! ported; its options `prior`, `model_rewards`, `source_weights`, `surprise_stop` and
-//! `plan_trees` are left out, all off by default): the Q-function is any of the core's
-//! approximators — recommended on Puddle World, the core's own Extra-Trees, streamed
-//! ([`crate::fqi::ExtraTrees::streamed`]: 50 trees per action in the memory of one, the
-//! harness's choice on the tuning runs), or the table, tile coding or kernel averaging;
-//! every GP has a fixed capacity `N` fitted on an even
-//! spread of its data ([`crate::SubsetRule`]) instead of up to 4 000 points; the residual GP
-//! is fitted after the weights' GP (one GP in memory), so the random streams differ.
+//! **The Q-function** is any of the core's approximators; recommended on Puddle World, the
+//! model sweep ([`crate::fqi::ModelSweep`]). Every GP has a fixed capacity `N`, fitted on an
+//! even spread of its data ([`crate::SubsetRule`]), and is refitted warm after its first fit
+//! ([`AdaptiveConfig::refit`]); the residual GP is fitted after the weights' GP in the same
+//! GP.
 //!
 //! **Errors part-way** are those of [`crate::Awfqi`]: records already queried stay in `D₀`,
 //! the Q-function keeps its last fit, the step counter does not advance.

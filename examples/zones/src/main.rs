@@ -18,6 +18,8 @@
 #![no_std]
 #![no_main]
 
+// The stack painting is the Dam firmware's, shared rather than copied.
+#[path = "../../firmware/src/stack.rs"]
 mod stack;
 mod zones;
 
