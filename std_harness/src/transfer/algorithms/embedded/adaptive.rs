@@ -21,9 +21,7 @@ use awfqi::{
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::{
-    EmbeddedSetup, GP_POINTS, Record32, T, print_warnings, reward_gp_summary, row_set, to_f64,
-};
+use super::{EmbeddedSetup, GP_POINTS, Record32, T, after_step, row_set};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
@@ -175,16 +173,14 @@ struct AdaptiveLearner<'a, const N: usize> {
 impl<const N: usize> Learner for AdaptiveLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.adaptive.step(rng)?;
-        print_warnings("awfqi-adaptive", &report);
-        let new = &self.adaptive.target_samples()[self.collected.len()..];
-        self.collected.extend(new.iter().map(to_f64));
-        Ok(Diagnostics {
-            n_source_samples: Some(report.n_source_samples),
-            wr_mean: Some(f64::from(report.wr_mean)),
-            wr_eff: Some(f64::from(report.wr_eff)),
-            reward_gp: Some(reward_gp_summary(&report)),
-            ..Diagnostics::default()
-        })
+        let samples = self.adaptive.target_samples();
+        Ok(after_step(
+            "awfqi-adaptive",
+            &report,
+            samples,
+            &mut self.collected,
+            false,
+        ))
     }
 
     fn greedy_action(&self, s: &[f64; 2]) -> usize {

@@ -26,6 +26,7 @@ use awfqi::{
 use rand_chacha::ChaCha8Rng;
 
 use crate::transfer::gp::GpSummary;
+use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::{GridRows, Mode};
 use crate::transfer::sources::{Record, SourceSet};
 
@@ -459,11 +460,30 @@ fn row_set<'a>(
     Ok(config.mode.row_set(grid, slices)?)
 }
 
-/// Prints a step's warnings ([`awfqi::StepReport::warnings`]) to stderr, one line each,
-/// naming the algorithm and the step (shared by the embedded learners).
-fn print_warnings<const I: usize>(algorithm: &str, report: &awfqi::StepReport<T, I>) {
+/// What both embedded learners do after a core step: print its warnings
+/// ([`awfqi::StepReport::warnings`]) to stderr naming the algorithm, append the target
+/// samples the step added to `collected` (in f64), and return the step's diagnostics
+/// (the transition weights' only when the learner weighs transitions).
+fn after_step<const I: usize>(
+    algorithm: &str,
+    report: &awfqi::StepReport<T, I>,
+    samples: &[Record32],
+    collected: &mut Vec<Record>,
+    transition_weights: bool,
+) -> Diagnostics {
     for warning in report.warnings() {
         eprintln!("{algorithm}, step {}: warning: {warning}", report.step);
+    }
+    collected.extend(samples[collected.len()..].iter().map(to_f64));
+    let transitions = |x: T| transition_weights.then_some(f64::from(x));
+    Diagnostics {
+        n_source_samples: Some(report.n_source_samples),
+        wr_mean: Some(f64::from(report.wr_mean)),
+        wr_eff: Some(f64::from(report.wr_eff)),
+        ws_mean: transitions(report.ws_mean),
+        ws_eff: transitions(report.ws_eff),
+        reward_gp: Some(reward_gp_summary(report)),
+        ..Diagnostics::default()
     }
 }
 

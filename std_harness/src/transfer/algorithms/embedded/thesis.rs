@@ -12,9 +12,7 @@ use awfqi::{
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{
-    EmbeddedSetup, GP_POINTS, Record32, T, print_warnings, reward_gp_summary, row_set, to_f64,
-};
+use super::{EmbeddedSetup, GP_POINTS, Record32, T, after_step, row_set};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::sources::Record;
@@ -127,18 +125,14 @@ impl<'a, const N: usize> EmbeddedLearner<'a, N> {
 impl<const N: usize> Learner for EmbeddedLearner<'_, N> {
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.awfqi.step(rng)?;
-        print_warnings("awfqi-embedded", &report);
-        let new = &self.awfqi.target_samples()[self.collected.len()..];
-        self.collected.extend(new.iter().map(to_f64));
-        Ok(Diagnostics {
-            n_source_samples: Some(report.n_source_samples),
-            wr_mean: Some(f64::from(report.wr_mean)),
-            wr_eff: Some(f64::from(report.wr_eff)),
-            ws_mean: Some(f64::from(report.ws_mean)),
-            ws_eff: Some(f64::from(report.ws_eff)),
-            reward_gp: Some(reward_gp_summary(&report)),
-            ..Diagnostics::default()
-        })
+        let samples = self.awfqi.target_samples();
+        Ok(after_step(
+            "awfqi-embedded",
+            &report,
+            samples,
+            &mut self.collected,
+            true,
+        ))
     }
 
     fn greedy_action(&self, s: &[f64; 2]) -> usize {
