@@ -5,7 +5,7 @@
 //! forest over storage, day and release, `min_samples_split` 20, 60 iterations).
 //!
 //! `cargo run --release -p awfqi-harness --example dam_fqi_step -- [--iterations N]
-//! [--freeze-trees-after K] [--write-inputs FILE] [--seed S] [--run R]`
+//! [--freeze-trees-after K [--regrow-trees-every R]] [--write-inputs FILE] [--seed S] [--run R]`
 //!
 //! Prints the records, the options and the CPU time of the FQI call alone (this thread's,
 //! from `/proc/thread-self/schedstat`; wall time where that is missing), and a
@@ -43,6 +43,9 @@ struct Cli {
     /// Keep the trees of this iteration (as `dam --freeze-trees-after`).
     #[arg(long)]
     freeze_trees_after: Option<usize>,
+    /// Regrow and freeze every this many iterations after it (as `dam --regrow-trees-every`).
+    #[arg(long)]
+    regrow_trees_every: Option<usize>,
     /// Write the weighted records here (CSV).
     #[arg(long)]
     write_inputs: Option<PathBuf>,
@@ -128,6 +131,7 @@ fn main() -> anyhow::Result<()> {
         gamma: experiment.domain.discount,
         num_actions: DAM_RELEASES.len(),
         freeze_after: cli.freeze_trees_after,
+        regrow_every: cli.regrow_trees_every,
         ..FqiOptions::iwfqi(&wr, &ws)
     };
     let (cpu0, wall0) = (thread_cpu_seconds(), Instant::now());

@@ -181,6 +181,11 @@ pub struct FqiOptions<'a> {
     /// iterations ([`crate::frozen_trees`]; `None`, the default: every iteration grows new
     /// trees, spec §5). An option, not the spec's FQI.
     pub freeze_after: Option<usize>,
+    /// With [`FqiOptions::freeze_after`] `= K`: grow new trees (again without the impurity
+    /// stop) and freeze them every this many iterations after `K` (iterations `K + R`,
+    /// `K + 2R`, …), so the averaging operator follows the changing targets at a fraction
+    /// of the faithful cost (`None`: frozen once, at `K`). An option, not the spec's FQI.
+    pub regrow_every: Option<usize>,
 }
 
 impl<'a> FqiOptions<'a> {
@@ -198,6 +203,7 @@ impl<'a> FqiOptions<'a> {
             first_iteration_records: None,
             tree: TreeParams::FULLY_GROWN,
             freeze_after: None,
+            regrow_every: None,
         }
     }
 
@@ -222,6 +228,19 @@ impl<'a> FqiOptions<'a> {
         }
     }
 
+    /// Whether iteration `iteration` grows trees to be frozen (without the impurity stop):
+    /// `K`, then every `R` after it, never the last iteration (nothing would use them).
+    pub(crate) fn freezes_at(&self, iteration: usize) -> bool {
+        let Some(k) = self.freeze_after else {
+            return false;
+        };
+        let scheduled = iteration == k
+            || self
+                .regrow_every
+                .is_some_and(|r| iteration > k && (iteration - k) % r == 0);
+        scheduled && iteration < self.iterations
+    }
+
     pub(crate) fn validate(&self, n: usize) -> Result<()> {
         if self.iterations == 0 {
             return Err(Error::InvalidParameter {
@@ -242,6 +261,14 @@ impl<'a> FqiOptions<'a> {
         if self.freeze_after.is_some_and(|k| k < 2) {
             return Err(Error::InvalidParameter {
                 parameter: "freeze_after",
+            });
+        }
+        if self
+            .regrow_every
+            .is_some_and(|r| r == 0 || self.freeze_after.is_none())
+        {
+            return Err(Error::InvalidParameter {
+                parameter: "regrow_every",
             });
         }
         if !(0.0..=1.0).contains(&self.gamma) {
@@ -346,10 +373,10 @@ pub fn fqi<const D: usize, R: Rng + ?Sized>(
         }
         // The structure to be frozen is grown without the impurity stop, so that it stays
         // fine where this iteration's targets happen to be constant.
-        let freezing = options.freeze_after == Some(iteration) && iteration < options.iterations;
+        let freezing = options.freezes_at(iteration);
         match &mut frozen {
-            Some(f) => f.refit(&mut q, &targets)?,
-            None => {
+            Some(f) if !freezing => f.refit(&mut q, &targets)?,
+            _ => {
                 let (s, a, w, m) = (
                     &data.states,
                     &data.actions,

@@ -253,10 +253,10 @@ pub fn fqi_joint<const D: usize, R: Rng + ?Sized>(
             targets[i] += options.gamma * v;
         }
         // As in `fqi`: the structure to be frozen is grown without the impurity stop.
-        let freezing = options.freeze_after == Some(iteration) && iteration < options.iterations;
+        let freezing = options.freezes_at(iteration);
         match &mut frozen {
-            Some((f, _)) => f.refit(&mut q.forest, &targets)?,
-            None => {
+            Some((f, _)) if !freezing => f.refit(&mut q.forest, &targets)?,
+            _ => {
                 next.refit(
                     &inputs,
                     &targets,
@@ -309,24 +309,26 @@ mod tests {
     #[test]
     fn joint_fqi_learns_a_bandit_and_splits_on_the_action() {
         let data = bandit();
-        // Frozen after iteration 2 or not: the leaves are pure by action either way, so
-        // the values are the same hand-derived ones.
-        for freeze_after in [None, Some(2)] {
+        // Frozen after iteration 2 (and regrown at 3) or not: the leaves are pure by action
+        // either way, so the values are the same hand-derived ones.
+        for (freeze_after, regrow_every) in [(None, None), (Some(2), None), (Some(2), Some(1))] {
             let options = FqiOptions {
-                iterations: 3,
+                iterations: 4,
                 n_trees: 10,
                 gamma: 0.5,
                 num_actions: 2,
                 freeze_after,
+                regrow_every,
                 ..FqiOptions::plain()
             };
             let mut rng = ChaCha8Rng::seed_from_u64(1);
             let q = fqi_joint(&data, &options, &[0.0, 10.0], &mut rng).unwrap();
             // The states are all equal, so every split is on the action value and each leaf
             // holds one action's records (exact averages). By hand, with max always action
-            // 1: Q₁ = (1, 3); Q₂ = r + ½·3 = (2.5, 4.5); Q₃ = r + ½·4.5 = (3.25, 5.25).
-            assert!((q.predict(&[0.5, 1.0], 1) - 5.25).abs() < 1e-12);
-            assert!((q.predict(&[0.5, 1.0], 0) - 3.25).abs() < 1e-12);
+            // 1: Q₁ = (1, 3); Q₂ = r + ½·3 = (2.5, 4.5); Q₃ = r + ½·4.5 = (3.25, 5.25);
+            // Q₄ = r + ½·5.25 = (3.625, 5.625).
+            assert!((q.predict(&[0.5, 1.0], 1) - 5.625).abs() < 1e-12);
+            assert!((q.predict(&[0.5, 1.0], 0) - 3.625).abs() < 1e-12);
             assert_eq!(q.greedy_action(&[0.5, 1.0]), 1);
             let wrapped = ForestQ::<2>::Joint(q);
             assert_eq!(wrapped.greedy_action(&[0.5, 1.0]), 1);

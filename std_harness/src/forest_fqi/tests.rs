@@ -420,3 +420,75 @@ fn freezing_at_or_after_the_last_iteration_changes_no_bit() {
         })
     );
 }
+
+#[test]
+fn regrowing_freezes_at_k_then_every_r_but_never_at_the_last_iteration() {
+    let options = FqiOptions {
+        iterations: 60,
+        freeze_after: Some(2),
+        regrow_every: Some(10),
+        ..FqiOptions::plain()
+    };
+    let at: Vec<usize> = (1..=60).filter(|&i| options.freezes_at(i)).collect();
+    assert_eq!(at, [2, 12, 22, 32, 42, 52]);
+    let once = FqiOptions {
+        regrow_every: None,
+        ..options
+    };
+    assert_eq!((1..=60).filter(|&i| once.freezes_at(i)).count(), 1);
+    let ending = FqiOptions {
+        iterations: 52,
+        ..options
+    };
+    assert!(!ending.freezes_at(52));
+    assert!(!FqiOptions::plain().freezes_at(2));
+}
+
+#[test]
+fn regrown_trees_reach_the_chains_q_star() {
+    // As in `frozen_trees_reach_the_chains_q_star_too`: trees grown from iteration 5 on are
+    // as fine as the spec's, and four iterations on a fine structure forget any start.
+    // Frozen at 2 and regrown every 3 (at 5 and 8), each regrowth starts from the frozen
+    // structure's values and FQI still ends at Q*.
+    let gamma: f64 = 0.99;
+    let v = |s: usize| -(1.0 - gamma.powi(4 - s as i32)) / (1.0 - gamma);
+    let regrown = FqiOptions {
+        iterations: 10,
+        num_actions: 2,
+        freeze_after: Some(2),
+        regrow_every: Some(3),
+        ..FqiOptions::plain()
+    };
+    let error = |options: &FqiOptions<'_>| -> f64 {
+        let q = fqi(&chain(), options, &mut rng(1)).unwrap().q;
+        (0..4)
+            .map(|s| {
+                let x = [s as f64, 0.0];
+                let right = q.predict(&x, 0).unwrap() - v(s);
+                let left = q.predict(&x, 1).unwrap() - (-1.0 + gamma * v(s.saturating_sub(1)));
+                right.abs().max(left.abs())
+            })
+            .fold(0.0, f64::max)
+    };
+    assert!(error(&regrown) < 1e-12, "{}", error(&regrown));
+}
+
+#[test]
+fn regrowing_needs_a_freeze_and_a_positive_period() {
+    let data = chain();
+    for (freeze_after, regrow_every) in [(None, Some(3)), (Some(2), Some(0))] {
+        let options = FqiOptions {
+            iterations: 5,
+            num_actions: 2,
+            freeze_after,
+            regrow_every,
+            ..FqiOptions::plain()
+        };
+        assert_eq!(
+            fqi(&data, &options, &mut rng(1)).map(|_| ()),
+            Err(Error::InvalidParameter {
+                parameter: "regrow_every"
+            })
+        );
+    }
+}

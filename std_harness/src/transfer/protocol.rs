@@ -53,6 +53,10 @@ pub struct Protocol {
     /// (absent: new trees every iteration, spec §5).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub freeze_trees_after: Option<usize>,
+    /// With `freeze_trees_after`: FQI grows and freezes new trees every this many
+    /// iterations after it (absent: frozen once).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub regrow_trees_every: Option<usize>,
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
@@ -100,6 +104,7 @@ impl Protocol {
             first_step: FirstStep::Uniform,
             q_function: ForestLayout::PerAction,
             freeze_trees_after: None,
+            regrow_trees_every: None,
         }
     }
 }

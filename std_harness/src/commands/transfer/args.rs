@@ -134,6 +134,12 @@ pub struct CommonArgs {
     /// spec §5). A speed option, compared with the default in docs/large-data.md.
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..))]
     pub freeze_trees_after: Option<u64>,
+    /// With `--freeze-trees-after K`: grow and freeze new trees every R iterations after
+    /// K (K + R, K + 2R, …), so the frozen operator follows the changing targets at a
+    /// fraction of the cost of new trees every iteration. A speed option, compared with the
+    /// default in docs/large-data.md.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), requires = "freeze_trees_after")]
+    pub regrow_trees_every: Option<u64>,
     /// Grid spacing of the score tables. Default: Puddle World 0.1 (both coordinates), Dam
     /// 10 (storage; every day), Acrobot π/6 (angles; 9 values per velocity).
     #[arg(long)]

@@ -98,6 +98,7 @@ pub fn build_experiment<const D: usize>(
     protocol.first_step = config.args.first_step.unwrap_or_default();
     protocol.q_function = config.args.q_function.unwrap_or_default();
     protocol.freeze_trees_after = config.args.freeze_trees_after.map(|k| k as usize);
+    protocol.regrow_trees_every = config.args.regrow_trees_every.map(|r| r as usize);
     anyhow::ensure!(
         protocol.q_function.is_per_action()
             || (D == 2 && config.algorithms.iter().all(|&a| !a.is_active())),

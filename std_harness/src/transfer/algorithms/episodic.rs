@@ -44,7 +44,7 @@ impl<'e, const D: usize> Episodic<'e, D> {
         collect_episodes(self.domain, &self.protocol, greedy, rng, &mut self.data)
     }
 
-    /// FQI options with the protocol's iterations, trees, tree limits and freezing and the domain's
+    /// FQI options with the protocol's iterations, trees, tree limits and freezing schedule and the domain's
     /// discount and actions.
     pub fn options<'a>(&self, base: FqiOptions<'a>) -> FqiOptions<'a> {
         FqiOptions {
@@ -52,6 +52,7 @@ impl<'e, const D: usize> Episodic<'e, D> {
             n_trees: self.protocol.trees,
             tree: self.protocol.tree,
             freeze_after: self.protocol.freeze_trees_after,
+            regrow_every: self.protocol.regrow_trees_every,
             gamma: self.domain.discount,
             num_actions: self.domain.num_actions(),
             ..base
