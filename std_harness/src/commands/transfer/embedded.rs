@@ -1,6 +1,6 @@
-//! The options of the core's algorithms on Puddle World: `awfqi-embedded`'s FQI
-//! approximator ([`EmbeddedArgs`]) and `awfqi-adaptive`'s approximator and loop
-//! ([`AdaptiveArgs`]), each under its own heading of `puddle --help`.
+//! The options of the core's algorithms: `awfqi-embedded`'s FQI approximator
+//! ([`EmbeddedArgs`]) and `awfqi-adaptive`'s approximator and loop ([`AdaptiveArgs`]),
+//! each under its own heading of every transfer command's `--help`.
 
 use clap::{Args, ValueEnum};
 
@@ -90,9 +90,10 @@ pub struct AdaptiveArgs {
     pub adaptive_sweep_cells: usize,
     /// `--adaptive-q sweep`: which records a node's reward averages (`pooled`: every
     /// action's, for rewards that depend on the state only; `backfilled`: the action's own
-    /// where it has some, every action's elsewhere).
-    #[arg(long, value_enum, default_value = "pooled")]
-    pub adaptive_sweep_rewards: SweepRewardsArg,
+    /// where it has some, every action's elsewhere). Default: pooled on Puddle World and
+    /// Acrobot, backfilled on the Dam (whose cost depends on the release).
+    #[arg(long, value_enum)]
+    pub adaptive_sweep_rewards: Option<SweepRewardsArg>,
     /// `--adaptive-q sweep`: the least reward weight of a node with data (a record at the
     /// node weighs 1).
     #[arg(long, default_value_t = 0.0)]
@@ -208,10 +209,11 @@ impl AdaptiveArgs {
         }
     }
 
-    /// The FQI approximator the options name.
+    /// The FQI approximator the options name (a model sweep's reward model `rewards` unless
+    /// `--adaptive-sweep-rewards` names one).
     ///
     /// Errors: an approximator the core refuses (zero tiles, neighbours or trees, …).
-    pub fn q(&self) -> anyhow::Result<EmbeddedQ> {
+    pub fn q(&self, rewards: awfqi::RewardModel) -> anyhow::Result<EmbeddedQ> {
         let knn = || {
             EmbeddedQ::knn(
                 self.adaptive_knn_neighbours,
@@ -240,7 +242,7 @@ impl AdaptiveArgs {
             })?,
             AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
                 cells: self.adaptive_sweep_cells,
-                rewards: self.adaptive_sweep_rewards.into(),
+                rewards: self.adaptive_sweep_rewards.map_or(rewards, Into::into),
                 min_mass: self.adaptive_sweep_min_mass,
                 lookahead: self.adaptive_sweep_lookahead,
             })?,
@@ -248,7 +250,8 @@ impl AdaptiveArgs {
     }
 }
 
-/// The embedded path's configuration for a score table of `mode` at `spacing`.
+/// The embedded path's configuration for a score table of `mode` at `spacing`, with the
+/// domain's default reward model of a model sweep.
 ///
 /// Errors: those of [`EmbeddedQ::tabular`], [`EmbeddedQ::tiles`] and [`AdaptiveArgs::q`],
 /// each naming its option.
@@ -257,6 +260,7 @@ pub fn embedded_config(
     adaptive: &AdaptiveArgs,
     mode: Mode,
     spacing: f64,
+    rewards: awfqi::RewardModel,
 ) -> anyhow::Result<EmbeddedConfig> {
     use anyhow::Context;
     let q = match embedded.embedded_q {
@@ -266,7 +270,9 @@ pub fn embedded_config(
         }
     }
     .context("--embedded-q, --embedded-resolution, --embedded-tilings")?;
-    let adaptive_q = adaptive.q().context("--adaptive-q and its options")?;
+    let adaptive_q = adaptive
+        .q(rewards)
+        .context("--adaptive-q and its options")?;
     Ok(EmbeddedConfig::new(mode, spacing)
         .with_q(q)
         .with_adaptive_q(adaptive_q))

@@ -25,6 +25,6 @@ pub use config::{
     MAX_GP_RESTARTS, MAX_ITERATIONS, MAX_RUN_INDEX, MAX_STEPS, MAX_TREES,
 };
 pub use embedded::{AdaptiveArgs, AdaptiveQArg, EmbeddedArgs, EmbeddedQArg, embedded_config};
-pub use experiment::{EmbeddedPath, build_experiment};
+pub use experiment::{EmbeddedPath, SetupFn, build_experiment, setup_of};
 pub use report::TIMING_HEADER;
 pub use run::{ensure_writable, run, run_one};
