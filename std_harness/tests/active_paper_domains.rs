@@ -35,8 +35,8 @@ fn read(dir: &Path, name: &str) -> serde_json::Value {
     serde_json::from_str(&text).unwrap()
 }
 
-/// The command line of a tiny run: 2 steps of `queries` queries, FQI episodes cut to as
-/// many steps, 1 run.
+/// The command line of a tiny run: 2 steps of 6 queries, FQI's one episode per step cut
+/// to as many steps, 1 run.
 fn words<'a>(command: &'a str, sources: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let fixed = [
         command,
@@ -52,6 +52,8 @@ fn words<'a>(command: &'a str, sources: &'a str, out: &'a str, extra: &[&'a str]
         "6",
         "--episode-length",
         "6",
+        "--episodes-per-step",
+        "1",
         "--max-gp",
         "40",
         "--adaptive-candidates",
