@@ -12,7 +12,7 @@ use awfqi::env::Acrobot;
 use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
 
 use super::transfer::{
-    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, embedded_config, setup_of,
+    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of,
 };
 
 /// Arguments of `awfqi-harness acrobot`.
@@ -33,7 +33,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             &args.adaptive,
             config.setting,
             config.spacing,
-            awfqi::RewardModel::Pooled,
+            SweepDefaults::ACROBOT,
         )?,
         adaptive: args.adaptive.options(),
     };

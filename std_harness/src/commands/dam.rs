@@ -11,7 +11,7 @@ use awfqi::env::Dam;
 use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
 
 use super::transfer::{
-    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, embedded_config, setup_of,
+    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of,
 };
 
 /// Arguments of `awfqi-harness dam`.
@@ -32,7 +32,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             &args.adaptive,
             config.setting,
             config.spacing,
-            awfqi::RewardModel::Backfilled,
+            SweepDefaults::DAM,
         )?,
         adaptive: args.adaptive.options(),
     };

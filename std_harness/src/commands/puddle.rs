@@ -13,8 +13,8 @@ use crate::transfer::algorithms::Algorithm;
 use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
 
 use super::transfer::{
-    AdaptiveArgs, CommonArgs, Config, EmbeddedArgs, EmbeddedPath, FixedGpArgs, embedded_config,
-    setup_of,
+    AdaptiveArgs, CommonArgs, Config, EmbeddedArgs, EmbeddedPath, FixedGpArgs, SweepDefaults,
+    embedded_config, setup_of,
 };
 
 /// The command's default algorithms, the headline comparison: FQI on the target alone,
@@ -77,7 +77,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             &args.adaptive,
             config.setting,
             config.spacing,
-            awfqi::RewardModel::Pooled,
+            SweepDefaults::PUDDLE,
         )?,
         adaptive: args.adaptive.options(),
     };

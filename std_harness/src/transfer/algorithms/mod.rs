@@ -425,11 +425,12 @@ impl<const D: usize> Experiment<D> {
                     // The adaptive algorithm's own GPs, not the set-up's.
                     let a = self.adaptive_options;
                     o["embedded"]["gp_capacity"] = a.gp_points.into();
+                    let search = e.gp_search();
                     o["embedded"]["gp_search"] = match a.refit {
-                        Some((e, r)) => format!(
-                            "core Nelder-Mead, 10 restarts, then warm refits of {e} evaluations, {r} restarts"
-                        ),
-                        None => "core Nelder-Mead, 10 restarts".into(),
+                        Some((e, r)) => {
+                            format!("{search}, then warm refits of {e} evaluations, {r} restarts")
+                        }
+                        None => search,
                     }
                     .into();
                 }

@@ -425,6 +425,8 @@ pub trait SharedSetup: Debug + Send + Sync {
     fn config(&self) -> &EmbeddedConfig;
     /// The fixed parameters of an algorithm of this set-up whose FQI approximator is `q`.
     fn parameters(&self, q: EmbeddedQ) -> serde_json::Value;
+    /// How the GPs' hyperparameters are searched.
+    fn gp_search(&self) -> String;
     /// The set-up, for a downcast to its [`EmbeddedSetup`] type.
     fn as_any(&self) -> &dyn Any;
 }
@@ -605,12 +607,7 @@ where
             "score_spacing": self.config.spacing,
         });
         if let DomainSettings::Scaled { .. } = self.domain.settings {
-            let training = &self.awfqi.gp_training;
-            out["gp_search"] = format!(
-                "core Nelder-Mead, {} restarts, {} evaluations",
-                training.search.restarts, training.search.max_evaluations
-            )
-            .into();
+            out["gp_search"] = self.gp_search().into();
             out["settings"] = "scaled from the source records".into();
             out["var_rw"] = f64::from(self.awfqi.weights.noise_variance()).into();
             out["fqi_discount"] = f64::from(self.awfqi.fqi.discount()).into();
@@ -659,6 +656,18 @@ where
         out
     }
 
+    /// How the GPs' hyperparameters are searched, for the result files.
+    pub fn gp_search(&self) -> String {
+        let search = &self.awfqi.gp_training.search;
+        match self.domain.settings {
+            DomainSettings::Thesis => "core Nelder-Mead, 10 restarts".into(),
+            DomainSettings::Scaled { .. } => format!(
+                "core Nelder-Mead, {} restarts, {} evaluations",
+                search.restarts, search.max_evaluations
+            ),
+        }
+    }
+
     /// Rows of the score table (one alias entry each in `awfqi-embedded`'s memory).
     pub fn score_rows(&self) -> usize {
         self.values.len()
@@ -696,6 +705,10 @@ where
 
     fn parameters(&self, q: EmbeddedQ) -> serde_json::Value {
         EmbeddedSetup::parameters(self, q)
+    }
+
+    fn gp_search(&self) -> String {
+        EmbeddedSetup::gp_search(self)
     }
 
     fn as_any(&self) -> &dyn Any {
