@@ -561,15 +561,13 @@ fn grow_compact<const Z: usize>(
     if let Some(old) = old {
         backward_solve(&old.rows, l21t.as_mut(), par);
         let weights = l21t;
+        let scaled = Scaled::new(kernel, &old.inputs);
         let mut cross = Mat::<f64>::zeros(n, QUERY_CHUNK.min(queries.len()));
         let mut start = 0;
         for chunk in queries.chunks(QUERY_CHUNK) {
             cross.truncate(n, chunk.len());
             for (col, &q) in chunk.iter().enumerate() {
-                let z = &all_queries[q];
-                for (v, x) in cross.col_as_slice_mut(col).iter_mut().zip(&old.inputs) {
-                    *v = kernel.covariance(x, z);
-                }
+                scaled.covariances_into(&all_queries[q], cross.col_as_slice_mut(col));
             }
             matmul(
                 panel.submatrix_mut(0, start, d, chunk.len()),
@@ -591,6 +589,52 @@ fn grow_compact<const Z: usize>(
         whitened_targets,
         panel,
     })
+}
+
+/// Training inputs divided by each RBF term's length scales, so that a column of
+/// `K(X₁, Q)` costs no division: `n·q` kernel evaluations an append
+/// ([`Storage::Compact`]). Equal to [`FixedKernel::covariance`] to rounding.
+struct Scaled<const Z: usize> {
+    /// Per term: signal variance, `1/ℓ_d` (0 beyond the listed coordinates), and the
+    /// scaled inputs.
+    terms: Vec<(f64, [f64; Z], Vec<[f64; Z]>)>,
+}
+
+impl<const Z: usize> Scaled<Z> {
+    fn new(kernel: &FixedKernel, inputs: &[[f64; Z]]) -> Self {
+        let terms = kernel
+            .terms
+            .iter()
+            .map(|t| {
+                let mut inverse = [0.0; Z];
+                for (v, l) in inverse.iter_mut().zip(&t.length_scales) {
+                    *v = 1.0 / l;
+                }
+                let scaled = inputs
+                    .iter()
+                    .map(|x| core::array::from_fn(|d| x[d] * inverse[d]))
+                    .collect();
+                (t.signal_variance, inverse, scaled)
+            })
+            .collect();
+        Self { terms }
+    }
+
+    /// `out[i] = k(xᵢ, z)` for every training input `xᵢ`.
+    fn covariances_into(&self, z: &[f64; Z], out: &mut [f64]) {
+        out.fill(0.0);
+        for (c, inverse, scaled) in &self.terms {
+            let zs: [f64; Z] = core::array::from_fn(|d| z[d] * inverse[d]);
+            for (v, x) in out.iter_mut().zip(scaled) {
+                let mut q = 0.0;
+                for d in 0..Z {
+                    let u = x[d] - zs[d];
+                    q += u * u;
+                }
+                *v += c * (-0.5 * q).exp();
+            }
+        }
+    }
 }
 
 /// `B ← L⁻¹B` for the lower factor `L` held as row panels (each `Δ × (r + Δ)`, `r` the

@@ -227,3 +227,29 @@ fn bad_input_leaves_the_gp_as_it_was(storage: Storage) {
         })
     );
 }
+
+#[test]
+fn scaled_inputs_give_the_kernels_covariances() {
+    let (xs, _) = points(30);
+    // Two terms, one listing fewer length scales than coordinates (the rest ignored).
+    let kernel = FixedKernel {
+        terms: vec![
+            RbfTerm {
+                signal_variance: 2.0,
+                length_scales: vec![1.3, 0.7, 0.0161],
+            },
+            RbfTerm {
+                signal_variance: 0.5,
+                length_scales: vec![4.0],
+            },
+        ],
+        noise_variance: 0.25,
+    };
+    let scaled = Scaled::new(&kernel, &xs);
+    let mut out = vec![f64::NAN; xs.len()];
+    for z in queries() {
+        scaled.covariances_into(&z, &mut out);
+        let expected: Vec<f64> = xs.iter().map(|x| kernel.covariance(x, &z)).collect();
+        assert_close(&out, &expected, 1e-13, "covariance");
+    }
+}
