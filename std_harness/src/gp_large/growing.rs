@@ -139,7 +139,8 @@ impl<const Z: usize> GrowingFixedGp<Z> {
         })
     }
 
-    /// The same GP (still without points), keeping `storage` between appends.
+    /// The same GP, keeping `storage` between appends; a GP that already holds points
+    /// keeps the storage it has (its blocks are laid out for it).
     pub fn with_storage(mut self, storage: Storage) -> Self {
         if self.blocks.is_empty() {
             self.storage = storage;

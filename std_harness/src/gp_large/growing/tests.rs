@@ -253,3 +253,15 @@ fn scaled_inputs_give_the_kernels_covariances() {
         assert_close(&out, &expected, 1e-13, "covariance");
     }
 }
+
+#[test]
+fn the_storage_is_chosen_before_the_first_point() {
+    let (xs, ys) = points(20);
+    let mut gp = GrowingFixedGp::new(&split_kernel(), Some(2), queries(), Par::Seq).unwrap();
+    assert_eq!(gp.storage(), Storage::Stored);
+    gp.extend(&xs, &ys).unwrap();
+    // Blocks laid out for one storage are not reinterpreted as the other's.
+    let gp = gp.with_storage(Storage::Compact);
+    assert_eq!(gp.storage(), Storage::Stored);
+    assert_eq!(gp.len(), 20);
+}
