@@ -131,9 +131,9 @@ pub enum FixedGpUpdate {
     #[default]
     Incremental,
     /// As `Incremental`, keeping only the factor's lower triangle and recomputing the rows
-    /// of `L⁻¹K(X, Q)` an append needs ([`Storage::Compact`]): about a quarter of the
-    /// memory (Acrobot: ≈ 1.7 GB at the last step) for `n·q` kernel evaluations and one
-    /// more triangular solve a step; the same posterior to rounding.
+    /// of `L⁻¹K(X, Q)` an append needs ([`Storage::Compact`]): less memory (Acrobot: a
+    /// run peaks at 2.3 GB instead of 7.7 GB) for `n·q` kernel evaluations and one more
+    /// triangular solve a step; the same posterior to rounding.
     Compact,
     /// Recondition on all target records every step, as the reference does.
     Refit,
