@@ -82,7 +82,6 @@ fn main() -> anyhow::Result<()> {
         command.args.fixed_gp,
         &domain,
         &[Algorithm::Iwfqi],
-        false,
     )?;
     let data = awfqi_harness::transfer::domain_data::dam::data();
     let experiment =

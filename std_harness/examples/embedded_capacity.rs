@@ -16,7 +16,7 @@
 //! after every step, each run's step-6 return, and the RAM the configuration's
 //! `AwfqiStorage` takes on a Cortex-M4F (thumbv7em: `usize` 4 bytes, so a record is 28 B).
 
-use awfqi::env::{Dynamics, PUDDLE_ACTIONS};
+use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi_harness::domains::puddle::domain;
 use awfqi_harness::transfer::algorithms::Algorithm;
 use awfqi_harness::transfer::algorithms::embedded::thesis::{EmbeddedLearner, EmbeddedMemory};
@@ -53,13 +53,13 @@ fn run<const N: usize>(
             seed,
             &[RUN, Algorithm::AwfqiEmbedded.id(), (first + i) as u64],
         );
-        let mut memory = EmbeddedMemory::<N>::new(&setup, STEPS, BUDGET, false)?;
+        let mut memory = EmbeddedMemory::<N>::new(&setup, STEPS, BUDGET, PUDDLE_ACTIONS, false)?;
         let mut learner = EmbeddedLearner::new(
             &setup,
             &slices,
             &mut memory,
             BUDGET,
-            Dynamics::Shared,
+            PuddleWorld::target(Dynamics::Shared),
             None,
             &mut rng,
         )?;

@@ -260,8 +260,9 @@ fn the_joint_q_function_runs_the_baselines_and_refuses_active_algorithms() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
-/// Each subcommand offers only the flags that apply to it: Puddle World's dynamics and the
-/// core algorithms' options (Puddle World only) are not in `dam --help` or `acrobot --help`.
+/// Each subcommand offers only the flags that apply to it: Puddle World's dynamics are not
+/// in `dam --help` or `acrobot --help`; the core algorithms' options and the query budget
+/// are in every command's.
 #[test]
 fn dam_and_acrobot_offer_no_puddle_world_flags() {
     let help = |command: &str| {
@@ -272,21 +273,26 @@ fn dam_and_acrobot_offer_no_puddle_world_flags() {
         assert!(out.status.success(), "{command} --help");
         String::from_utf8(out.stdout).unwrap()
     };
-    let puddle_only = [
-        "--dynamics",
+    let everywhere = [
         "--embedded-q",
         "--adaptive-q",
         "--adaptive-sweep-cells",
+        "--queries-per-step",
+        "--episode-length",
     ];
     let puddle = help("puddle");
-    for flag in puddle_only {
+    for flag in everywhere.iter().chain(&["--dynamics"]) {
         assert!(puddle.contains(flag), "puddle --help lacks {flag}");
     }
     for command in ["dam", "acrobot"] {
         let text = help(command);
         assert!(text.contains("--algorithms") && text.contains("--fixed-gp-variance"));
-        for flag in puddle_only {
-            assert!(!text.contains(flag), "{command} --help offers {flag}");
+        assert!(
+            !text.contains("--dynamics"),
+            "{command} --help offers --dynamics"
+        );
+        for flag in everywhere {
+            assert!(text.contains(flag), "{command} --help lacks {flag}");
         }
     }
 }

@@ -7,7 +7,13 @@
 
 use crate::domains::acrobot;
 
-use super::transfer::{BASELINES_AND_AWFQI, Config, PaperArgs};
+use awfqi::env::Acrobot;
+
+use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
+
+use super::transfer::{
+    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of,
+};
 
 /// Arguments of `awfqi-harness acrobot`.
 pub type Args = PaperArgs;
@@ -15,13 +21,22 @@ pub type Args = PaperArgs;
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let domain = acrobot::domain();
-    let config = Config::resolve(
-        &args.common,
-        args.fixed_gp,
-        &domain,
-        &BASELINES_AND_AWFQI,
-        false,
-    )?;
+    let config = Config::resolve(&args.common, args.fixed_gp, &domain, &BASELINES_AND_AWFQI)?;
+    // The core's algorithms with settings scaled from the source records.
+    let embedded = EmbeddedPath {
+        setup: setup_of::<4, 5>,
+        domain: EmbeddedDomain::scaled(&domain, config.iterations),
+        learner: embedded::thesis::with_learner::<Acrobot<f32>, 4, 5>,
+        adaptive_learner: embedded::adaptive::with_learner::<Acrobot<f32>, 4, 5>,
+        config: embedded_config(
+            &args.embedded,
+            &args.adaptive,
+            config.setting,
+            config.spacing,
+            SweepDefaults::ACROBOT,
+        )?,
+        adaptive: args.adaptive.options(),
+    };
     let data = crate::transfer::domain_data::acrobot::data();
-    super::transfer::run(&config, domain, data, None, None)
+    super::transfer::run(&config, domain, data, None, Some(embedded))
 }

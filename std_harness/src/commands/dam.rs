@@ -6,7 +6,13 @@
 
 use crate::domains::dam;
 
-use super::transfer::{BASELINES_AND_AWFQI, Config, PaperArgs};
+use awfqi::env::Dam;
+
+use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
+
+use super::transfer::{
+    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of,
+};
 
 /// Arguments of `awfqi-harness dam`.
 pub type Args = PaperArgs;
@@ -14,13 +20,22 @@ pub type Args = PaperArgs;
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let domain = dam::domain();
-    let config = Config::resolve(
-        &args.common,
-        args.fixed_gp,
-        &domain,
-        &BASELINES_AND_AWFQI,
-        false,
-    )?;
+    let config = Config::resolve(&args.common, args.fixed_gp, &domain, &BASELINES_AND_AWFQI)?;
+    // The core's algorithms with settings scaled from the source records.
+    let embedded = EmbeddedPath {
+        setup: setup_of::<2, 3>,
+        domain: EmbeddedDomain::scaled(&domain, config.iterations),
+        learner: embedded::thesis::with_learner::<Dam<f32>, 2, 3>,
+        adaptive_learner: embedded::adaptive::with_learner::<Dam<f32>, 2, 3>,
+        config: embedded_config(
+            &args.embedded,
+            &args.adaptive,
+            config.setting,
+            config.spacing,
+            SweepDefaults::DAM,
+        )?,
+        adaptive: args.adaptive.options(),
+    };
     let data = crate::transfer::domain_data::dam::data();
-    super::transfer::run(&config, domain, data, None, None)
+    super::transfer::run(&config, domain, data, None, Some(embedded))
 }

@@ -5,17 +5,16 @@
 //! `--algorithms all` runs every algorithm.
 
 use clap::ValueEnum;
-use rand_chacha::ChaCha8Rng;
 
-use awfqi::env::Dynamics;
+use awfqi::env::{Dynamics, PuddleWorld};
 
 use crate::domains::puddle;
 use crate::transfer::algorithms::Algorithm;
-use crate::transfer::algorithms::embedded::{self, EmbeddedConfig, EmbeddedSetup};
-use crate::transfer::sources::SourceSet;
+use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
 
 use super::transfer::{
-    AdaptiveArgs, CommonArgs, Config, EmbeddedArgs, EmbeddedPath, FixedGpArgs, embedded_config,
+    AdaptiveArgs, CommonArgs, Config, EmbeddedArgs, EmbeddedPath, FixedGpArgs, SweepDefaults,
+    embedded_config, setup_of,
 };
 
 /// The command's default algorithms, the headline comparison: FQI on the target alone,
@@ -63,34 +62,22 @@ pub struct Args {
     pub adaptive: AdaptiveArgs,
 }
 
-fn embedded_setup(
-    sources: &SourceSet<2>,
-    config: EmbeddedConfig,
-    rng: &mut ChaCha8Rng,
-) -> anyhow::Result<EmbeddedSetup> {
-    EmbeddedSetup::new(sources, config, rng)
-}
-
 /// Runs the experiment and writes every output.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let dynamics = args.dynamics.dynamics();
     let domain = puddle::domain(dynamics);
-    let config = Config::resolve(
-        &args.common,
-        FixedGpArgs::default(),
-        &domain,
-        &HEADLINE,
-        true,
-    )?;
+    let config = Config::resolve(&args.common, FixedGpArgs::default(), &domain, &HEADLINE)?;
     let embedded = EmbeddedPath {
-        setup: embedded_setup,
-        learner: embedded::thesis::with_learner,
-        adaptive_learner: embedded::adaptive::with_learner,
+        setup: setup_of::<2, 3>,
+        domain: EmbeddedDomain::puddle(),
+        learner: embedded::thesis::with_learner::<PuddleWorld<f32>, 2, 3>,
+        adaptive_learner: embedded::adaptive::with_learner::<PuddleWorld<f32>, 2, 3>,
         config: embedded_config(
             &args.embedded,
             &args.adaptive,
             config.setting,
             config.spacing,
+            SweepDefaults::PUDDLE,
         )?,
         adaptive: args.adaptive.options(),
     };

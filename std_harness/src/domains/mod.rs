@@ -212,8 +212,27 @@ impl<const D: usize> Domain<D> {
         P: Policy<[f64; D]> + ?Sized,
         F: FnMut(usize, Record<D>) -> awfqi::Result<()>,
     {
+        self.run_episode_of(task, self.horizon, policy, rng, visit)
+    }
+
+    /// [`Domain::run_episode`] cut to at most `length` steps (an episode of
+    /// `--episode-length`).
+    ///
+    /// Errors: as [`Domain::run_episode`].
+    pub fn run_episode_of<P, F>(
+        &self,
+        task: &dyn Task<D>,
+        length: usize,
+        policy: &mut P,
+        rng: &mut ChaCha8Rng,
+        visit: F,
+    ) -> awfqi::Result<usize>
+    where
+        P: Policy<[f64; D]> + ?Sized,
+        F: FnMut(usize, Record<D>) -> awfqi::Result<()>,
+    {
         let start = task.initial_state(rng);
-        self.run_from(task, start, policy, rng, visit)
+        self.run_for(task, start, length, policy, rng, visit)
     }
 
     /// [`Domain::run_episode`] from a given first state.
@@ -225,6 +244,23 @@ impl<const D: usize> Domain<D> {
         start: [f64; D],
         policy: &mut P,
         rng: &mut ChaCha8Rng,
+        visit: F,
+    ) -> awfqi::Result<usize>
+    where
+        P: Policy<[f64; D]> + ?Sized,
+        F: FnMut(usize, Record<D>) -> awfqi::Result<()>,
+    {
+        self.run_for(task, start, self.horizon, policy, rng, visit)
+    }
+
+    /// [`Domain::run_from`] for at most `length` steps.
+    fn run_for<P, F>(
+        &self,
+        task: &dyn Task<D>,
+        start: [f64; D],
+        length: usize,
+        policy: &mut P,
+        rng: &mut ChaCha8Rng,
         mut visit: F,
     ) -> awfqi::Result<usize>
     where
@@ -232,7 +268,7 @@ impl<const D: usize> Domain<D> {
         F: FnMut(usize, Record<D>) -> awfqi::Result<()>,
     {
         let mut state = start;
-        for t in 0..self.horizon {
+        for t in 0..length {
             let action = policy.action(&state, rng)?;
             let record = task.query(state, action, rng)?;
             visit(t, record)?;
@@ -241,7 +277,7 @@ impl<const D: usize> Domain<D> {
             }
             state = record.next_state;
         }
-        Ok(self.horizon)
+        Ok(length)
     }
 
     /// Evaluates the deterministic policy `greedy` on the target (spec §3.3): one rollout

@@ -53,6 +53,13 @@ pub struct Protocol {
     /// (absent: new trees every iteration, spec §5).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub freeze_trees_after: Option<usize>,
+    /// Generative-model queries per step of the active algorithms (absent: `H·B`, §12).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub queries_per_step: Option<usize>,
+    /// Episodes of the episodic algorithms cut to this many steps (absent: the domain's
+    /// horizon), so that they get as many target samples as a query budget.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub episode_length: Option<usize>,
 }
 
 /// The collection policy of step 1, before any Q-function is learned.
@@ -100,6 +107,8 @@ impl Protocol {
             first_step: FirstStep::Uniform,
             q_function: ForestLayout::PerAction,
             freeze_trees_after: None,
+            queries_per_step: None,
+            episode_length: None,
         }
     }
 }
@@ -276,7 +285,8 @@ pub fn evaluate_step<const D: usize>(
 /// A greedy policy: the action in a state.
 pub type GreedyFn<'a, const D: usize = 2> = &'a dyn Fn(&[f64; D]) -> usize;
 
-/// Appends `B` episodes on the target to `data` (§3.2): uniform at step 1 (`greedy` is
+/// Appends `B` episodes on the target to `data` (§3.2; each cut to
+/// [`Protocol::episode_length`] steps when set): uniform at step 1 (`greedy` is
 /// `None`; or ε-greedy around a zero Q-function with [`FirstStep::ZeroQ`]), ε-greedy around
 /// `greedy` afterwards.
 pub fn collect_episodes<const D: usize>(
@@ -287,6 +297,7 @@ pub fn collect_episodes<const D: usize>(
     data: &mut Vec<Record<D>>,
 ) -> anyhow::Result<()> {
     let n = domain.num_actions();
+    let length = protocol.episode_length.unwrap_or(domain.horizon);
     for _ in 0..protocol.episodes_per_step {
         let visit = |_t: usize, r: Record<D>| {
             data.push(r);
@@ -295,17 +306,17 @@ pub fn collect_episodes<const D: usize>(
         match (greedy, protocol.first_step) {
             (None, FirstStep::Uniform) => {
                 let mut uniform = UniformPolicy::new(n)?;
-                domain.run_episode(&*domain.target, &mut uniform, rng, visit)?;
+                domain.run_episode_of(&*domain.target, length, &mut uniform, rng, visit)?;
             }
             (None, FirstStep::ZeroQ) => {
                 let zero_q = |_: &[f64; D]| Ok(0);
                 let mut policy = EpsilonGreedyPolicy::new(zero_q, protocol.epsilon, n)?;
-                domain.run_episode(&*domain.target, &mut policy, rng, visit)?;
+                domain.run_episode_of(&*domain.target, length, &mut policy, rng, visit)?;
             }
             (Some(g), _) => {
                 let inner = |s: &[f64; D]| Ok(g(s));
                 let mut policy = EpsilonGreedyPolicy::new(inner, protocol.epsilon, n)?;
-                domain.run_episode(&*domain.target, &mut policy, rng, visit)?;
+                domain.run_episode_of(&*domain.target, length, &mut policy, rng, visit)?;
             }
         }
     }

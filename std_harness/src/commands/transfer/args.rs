@@ -1,7 +1,7 @@
 //! The transfer commands' arguments, in groups each command flattens: every command's
 //! ([`CommonArgs`]) and the fixed-kernel GPs' of the IWFQI paper's domains
-//! ([`FixedGpArgs`], `dam` and `acrobot`); Puddle World's own are in
-//! [`super::embedded`] and [`crate::commands::puddle`].
+//! ([`FixedGpArgs`], `dam` and `acrobot`); the core's algorithms' are in
+//! [`super::embedded`], Puddle World's own in [`crate::commands::puddle`].
 
 use std::path::PathBuf;
 
@@ -18,6 +18,7 @@ use crate::transfer::protocol::FirstStep;
 use crate::transfer::score_tables::Mode;
 
 use super::AlgorithmChoice;
+use super::embedded::{AdaptiveArgs, EmbeddedArgs};
 
 /// Noise subtraction of the target GPs' stds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -40,6 +41,15 @@ pub struct CommonArgs {
     /// Puddle World 1, Dam 1, Acrobot 10.
     #[arg(long)]
     pub episodes_per_step: Option<usize>,
+    /// Generative-model queries per step of the active algorithms (awfqi, awfqi-oracle,
+    /// awfqi-embedded, awfqi-adaptive). Default: H·B, the samples of the step's episodes.
+    #[arg(long)]
+    pub queries_per_step: Option<usize>,
+    /// Cut the episodes of the episodic algorithms (fqi, iwfqi, rbt, sdt, …) to this many
+    /// steps: with `--episodes-per-step B`, at most B·L target samples per step, the same
+    /// number as a query budget of B·L. Default: the domain's horizon.
+    #[arg(long)]
+    pub episode_length: Option<usize>,
     /// Steps K. Default: Puddle World 6, Dam 10, Acrobot 20.
     #[arg(long)]
     pub steps: Option<usize>,
@@ -194,4 +204,10 @@ pub struct PaperArgs {
     /// The fixed-kernel GPs' options.
     #[command(flatten)]
     pub fixed_gp: FixedGpArgs,
+    /// `awfqi-embedded`'s options.
+    #[command(flatten)]
+    pub embedded: EmbeddedArgs,
+    /// `awfqi-adaptive`'s options.
+    #[command(flatten)]
+    pub adaptive: AdaptiveArgs,
 }

@@ -100,6 +100,8 @@ pub struct Config {
 pub const MAX_STEPS: usize = 1_000;
 /// The largest `--episodes-per-step` accepted.
 pub const MAX_EPISODES_PER_STEP: usize = 10_000;
+/// The largest `--queries-per-step` and `--episode-length` accepted.
+pub const MAX_QUERIES_PER_STEP: usize = 1_000_000;
 /// The largest `--iterations` (FQI) accepted.
 pub const MAX_ITERATIONS: usize = 100_000;
 /// The largest `--trees` accepted.
@@ -113,21 +115,18 @@ pub const MAX_RUN_INDEX: usize = 1 << 32;
 
 impl Config {
     /// Resolves `args` for `domain`: the options left out take the domain's published
-    /// values, `--algorithms` left out takes `defaults`, and `all` every algorithm the
-    /// domain runs (the embedded ones only `with_embedded`).
+    /// values, `--algorithms` left out takes `defaults`, and `all` every algorithm.
     pub fn resolve<const D: usize>(
         args: &CommonArgs,
         fixed_gp: FixedGpArgs,
         domain: &Domain<D>,
         defaults: &[Algorithm],
-        with_embedded: bool,
     ) -> anyhow::Result<Self> {
         let p = &domain.published;
-        let runs_here = |a: &Algorithm| with_embedded || !a.is_embedded();
         let mut algorithms: Vec<Algorithm> = if args.algorithms.is_empty() {
             defaults.to_vec()
         } else if args.algorithms.contains(&AlgorithmChoice::All) {
-            Algorithm::ALL.into_iter().filter(runs_here).collect()
+            Algorithm::ALL.to_vec()
         } else {
             args.algorithms
                 .iter()
@@ -139,12 +138,6 @@ impl Config {
         };
         algorithms.sort();
         algorithms.dedup();
-        if let Some(a) = algorithms.iter().find(|a| !runs_here(a)) {
-            bail!(
-                "{} runs on Puddle World only until the harness's embedded path is generic over the state dimension",
-                a.name()
-            );
-        }
         let config = Self {
             args: args.clone(),
             fixed_gp,
@@ -193,6 +186,12 @@ impl Config {
         within("max-gp", self.max_gp, 1, MAX_GP_POINTS)?;
         within("rbt-total", self.rbt_total, 1, usize::MAX)?;
         within("gp-restarts", self.args.gp_restarts, 0, MAX_GP_RESTARTS)?;
+        if let Some(q) = self.args.queries_per_step {
+            within("queries-per-step", q, 1, MAX_QUERIES_PER_STEP)?;
+        }
+        if let Some(l) = self.args.episode_length {
+            within("episode-length", l, 1, MAX_QUERIES_PER_STEP)?;
+        }
         if self.runs.start >= self.runs.end || self.runs.end > MAX_RUN_INDEX {
             bail!(
                 "--runs {}..{} is out of range: it must be a non-empty range of run indices below {MAX_RUN_INDEX}",
@@ -256,16 +255,9 @@ mod tests {
                     FixedGpArgs::default(),
                     &puddle,
                     &crate::commands::puddle::HEADLINE,
-                    true,
                 )
             } else {
-                Config::resolve(
-                    &a,
-                    FixedGpArgs::default(),
-                    &dam,
-                    &BASELINES_AND_AWFQI,
-                    false,
-                )
+                Config::resolve(&a, FixedGpArgs::default(), &dam, &BASELINES_AND_AWFQI)
             }
             .map(|c| c.algorithms)
         };
@@ -278,19 +270,45 @@ mod tests {
             Algorithm::ALL
         );
         let on_dam = resolve(&["--algorithms", "all"], false).unwrap();
-        assert_eq!(on_dam.len(), Algorithm::ALL.len() - 2);
-        assert!(on_dam.iter().all(|a| !a.is_embedded()));
+        assert_eq!(on_dam, Algorithm::ALL);
         assert_eq!(resolve(&[], false).unwrap(), BASELINES_AND_AWFQI.to_vec());
         // Named algorithms keep the table's order, once each.
         assert_eq!(
             resolve(&["--algorithms", "awfqi,fqi,awfqi"], false).unwrap(),
             [Algorithm::Fqi, Algorithm::Awfqi]
         );
-        let embedded = resolve(&["--algorithms", "awfqi-embedded"], false).unwrap_err();
-        assert!(
-            embedded.to_string().contains("Puddle World only"),
-            "{embedded}"
+        assert_eq!(
+            resolve(&["--algorithms", "awfqi-adaptive,awfqi-embedded"], false).unwrap(),
+            [Algorithm::AwfqiEmbedded, Algorithm::AwfqiAdaptive]
         );
+    }
+
+    #[test]
+    fn query_budget_and_episode_length_are_checked_and_absent_by_default() {
+        let dam = dam::domain();
+        let resolve =
+            |words: &[&str]| Config::resolve(&args(words), FixedGpArgs::default(), &dam, &[]);
+        let c = resolve(&[]).unwrap();
+        assert_eq!(
+            (c.args.queries_per_step, c.args.episode_length),
+            (None, None)
+        );
+        let c = resolve(&["--queries-per-step", "50", "--episode-length", "25"]).unwrap();
+        assert_eq!(
+            (c.args.queries_per_step, c.args.episode_length),
+            (Some(50), Some(25))
+        );
+        for bad in [
+            ["--queries-per-step", "0"],
+            ["--episode-length", "0"],
+            ["--queries-per-step", "1000001"],
+        ] {
+            let e = resolve(&bad).unwrap_err().to_string();
+            assert!(
+                e.contains(&bad[0][2..]) && e.contains("out of range"),
+                "{e}"
+            );
+        }
     }
 
     #[test]
@@ -301,7 +319,6 @@ mod tests {
             FixedGpArgs::default(),
             &dam,
             &BASELINES_AND_AWFQI,
-            false,
         )
         .unwrap();
         let p = &dam.published;
@@ -309,14 +326,8 @@ mod tests {
             (c.steps, c.episodes_per_step, c.runs.end, c.threshold),
             (p.steps, p.episodes_per_step, p.runs, p.threshold)
         );
-        let c = Config::resolve(
-            &args(&["--steps", "3"]),
-            FixedGpArgs::default(),
-            &dam,
-            &[],
-            false,
-        )
-        .unwrap();
+        let c =
+            Config::resolve(&args(&["--steps", "3"]), FixedGpArgs::default(), &dam, &[]).unwrap();
         assert_eq!(c.steps, 3);
     }
 }

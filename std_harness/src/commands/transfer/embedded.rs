@@ -1,6 +1,6 @@
-//! The options of the core's algorithms on Puddle World: `awfqi-embedded`'s FQI
-//! approximator ([`EmbeddedArgs`]) and `awfqi-adaptive`'s approximator and loop
-//! ([`AdaptiveArgs`]), each under its own heading of `puddle --help`.
+//! The options of the core's algorithms: `awfqi-embedded`'s FQI approximator
+//! ([`EmbeddedArgs`]) and `awfqi-adaptive`'s approximator and loop ([`AdaptiveArgs`]),
+//! each under its own heading of every transfer command's `--help`.
 
 use clap::{Args, ValueEnum};
 
@@ -85,14 +85,16 @@ pub struct AdaptiveArgs {
     /// Q-function approximator of awfqi-adaptive's FQI.
     #[arg(long, value_enum, default_value = "sweep")]
     pub adaptive_q: AdaptiveQArg,
-    /// Cells per axis of `--adaptive-q sweep` (its nodes: one more per axis).
-    #[arg(long, default_value_t = ADAPTIVE_SWEEP_CELLS)]
-    pub adaptive_sweep_cells: usize,
+    /// Cells per axis of `--adaptive-q sweep` (its nodes: one more per axis). Default: 12
+    /// on Puddle World and Acrobot, 24 on the Dam (each chosen on the tuning runs).
+    #[arg(long)]
+    pub adaptive_sweep_cells: Option<usize>,
     /// `--adaptive-q sweep`: which records a node's reward averages (`pooled`: every
     /// action's, for rewards that depend on the state only; `backfilled`: the action's own
-    /// where it has some, every action's elsewhere).
-    #[arg(long, value_enum, default_value = "pooled")]
-    pub adaptive_sweep_rewards: SweepRewardsArg,
+    /// where it has some, every action's elsewhere). Default: pooled on Puddle World and
+    /// Acrobot, backfilled on the Dam (whose cost depends on the release).
+    #[arg(long, value_enum)]
+    pub adaptive_sweep_rewards: Option<SweepRewardsArg>,
     /// `--adaptive-q sweep`: the least reward weight of a node with data (a record at the
     /// node weighs 1).
     #[arg(long, default_value_t = 0.0)]
@@ -208,10 +210,12 @@ impl AdaptiveArgs {
         }
     }
 
-    /// The FQI approximator the options name.
+    /// The FQI approximator the options name (a model sweep's cells and reward model the
+    /// domain's `sweep` unless `--adaptive-sweep-cells` or `--adaptive-sweep-rewards` name
+    /// them).
     ///
     /// Errors: an approximator the core refuses (zero tiles, neighbours or trees, …).
-    pub fn q(&self) -> anyhow::Result<EmbeddedQ> {
+    pub fn q(&self, sweep: SweepDefaults) -> anyhow::Result<EmbeddedQ> {
         let knn = || {
             EmbeddedQ::knn(
                 self.adaptive_knn_neighbours,
@@ -239,8 +243,10 @@ impl AdaptiveArgs {
                 streamed: self.adaptive_tree_streamed,
             })?,
             AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
-                cells: self.adaptive_sweep_cells,
-                rewards: self.adaptive_sweep_rewards.into(),
+                cells: self.adaptive_sweep_cells.unwrap_or(sweep.cells),
+                rewards: self
+                    .adaptive_sweep_rewards
+                    .map_or(sweep.rewards, Into::into),
                 min_mass: self.adaptive_sweep_min_mass,
                 lookahead: self.adaptive_sweep_lookahead,
             })?,
@@ -248,7 +254,41 @@ impl AdaptiveArgs {
     }
 }
 
-/// The embedded path's configuration for a score table of `mode` at `spacing`.
+/// A domain's default model sweep for `awfqi-adaptive`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepDefaults {
+    /// Cells per axis.
+    pub cells: usize,
+    /// Which records a node's reward averages.
+    pub rewards: awfqi::RewardModel,
+}
+
+impl SweepDefaults {
+    /// Puddle World's: [`ADAPTIVE_SWEEP_CELLS`] cells, pooled rewards (they depend on the
+    /// state only).
+    pub const PUDDLE: Self = Self {
+        cells: ADAPTIVE_SWEEP_CELLS,
+        rewards: awfqi::RewardModel::Pooled,
+    };
+    /// The Dam's: 24 cells per axis (chosen on the tuning runs, `--seed 100`, 20 runs at
+    /// 50 queries a step, among 4, 8, 12, 16, 24, 32: the best mean over 10 steps,
+    /// `docs/results-active-paper-domains.md`), backfilled rewards (the cost depends on the
+    /// release).
+    pub const DAM: Self = Self {
+        cells: 24,
+        rewards: awfqi::RewardModel::Backfilled,
+    };
+    /// Acrobot's: [`ADAPTIVE_SWEEP_CELLS`] cells per axis (chosen on the tuning runs,
+    /// `--seed 100`, 20 runs at 100 queries a step, among 3, 4, 6, 8, 12), pooled rewards
+    /// (they depend on the state only).
+    pub const ACROBOT: Self = Self {
+        cells: ADAPTIVE_SWEEP_CELLS,
+        rewards: awfqi::RewardModel::Pooled,
+    };
+}
+
+/// The embedded path's configuration for a score table of `mode` at `spacing`, with the
+/// domain's default model sweep.
 ///
 /// Errors: those of [`EmbeddedQ::tabular`], [`EmbeddedQ::tiles`] and [`AdaptiveArgs::q`],
 /// each naming its option.
@@ -257,6 +297,7 @@ pub fn embedded_config(
     adaptive: &AdaptiveArgs,
     mode: Mode,
     spacing: f64,
+    sweep: SweepDefaults,
 ) -> anyhow::Result<EmbeddedConfig> {
     use anyhow::Context;
     let q = match embedded.embedded_q {
@@ -266,7 +307,7 @@ pub fn embedded_config(
         }
     }
     .context("--embedded-q, --embedded-resolution, --embedded-tilings")?;
-    let adaptive_q = adaptive.q().context("--adaptive-q and its options")?;
+    let adaptive_q = adaptive.q(sweep).context("--adaptive-q and its options")?;
     Ok(EmbeddedConfig::new(mode, spacing)
         .with_q(q)
         .with_adaptive_q(adaptive_q))

@@ -7,11 +7,14 @@ use std::time::Instant;
 
 use awfqi::env::Dynamics;
 use awfqi::weights::NoiseSubtraction;
+use awfqi::{Dims, StatePlusAction};
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::Domain;
 use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
-use crate::transfer::algorithms::embedded::{EmbeddedConfig, EmbeddedSetup};
+use crate::transfer::algorithms::embedded::{
+    EmbeddedConfig, EmbeddedDomain, EmbeddedSetup, GP_POINTS, SharedSetup,
+};
 use crate::transfer::algorithms::{Algorithm, Experiment, ScopedLearner, TransferOptions};
 use crate::transfer::domain_data::DomainData;
 use crate::transfer::protocol::Protocol;
@@ -22,14 +25,15 @@ use crate::transfer::{IDEAL_WEIGHTS, SCORE_TABLE, stream};
 use super::Config;
 use super::args::NoiseArg;
 
-/// The core's algorithms on a domain (Puddle World only until the embedded path is generic
-/// over the state dimension): their set-up, their learners and the configuration the
-/// command line chose.
+/// The core's algorithms on a domain: their set-up, their learners and the configuration
+/// the command line chose.
 #[derive(Debug, Clone, Copy)]
 pub struct EmbeddedPath<const D: usize> {
     /// Builds the shared set-up from the sources, the configuration (its score table's
-    /// mode and spacing set from the experiment's) and a stream.
-    pub setup: fn(&SourceSet<D>, EmbeddedConfig, &mut ChaCha8Rng) -> anyhow::Result<EmbeddedSetup>,
+    /// mode and spacing set from the experiment's), the domain and a stream.
+    pub setup: SetupFn<D>,
+    /// What the core's algorithms need to know of the domain.
+    pub domain: EmbeddedDomain<D>,
     /// Hands one run's `awfqi-embedded` learner to the protocol.
     pub learner: ScopedLearner<D>,
     /// Hands one run's `awfqi-adaptive` learner to the protocol.
@@ -38,6 +42,28 @@ pub struct EmbeddedPath<const D: usize> {
     pub config: EmbeddedConfig,
     /// `awfqi-adaptive`'s loop.
     pub adaptive: AdaptiveOptions,
+}
+
+/// Builds an [`EmbeddedPath`]'s shared set-up.
+pub type SetupFn<const D: usize> = fn(
+    &SourceSet<D>,
+    EmbeddedConfig,
+    EmbeddedDomain<D>,
+    &mut ChaCha8Rng,
+) -> anyhow::Result<Arc<dyn SharedSetup>>;
+
+/// [`SetupFn`] of the set-up of state dimension `D` and GP input dimension `I`.
+pub fn setup_of<const D: usize, const I: usize>(
+    sources: &SourceSet<D>,
+    config: EmbeddedConfig,
+    domain: EmbeddedDomain<D>,
+    rng: &mut ChaCha8Rng,
+) -> anyhow::Result<Arc<dyn SharedSetup>>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    let setup = EmbeddedSetup::<GP_POINTS, D, I>::for_domain(sources, config, domain, rng)?;
+    Ok(Arc::new(setup))
 }
 
 /// The source datasets `--sources` names.
@@ -98,6 +124,8 @@ pub fn build_experiment<const D: usize>(
     protocol.first_step = config.args.first_step.unwrap_or_default();
     protocol.q_function = config.args.q_function.unwrap_or_default();
     protocol.freeze_trees_after = config.args.freeze_trees_after.map(|k| k as usize);
+    protocol.queries_per_step = config.args.queries_per_step;
+    protocol.episode_length = config.args.episode_length;
     anyhow::ensure!(
         protocol.q_function.is_per_action()
             || (D == 2 && config.algorithms.iter().all(|&a| !a.is_active())),
@@ -154,7 +182,7 @@ pub fn build_experiment<const D: usize>(
             let mut c = e.config;
             c.mode = config.setting;
             c.spacing = config.spacing;
-            Some(Arc::new((e.setup)(&sources, c, &mut rng)?))
+            Some((e.setup)(&sources, c, e.domain, &mut rng)?)
         }
         _ => None,
     };

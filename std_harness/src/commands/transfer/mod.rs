@@ -24,7 +24,9 @@ pub use config::{
     AlgorithmChoice, BASELINES_AND_AWFQI, Config, MAX_EPISODES_PER_STEP, MAX_GP_POINTS,
     MAX_GP_RESTARTS, MAX_ITERATIONS, MAX_RUN_INDEX, MAX_STEPS, MAX_TREES,
 };
-pub use embedded::{AdaptiveArgs, AdaptiveQArg, EmbeddedArgs, EmbeddedQArg, embedded_config};
-pub use experiment::{EmbeddedPath, build_experiment};
+pub use embedded::{
+    AdaptiveArgs, AdaptiveQArg, EmbeddedArgs, EmbeddedQArg, SweepDefaults, embedded_config,
+};
+pub use experiment::{EmbeddedPath, SetupFn, build_experiment, setup_of};
 pub use report::TIMING_HEADER;
 pub use run::{ensure_writable, run, run_one};

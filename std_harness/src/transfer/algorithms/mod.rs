@@ -170,8 +170,8 @@ impl Algorithm {
         matches!(self, Algorithm::Awfqi)
     }
 
-    /// `true` for the core's algorithms, which run on Puddle World only until the
-    /// harness's embedded path is generic over the state dimension.
+    /// `true` for the core's algorithms (`f32`, fixed memory, borrowed storage: they run
+    /// through [`Experiment::with_learner`] on the experiment's embedded set-up).
     pub fn is_embedded(self) -> bool {
         matches!(self, Algorithm::AwfqiEmbedded | Algorithm::AwfqiAdaptive)
     }
@@ -251,8 +251,7 @@ impl Default for TransferOptions {
 
 /// A learner that borrows run-long storage (the core's memory and source slices):
 /// the hook allocates the storage in its own frame, builds the learner from the stream and
-/// hands it to the continuation, which runs the protocol on it. Puddle World only until the
-/// embedded path is generic over the state dimension.
+/// hands it to the continuation, which runs the protocol on it.
 pub type ScopedLearner<const D: usize> = fn(
     &Experiment<D>,
     &mut ChaCha8Rng,
@@ -279,7 +278,7 @@ pub struct Experiment<const D: usize = 2> {
     /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
     pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
     /// The embedded algorithms' shared set-up.
-    pub embedded: Option<Arc<embedded::EmbeddedSetup>>,
+    pub embedded: Option<Arc<dyn embedded::SharedSetup>>,
     /// `awfqi-embedded`'s learner on this domain (`None`: not available).
     pub embedded_learner: Option<ScopedLearner<D>>,
     /// `awfqi-adaptive`'s learner on this domain (`None`: not available).
@@ -343,9 +342,11 @@ impl<const D: usize> Experiment<D> {
         }
     }
 
-    /// The active algorithms' per-step budget `n = H·B` (§12).
+    /// The active algorithms' per-step budget: `--queries-per-step`, else `n = H·B` (§12).
     pub fn budget(&self) -> usize {
-        self.domain.horizon * self.protocol.episodes_per_step
+        self.protocol
+            .queries_per_step
+            .unwrap_or(self.domain.horizon * self.protocol.episodes_per_step)
     }
 
     /// The per-run parameters recorded in the results (§3.4).
@@ -415,20 +416,21 @@ impl<const D: usize> Experiment<D> {
             }
             Algorithm::AwfqiEmbedded => {
                 if let Some(e) = &self.embedded {
-                    o["embedded"] = e.parameters(e.config.q);
+                    o["embedded"] = e.parameters(e.config().q);
                 }
             }
             Algorithm::AwfqiAdaptive => {
                 if let Some(e) = &self.embedded {
-                    o["embedded"] = e.parameters(e.config.adaptive_q);
+                    o["embedded"] = e.parameters(e.config().adaptive_q);
                     // The adaptive algorithm's own GPs, not the set-up's.
                     let a = self.adaptive_options;
                     o["embedded"]["gp_capacity"] = a.gp_points.into();
+                    let search = e.gp_search();
                     o["embedded"]["gp_search"] = match a.refit {
-                        Some((e, r)) => format!(
-                            "core Nelder-Mead, 10 restarts, then warm refits of {e} evaluations, {r} restarts"
-                        ),
-                        None => "core Nelder-Mead, 10 restarts".into(),
+                        Some((e, r)) => {
+                            format!("{search}, then warm refits of {e} evaluations, {r} restarts")
+                        }
+                        None => search,
                     }
                     .into();
                 }
@@ -446,7 +448,7 @@ impl<const D: usize> Experiment<D> {
                 Algorithm::AwfqiEmbedded => self
                     .embedded
                     .as_ref()
-                    .map(|e| (e.config.mode, "realistic (the core's f32 GPs)")),
+                    .map(|e| (e.config().mode, "realistic (the core's f32 GPs)")),
                 _ => None,
             };
             if let Some((mode, kind)) = table {

@@ -13,18 +13,17 @@
 //! [`EmbeddedConfig::adaptive_q`]: super::EmbeddedConfig::adaptive_q
 //! [`ADAPTIVE_Q`]: super::ADAPTIVE_Q
 
-use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::env::GenerativeModel;
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, KnnRecord, MeanFunction,
-    QStorage, SourceData, Transition, TreeNode, TreeRecord,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, Dims, FqiEntry, Gp, KnnRecord, MeanFunction,
+    QStorage, SourceData, StatePlusAction, Transition, TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::{EmbeddedSetup, GP_POINTS, Record32, T, after_step, row_set};
+use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, T, after_step, setup_of};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
-use crate::transfer::sources::Record;
 
 /// The adaptive loop's knobs a run may set (fields of the core's [`AdaptiveConfig`]), as
 /// the result files record them. The defaults are the core's recommended configuration.
@@ -84,23 +83,28 @@ impl Default for AdaptiveOptions {
     }
 }
 
-/// The core's configuration for `experiment`: the recommended one with the experiment's
-/// adaptive options.
-fn config(experiment: &Experiment) -> AdaptiveConfig<T, 2, 3> {
+/// The core's configuration for `experiment`: the recommended one on the set-up's
+/// domain settings ([`EmbeddedSetup::awfqi_config`]) with the experiment's adaptive options.
+fn config<const N: usize, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
+    setup: &EmbeddedSetup<N, D, I>,
+) -> AdaptiveConfig<T, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
     let o = experiment.adaptive_options;
-    let domain = &experiment.domain;
-    let mut bounds = [(0.0, 0.0); 2];
-    for (b, &(lo, hi)) in bounds.iter_mut().zip(&domain.state_bounds) {
-        *b = (lo as T, hi as T);
-    }
-    let start = awfqi::env::PUDDLE_INITIAL_STATE.map(|x| x as T);
+    let domain = &setup.domain;
+    let bounds = domain.bounds.map(|(lo, hi)| (lo as T, hi as T));
+    let start = domain.start.map(|x| x as T);
+    let budget = experiment.budget();
     let mut c = AdaptiveConfig::recommended(
-        experiment.budget(),
+        budget,
         start,
-        domain.horizon,
+        experiment.domain.horizon,
         experiment.protocol.epsilon as T,
         bounds,
     );
+    c.awfqi = setup.awfqi_config(budget);
     c.sub_batches = o.sub_batches;
     c.verify = o.verify as T;
     c.surprise = o.surprise;
@@ -124,24 +128,24 @@ fn config(experiment: &Experiment) -> AdaptiveConfig<T, 2, 3> {
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
 /// an [`awfqi::AdaptiveStorage`].
 #[derive(Debug)]
-struct Memory<const N: usize> {
-    gp: Box<Gp<T, N, 3>>,
-    samples: Vec<Record32>,
+struct Memory<const N: usize, const D: usize, const I: usize> {
+    gp: Box<Gp<T, N, I>>,
+    samples: Vec<Record32<D>>,
     weights: Vec<T>,
     candidates: Vec<awfqi::adaptive::Candidate<T>>,
     fqi: Vec<FqiEntry<T>>,
-    records: Vec<KnnRecord<T, 2>>,
+    records: Vec<KnnRecord<T, D>>,
     links: Vec<u16>,
-    tree_records: Vec<TreeRecord<T, 2>>,
+    tree_records: Vec<TreeRecord<T, D>>,
     nodes: Vec<TreeNode<T>>,
-    sweep_entries: Vec<awfqi::SweepEntry<T, 2>>,
+    sweep_entries: Vec<awfqi::SweepEntry<T, D>>,
     sweep_nodes: Vec<awfqi::SweepNode<T>>,
-    path: Vec<[T; 2]>,
+    path: Vec<[T; D]>,
     beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
 }
 
-impl<const N: usize> Memory<N> {
-    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, 2, 3, N> {
+impl<const N: usize, const D: usize, const I: usize> Memory<N, D, I> {
+    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, D, I, N> {
         AdaptiveBuffers {
             gp: &mut self.gp,
             samples: &mut self.samples,
@@ -165,12 +169,17 @@ impl<const N: usize> Memory<N> {
 /// `awfqi-adaptive` as a [`Learner`]: each protocol step is one
 /// [`AdaptiveAwfqi::step`]; the greedy action is the `f32` Q-function's, and `D₀` is kept in
 /// `f64` for the result files.
-struct AdaptiveLearner<'a, const N: usize> {
-    adaptive: AdaptiveAwfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
-    collected: Vec<Record>,
+struct AdaptiveLearner<'a, P, const N: usize, const D: usize, const I: usize> {
+    adaptive: AdaptiveAwfqi<'a, T, P, D, I, N>,
+    collected: Vec<Record<D>>,
 }
 
-impl<const N: usize> Learner for AdaptiveLearner<'_, N> {
+impl<P, const N: usize, const D: usize, const I: usize> Learner<D>
+    for AdaptiveLearner<'_, P, N, D, I>
+where
+    P: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
+{
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.adaptive.step(rng)?;
         let samples = self.adaptive.target_samples();
@@ -183,29 +192,35 @@ impl<const N: usize> Learner for AdaptiveLearner<'_, N> {
         ))
     }
 
-    fn greedy_action(&self, s: &[f64; 2]) -> usize {
-        let state = [s[0] as T, s[1] as T];
-        self.adaptive.q().greedy_action(state).unwrap_or(0)
+    fn greedy_action(&self, s: &[f64; D]) -> usize {
+        self.adaptive
+            .q()
+            .greedy_action(s.map(|x| x as T))
+            .unwrap_or(0)
     }
 
-    fn target_samples(&self) -> &[Record] {
+    fn target_samples(&self) -> &[Record<D>] {
         &self.collected
     }
 }
 
-/// Hands a fresh learner for one run of `experiment` to `f` (the core's adaptive AWFQI
-/// borrows its memory and the set-up for the whole run, so they live in this frame).
-pub fn with_learner(
-    experiment: &Experiment,
+/// Hands a fresh learner for one run of `experiment` on the plant `P` to `f` (the core's
+/// adaptive AWFQI borrows its memory and the set-up for the whole run, so they live in this
+/// frame).
+pub fn with_learner<P: Plant<D>, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
     rng: &mut ChaCha8Rng,
-    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
+    f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
     match experiment.adaptive_options.gp_points {
-        GP_POINTS => with_learner_of::<GP_POINTS>(experiment, rng, f),
-        16 => with_learner_of::<16>(experiment, rng, f),
-        24 => with_learner_of::<24>(experiment, rng, f),
-        32 => with_learner_of::<32>(experiment, rng, f),
-        48 => with_learner_of::<48>(experiment, rng, f),
+        GP_POINTS => with_learner_of::<P, GP_POINTS, D, I>(experiment, rng, f),
+        16 => with_learner_of::<P, 16, D, I>(experiment, rng, f),
+        24 => with_learner_of::<P, 24, D, I>(experiment, rng, f),
+        32 => with_learner_of::<P, 32, D, I>(experiment, rng, f),
+        48 => with_learner_of::<P, 48, D, I>(experiment, rng, f),
         n => anyhow::bail!("--adaptive-gp-points {n}: 16, 24, 32, 48 or 64"),
     }
 }
@@ -213,19 +228,22 @@ pub fn with_learner(
 /// The sources' reward mean functions of capacity `N`: the set-up's when `N` is its GP
 /// capacity, else fitted here as the set-up fits its own (the published training, an even
 /// spread), from a stream of their own so every run has the same.
-fn means_of<const N: usize>(
-    setup: &EmbeddedSetup,
-    sources: &[&[Record32]],
-) -> anyhow::Result<Vec<MeanFunction<T, N, 3>>> {
+fn means_of<const N: usize, const D: usize, const I: usize>(
+    setup: &EmbeddedSetup<GP_POINTS, D, I>,
+    sources: &[&[Record32<D>]],
+) -> anyhow::Result<Vec<MeanFunction<T, N, I>>>
+where
+    Dims<D, I>: StatePlusAction,
+{
     use rand_core::SeedableRng;
     if N == GP_POINTS {
-        let means: Vec<MeanFunction<T, N, 3>> = setup
+        let means: Vec<MeanFunction<T, N, I>> = setup
             .means()
             .iter()
             .map(|m| {
                 // N == GP_POINTS: the same type.
                 let m: &dyn std::any::Any = m;
-                m.downcast_ref::<MeanFunction<T, N, 3>>()
+                m.downcast_ref::<MeanFunction<T, N, I>>()
                     .cloned()
                     .ok_or_else(|| anyhow::anyhow!("mean function capacity"))
             })
@@ -233,13 +251,14 @@ fn means_of<const N: usize>(
         return Ok(means);
     }
     let mut rng = ChaCha8Rng::seed_from_u64(N as u64);
-    let mut gp = Box::new(Gp::<T, N, 3>::empty());
+    let mut gp = Box::new(Gp::<T, N, I>::empty());
     let mut means = vec![MeanFunction::EMPTY; sources.len()];
+    let training = setup.awfqi_config(1).gp_training;
     for (mean, source) in means.iter_mut().zip(sources) {
         mean.fit_rewards(
             &mut gp,
             source,
-            &awfqi::GpTraining::published(),
+            &training,
             awfqi::SubsetRule::Spread,
             &mut rng,
         )?;
@@ -248,25 +267,23 @@ fn means_of<const N: usize>(
 }
 
 /// [`with_learner`] with target GPs and mean functions of `N` points.
-fn with_learner_of<const N: usize>(
-    experiment: &Experiment,
+fn with_learner_of<P: Plant<D>, const N: usize, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
     rng: &mut ChaCha8Rng,
-    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
-    let setup: &EmbeddedSetup = experiment
-        .embedded
-        .as_deref()
-        .ok_or_else(|| anyhow::anyhow!("no embedded set-up"))?;
-    let dynamics: Dynamics = experiment
-        .protocol
-        .dynamics
-        .ok_or_else(|| anyhow::anyhow!("awfqi-adaptive runs on Puddle World only"))?;
-    let config = config(experiment).validate()?;
+    f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    let setup = setup_of::<GP_POINTS, D, I>(experiment)?;
+    let plant = P::target(experiment)?;
+    let actions = plant.num_actions();
+    let config = config(experiment, setup).validate()?;
     let sources = setup.source_slices();
-    let rows = row_set(&setup.config, &sources)?;
-    let approximator = setup.config.adaptive_q.approximator()?;
+    let rows = setup.rows(&sources)?;
+    let approximator = setup.config.adaptive_q.approximator(&setup.domain.bounds)?;
     let entries = approximator
-        .required_entries(awfqi::env::PUDDLE_ACTIONS)
+        .required_entries(actions)
         .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
     let budget = experiment.budget();
     let slots = config.candidates.min(rows.len());
@@ -275,7 +292,7 @@ fn with_learner_of<const N: usize>(
     let (records, links) = match approximator {
         awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
             let links = nb
-                .required_links(n, awfqi::env::PUDDLE_ACTIONS)
+                .required_links(n, actions)
                 .ok_or_else(|| anyhow::anyhow!("kNN links overflow"))?;
             (n, links)
         }
@@ -284,7 +301,7 @@ fn with_learner_of<const N: usize>(
     let (tree_records, nodes) = match approximator {
         awfqi::Approximator::Trees(forests) => {
             let nodes = forests
-                .required_nodes(awfqi::env::PUDDLE_ACTIONS)
+                .required_nodes(actions)
                 .ok_or_else(|| anyhow::anyhow!("tree nodes overflow"))?;
             (n, nodes)
         }
@@ -293,13 +310,13 @@ fn with_learner_of<const N: usize>(
     let (sweep_entries, sweep_nodes) = match approximator {
         awfqi::Approximator::Sweep(sweep) => (
             sweep
-                .required_entries(awfqi::env::PUDDLE_ACTIONS)
+                .required_entries(actions)
                 .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
             sweep.nodes(),
         ),
         _ => (0, 0),
     };
-    let mut memory = Memory::<N> {
+    let mut memory = Memory::<N, D, I> {
         gp: Box::new(Gp::empty()),
         samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
         weights: vec![0.0; setup.posteriors().len()],
@@ -311,18 +328,18 @@ fn with_learner_of<const N: usize>(
         nodes: vec![TreeNode::EMPTY; nodes],
         sweep_entries: vec![awfqi::SweepEntry::EMPTY; sweep_entries],
         sweep_nodes: vec![awfqi::SweepNode::EMPTY; sweep_nodes],
-        path: vec![[0.0; 2]; budget],
+        path: vec![[0.0; D]; budget],
         beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
     };
-    let means = means_of::<N>(setup, &sources)?;
-    let means: &[MeanFunction<T, N, 3>] = &means;
+    let means = means_of::<N, D, I>(setup, &sources)?;
+    let means: &[MeanFunction<T, N, I>] = &means;
     let adaptive = AdaptiveAwfqi::new(
         config,
         approximator,
         SourceData::new(&sources, setup.posteriors())?,
         means,
         rows,
-        PuddleWorld::target(dynamics),
+        plant,
         memory.buffers(),
     )?;
     let mut learner = AdaptiveLearner {

@@ -11,24 +11,32 @@
 //! and the FQI approximator each runs ([`EmbeddedQ`]). Budget, steps, evaluation and
 //! records are the protocol's: each is a [`Learner`](crate::transfer::protocol::Learner)
 //! that [`protocol::run`](crate::transfer::protocol::run) drives like every other
-//! algorithm. Puddle World only, until this path is generic over the state dimension.
+//! algorithm. Every domain runs them: what differs between domains (the plant, the
+//! approximators' box, the score table's grid, the GP and weight settings) is an
+//! [`EmbeddedDomain`].
 
 pub mod adaptive;
 pub mod thesis;
 
 use std::time::Instant;
 
-use awfqi::env::{PUDDLE_ACTIONS, PuddleWorld};
+use std::any::Any;
+use std::fmt::Debug;
+
+use awfqi::env::{Acrobot, Dam, GenerativeModel, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::{
-    AliasEntry, Approximator, CellGrid, ExtraTrees, Gp, GpTraining, Kernel, MeanFunction,
-    Neighbours, Posterior, RowSet, ScoreTable, Scores, SubsetRule, Tilings, Transition,
+    AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp,
+    Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores, SourceScales,
+    StatePlusAction, SubsetRule, Tilings, Transition,
 };
 use rand_chacha::ChaCha8Rng;
 
+use crate::domains::{Domain, Rows};
+use crate::transfer::algorithms::Experiment;
 use crate::transfer::gp::GpSummary;
 use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::{GridRows, Mode};
-use crate::transfer::sources::{Record, SourceSet};
+use crate::transfer::sources::SourceSet;
 
 /// FQI cells per axis by default (cells about one unit step wide; see
 /// `tests/awfqi_puddle.rs`).
@@ -151,7 +159,7 @@ impl EmbeddedQ {
         common: bool,
     ) -> anyhow::Result<Self> {
         let out = Self::Knn(k, bandwidth, reach, common);
-        out.approximator()?;
+        out.check()?;
         Ok(out)
     }
 
@@ -161,7 +169,7 @@ impl EmbeddedQ {
     /// [`awfqi::ExtraTrees::with_min_samples`].
     pub fn trees(knobs: TreeKnobs) -> anyhow::Result<Self> {
         let out = Self::Trees(knobs);
-        out.approximator()?;
+        out.check()?;
         Ok(out)
     }
 
@@ -170,19 +178,30 @@ impl EmbeddedQ {
     /// Errors: those of [`awfqi::ModelSweep::cube`] and [`awfqi::ModelSweep::with_min_mass`].
     pub fn sweep(knobs: SweepKnobs) -> anyhow::Result<Self> {
         let out = Self::Sweep(knobs);
-        out.approximator()?;
+        out.check()?;
         Ok(out)
     }
 
-    /// The core's approximator over Puddle World's `[0, 10]²`.
-    fn approximator(self) -> anyhow::Result<Approximator<T, 2>> {
+    /// Checks the knobs (their checks do not depend on the state box).
+    fn check(self) -> anyhow::Result<()> {
+        self.approximator(&[(0.0, 1.0); 2]).map(|_| ())
+    }
+
+    /// The core's approximator over the box `bounds` (`(lower, upper)` of every state
+    /// coordinate).
+    fn approximator<const D: usize>(
+        self,
+        bounds: &[(f64, f64); D],
+    ) -> anyhow::Result<Approximator<T, D>> {
+        let lower = bounds.map(|b| b.0 as T);
+        let upper = bounds.map(|b| b.1 as T);
         Ok(match self {
-            Self::Tabular(n) => CellGrid::cube(0.0, 10.0, n)?.into(),
-            Self::Tiles(n, k) => Tilings::cube(0.0, 10.0, n, k)?.into(),
-            Self::Knn(k, h, reach, common) => neighbours(k, h, reach, common)?.into(),
+            Self::Tabular(n) => CellGrid::new(lower, upper, [n; D])?.into(),
+            Self::Tiles(n, k) => Tilings::new(lower, upper, n, k)?.into(),
+            Self::Knn(k, h, reach, common) => neighbours(k, h, reach, common, bounds)?.into(),
             Self::Hybrid((n, t), (k, h, reach, common)) => Approximator::Hybrid(
-                Tilings::cube(0.0, 10.0, n, t)?,
-                neighbours(k, h, reach, common)?,
+                Tilings::new(lower, upper, n, t)?,
+                neighbours(k, h, reach, common, bounds)?,
             ),
             Self::Trees(k) => {
                 let forests = if k.streamed {
@@ -195,7 +214,7 @@ impl EmbeddedQ {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
-            Self::Sweep(k) => awfqi::ModelSweep::cube(0.0, 10.0, k.cells)?
+            Self::Sweep(k) => awfqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
                 .with_rewards(k.rewards)
                 .with_min_mass(k.min_mass as T)?
                 .with_lookahead(k.lookahead)
@@ -204,15 +223,18 @@ impl EmbeddedQ {
     }
 }
 
-/// The kNN geometry over Puddle World's `[0, 10]²`.
-fn neighbours(
+/// The kNN geometry over the box `bounds`.
+fn neighbours<const D: usize>(
     k: usize,
     h: Option<f64>,
     reach: Option<f64>,
     common: bool,
-) -> anyhow::Result<Neighbours<T, 2>> {
+    bounds: &[(f64, f64); D],
+) -> anyhow::Result<Neighbours<T, D>> {
     let kernel = h.map_or(Kernel::Uniform, |h| Kernel::Gaussian(h as T));
-    let mut nb = Neighbours::cube(k, 0.0, 10.0, kernel)?;
+    let lower = bounds.map(|b| b.0 as T);
+    let upper = bounds.map(|b| b.1 as T);
+    let mut nb = Neighbours::new(k, lower, upper, kernel)?;
     if let Some(r) = reach {
         nb = nb.with_reach(r as T)?;
     }
@@ -225,9 +247,11 @@ fn neighbours(
 /// The embedded path's scalar.
 type T = f32;
 /// A record in the embedded path's scalar.
-type Record32 = Transition<[T; 2], T>;
+type Record32<const D: usize = 2> = Transition<[T; D], T>;
+/// A record of the harness (`f64`).
+type Record<const D: usize = 2> = crate::domains::Record<D>;
 
-fn to_f32(r: &Record) -> Record32 {
+fn to_f32<const D: usize>(r: &Record<D>) -> Record32<D> {
     Transition {
         state: r.state.map(|x| x as T),
         action: r.action,
@@ -237,7 +261,7 @@ fn to_f32(r: &Record) -> Record32 {
     }
 }
 
-fn to_f64(r: &Record32) -> Record {
+fn to_f64<const D: usize>(r: &Record32<D>) -> Record<D> {
     Transition {
         state: r.state.map(f64::from),
         action: r.action,
@@ -285,39 +309,200 @@ impl EmbeddedConfig {
     }
 }
 
+/// The score table's grid rows of a domain, for a spacing.
+#[derive(Debug, Clone, Copy)]
+pub enum DomainGrid<const D: usize> {
+    /// A core point grid for a spacing × this many actions (Puddle World's
+    /// [`PuddleWorld::score_grid`]).
+    Points(fn(T) -> awfqi::Result<awfqi::PointGrid<T, D>>, usize),
+    /// The domain's `(state, action)` pairs ([`Domain::grid_rows`]), converted to `f32`.
+    Pairs(fn(f64) -> anyhow::Result<Rows<D>>),
+}
+
+/// The GP, weight and FQI settings of the core's algorithms on a domain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DomainSettings {
+    /// The thesis's ([`AwfqiConfig::thesis`]): Puddle World's units.
+    Thesis,
+    /// Derived from the source records ([`AwfqiConfig::scaled`] on
+    /// [`SourceScales::measure`], what an embedder of a new plant does), with FQI at the
+    /// domain's discount and the protocol's iterations.
+    Scaled {
+        /// FQI's discount.
+        discount: f64,
+        /// FQI's iterations (value-iteration sweeps of a model sweep).
+        iterations: usize,
+    },
+}
+
+/// What the core's algorithms need to know of a domain beyond its source data: the box
+/// their approximators cover, where the adaptive kernel's verification rollouts start, the
+/// score table's grid and the settings.
+#[derive(Debug, Clone, Copy)]
+pub struct EmbeddedDomain<const D: usize> {
+    /// `(lower, upper)` of every state coordinate: the approximators' box and the adaptive
+    /// kernel's bounds.
+    pub bounds: [(f64, f64); D],
+    /// The adaptive kernel's start: the middle one of the domain's evaluation starts.
+    pub start: [f64; D],
+    /// The score table's grid rows.
+    pub grid: DomainGrid<D>,
+    /// GP, weight and FQI settings.
+    pub settings: DomainSettings,
+}
+
+impl<const D: usize> EmbeddedDomain<D> {
+    /// `domain`'s box and start, its own grid rows and settings scaled from the source
+    /// data, with FQI at its discount and `iterations` (the protocol's).
+    pub fn scaled(domain: &Domain<D>, iterations: usize) -> Self {
+        Self {
+            bounds: domain.state_bounds,
+            start: middle_start(domain),
+            grid: DomainGrid::Pairs(domain.grid_rows),
+            settings: DomainSettings::Scaled {
+                discount: domain.discount,
+                iterations,
+            },
+        }
+    }
+}
+
+impl EmbeddedDomain<2> {
+    /// Puddle World: `[0, 10]²`, its initial state, the core's point grid and the thesis's
+    /// settings (the faithful ones).
+    pub fn puddle() -> Self {
+        Self {
+            bounds: [(0.0, 10.0); 2],
+            start: awfqi::env::PUDDLE_INITIAL_STATE,
+            grid: DomainGrid::Points(PuddleWorld::score_grid, PUDDLE_ACTIONS),
+            settings: DomainSettings::Thesis,
+        }
+    }
+}
+
+/// The middle one of `domain`'s evaluation starts (Acrobot's: hanging at rest; the others
+/// evaluate from one state).
+fn middle_start<const D: usize>(domain: &Domain<D>) -> [f64; D] {
+    let starts = &domain.evaluation_starts;
+    starts.get(starts.len() / 2).copied().unwrap_or([0.0; D])
+}
+
+/// The target plant of a domain as the core queries it, in `f32`.
+pub trait Plant<const D: usize>: GenerativeModel<T, State = [T; D]> + Sized {
+    /// The target of `experiment`.
+    ///
+    /// Errors: an experiment this plant does not run (Puddle World without its dynamics).
+    fn target(experiment: &Experiment<D>) -> anyhow::Result<Self>;
+}
+
+impl Plant<2> for PuddleWorld<T> {
+    fn target(experiment: &Experiment<2>) -> anyhow::Result<Self> {
+        let dynamics = experiment
+            .protocol
+            .dynamics
+            .ok_or_else(|| anyhow::anyhow!("Puddle World's plant needs its dynamics variant"))?;
+        Ok(PuddleWorld::target(dynamics))
+    }
+}
+
+impl Plant<2> for Dam<T> {
+    fn target(_: &Experiment<2>) -> anyhow::Result<Self> {
+        Ok(Dam::target())
+    }
+}
+
+impl Plant<4> for Acrobot<T> {
+    fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
+        Ok(Acrobot::target())
+    }
+}
+
+/// The shared set-up as the experiment holds it, whatever its state and GP input
+/// dimensions: what the result files record, and the set-up itself for the learners to
+/// take back ([`SharedSetup::as_any`]).
+pub trait SharedSetup: Debug + Send + Sync {
+    /// The configuration.
+    fn config(&self) -> &EmbeddedConfig;
+    /// The fixed parameters of an algorithm of this set-up whose FQI approximator is `q`.
+    fn parameters(&self, q: EmbeddedQ) -> serde_json::Value;
+    /// How the GPs' hyperparameters are searched.
+    fn gp_search(&self) -> String;
+    /// The set-up, for a downcast to its [`EmbeddedSetup`] type.
+    fn as_any(&self) -> &dyn Any;
+}
+
+/// The set-up of `experiment` as an [`EmbeddedSetup`] of state dimension `D` and GP input
+/// dimension `I`.
+///
+/// Errors: no set-up, or one of other dimensions.
+fn setup_of<const N: usize, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
+) -> anyhow::Result<&EmbeddedSetup<N, D, I>> {
+    experiment
+        .embedded
+        .as_deref()
+        .ok_or_else(|| anyhow::anyhow!("no embedded set-up"))?
+        .as_any()
+        .downcast_ref()
+        .ok_or_else(|| anyhow::anyhow!("the embedded set-up has other dimensions"))
+}
+
 /// What the embedded path builds once per experiment and shares by all runs (§11.2): the
-/// `f32` source data with their stored posteriors, and the values of its realistic score
-/// table, from source GPs of capacity `N` ([`GP_POINTS`] unless a capacity study such as
-/// `examples/embedded_capacity.rs` asks for another).
+/// `f32` source data with their stored posteriors, the domain's settings, and the values of
+/// its realistic score table, from source GPs of capacity `N` ([`GP_POINTS`] unless a
+/// capacity study such as `examples/embedded_capacity.rs` asks for another), for states of
+/// `D` coordinates (GP inputs of `I = D + 1`).
 #[derive(Debug, Clone)]
-pub struct EmbeddedSetup<const N: usize = GP_POINTS> {
+pub struct EmbeddedSetup<const N: usize = GP_POINTS, const D: usize = 2, const I: usize = 3> {
     /// The configuration.
     pub config: EmbeddedConfig,
-    records: Vec<Vec<Record32>>,
+    /// The domain.
+    pub domain: EmbeddedDomain<D>,
+    /// The AWFQI settings of every run (its budget set per experiment).
+    awfqi: AwfqiConfig<T, I>,
+    records: Vec<Vec<Record32<D>>>,
+    /// The domain's grid pairs in `f32` (empty for a core point grid).
+    pairs: Vec<([T; D], usize)>,
     /// Stored reward posteriors of all sources, source after source.
     posteriors: Vec<Posterior<T>>,
-    values: Vec<Scores<T, 2>>,
-    /// Stored next-state posteriors of all sources, record after record, 2 per record
+    values: Vec<Scores<T, D>>,
+    /// Stored next-state posteriors of all sources, record after record, `D` per record
     /// (empty when the sources have none).
     transition_posteriors: Vec<Posterior<T>>,
     /// Each source's reward-GP posterior mean (the score table's GPs), for
     /// `awfqi-adaptive`.
-    means: Vec<MeanFunction<T, N, 3>>,
+    means: Vec<MeanFunction<T, N, I>>,
     /// Wall time of the set-up (source GP fits and score table), seconds.
     pub setup_seconds: f64,
 }
 
 impl<const N: usize> EmbeddedSetup<N> {
-    /// Converts the sources and builds the realistic score table from one
-    /// `Gp<f32, N, 3>` reward GP per source (an even spread of its records, the core's
-    /// published training, [`ScoreTable::realistic`]), from the stream `rng`.
+    /// Converts Puddle World's sources and builds the realistic score table
+    /// ([`EmbeddedSetup::for_domain`] on [`EmbeddedDomain::puddle`]).
     pub fn new(
         sources: &SourceSet,
         config: EmbeddedConfig,
         rng: &mut ChaCha8Rng,
     ) -> anyhow::Result<Self> {
+        Self::for_domain(sources, config, EmbeddedDomain::puddle(), rng)
+    }
+}
+
+impl<const N: usize, const D: usize, const I: usize> EmbeddedSetup<N, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    /// Converts the sources, derives the domain's settings and builds the realistic score
+    /// table from one `Gp<f32, N, I>` reward GP per source (an even spread of its records,
+    /// the settings' training, [`ScoreTable::realistic`]), from the stream `rng`.
+    pub fn for_domain(
+        sources: &SourceSet<D>,
+        config: EmbeddedConfig,
+        domain: EmbeddedDomain<D>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Self> {
         let start = Instant::now();
-        let records: Vec<Vec<Record32>> = sources
+        let records: Vec<Vec<Record32<D>>> = sources
             .sources
             .iter()
             .map(|s| s.records.iter().map(to_f32).collect())
@@ -328,17 +513,37 @@ impl<const N: usize> EmbeddedSetup<N> {
             .flat_map(|s| &s.reward)
             .map(|p| Posterior::new(p.mean as T, p.std as T))
             .collect();
-        let slices: Vec<&[Record32]> = records.iter().map(Vec::as_slice).collect();
-        let rows = row_set(&config, &slices)?;
+        let slices: Vec<&[Record32<D>]> = records.iter().map(Vec::as_slice).collect();
+        let awfqi = match domain.settings {
+            DomainSettings::Thesis => AwfqiConfig::thesis(1),
+            DomainSettings::Scaled {
+                discount,
+                iterations,
+            } => {
+                let scales = SourceScales::measure(&slices)?;
+                let mut c = AwfqiConfig::scaled(1, &scales)?;
+                c.fqi = FqiConfig::new(discount as T, iterations, EmptyCells::CappedNearest)?
+                    .with_min_weight(FqiConfig::<T>::published().min_weight())?;
+                c
+            }
+        };
+        let pairs = match (config.mode, domain.grid) {
+            (Mode::Source, _) | (_, DomainGrid::Points(..)) => Vec::new(),
+            (_, DomainGrid::Pairs(grid)) => grid(config.spacing)?
+                .into_iter()
+                .map(|(s, a)| (s.map(|x| x as T), a))
+                .collect(),
+        };
+        let rows = row_set(&config, &domain, &pairs, &slices)?;
         let mut values = vec![Scores::ZERO; rows.len()];
         let mut scratch = vec![AliasEntry::EMPTY; rows.len()];
-        let mut gp = Box::new(Gp::<T, N, 3>::empty());
+        let mut gp = Box::new(Gp::<T, N, I>::empty());
         let mut means = vec![MeanFunction::EMPTY; slices.len()];
         ScoreTable::realistic(
             rows,
             &slices,
             &mut gp,
-            &GpTraining::published(),
+            &awfqi.gp_training,
             SubsetRule::Spread,
             &mut values,
             &mut scratch,
@@ -362,13 +567,32 @@ impl<const N: usize> EmbeddedSetup<N> {
             .collect();
         Ok(Self {
             config,
+            domain,
+            awfqi,
             records,
+            pairs,
             posteriors,
             values,
             transition_posteriors,
             means,
             setup_seconds: start.elapsed().as_secs_f64(),
         })
+    }
+
+    /// The AWFQI settings of a run with `budget` queries per step.
+    pub fn awfqi_config(&self, budget: usize) -> AwfqiConfig<T, I> {
+        AwfqiConfig {
+            budget,
+            ..self.awfqi
+        }
+    }
+
+    /// The score table's rows over `sources` (this set-up's
+    /// [`EmbeddedSetup::source_slices`]).
+    ///
+    /// Errors: those of [`Mode::row_set`].
+    fn rows<'a>(&'a self, sources: &'a [&'a [Record32<D>]]) -> anyhow::Result<RowSet<'a, T, D>> {
+        row_set(&self.config, &self.domain, &self.pairs, sources)
     }
 
     /// The fixed parameters of an algorithm of this set-up whose FQI approximator is `q`,
@@ -382,10 +606,18 @@ impl<const N: usize> EmbeddedSetup<N> {
             "score_rows": self.values.len(),
             "score_spacing": self.config.spacing,
         });
+        if let DomainSettings::Scaled { .. } = self.domain.settings {
+            out["gp_search"] = self.gp_search().into();
+            out["settings"] = "scaled from the source records".into();
+            out["var_rw"] = f64::from(self.awfqi.weights.noise_variance()).into();
+            out["fqi_discount"] = f64::from(self.awfqi.fqi.discount()).into();
+            out["fqi_iterations"] = self.awfqi.fqi.iterations().into();
+        }
+        let n = |n: usize| serde_json::Value::from(vec![n; D]);
         match q {
-            EmbeddedQ::Tabular(n) => out["fqi_cells"] = serde_json::json!([n, n]),
-            EmbeddedQ::Tiles(n, k) => {
-                out["fqi_tiles"] = serde_json::json!([n, n]);
+            EmbeddedQ::Tabular(c) => out["fqi_cells"] = n(c),
+            EmbeddedQ::Tiles(c, k) => {
+                out["fqi_tiles"] = n(c);
                 out["fqi_tilings"] = k.into();
             }
             EmbeddedQ::Knn(k, h, reach, common) => {
@@ -396,11 +628,11 @@ impl<const N: usize> EmbeddedSetup<N> {
                     out["fqi_common_ball"] = true.into();
                 }
             }
-            EmbeddedQ::Hybrid((n, t), (k, h, reach, common)) => {
+            EmbeddedQ::Hybrid((c, t), (k, h, reach, common)) => {
                 if common {
                     out["fqi_common_ball"] = true.into();
                 }
-                out["fqi_tiles"] = serde_json::json!([n, n]);
+                out["fqi_tiles"] = n(c);
                 out["fqi_tilings"] = t.into();
                 out["fqi_neighbours"] = k.into();
                 out["fqi_bandwidth"] = h.into();
@@ -424,6 +656,18 @@ impl<const N: usize> EmbeddedSetup<N> {
         out
     }
 
+    /// How the GPs' hyperparameters are searched, for the result files.
+    pub fn gp_search(&self) -> String {
+        let search = &self.awfqi.gp_training.search;
+        match self.domain.settings {
+            DomainSettings::Thesis => "core Nelder-Mead, 10 restarts".into(),
+            DomainSettings::Scaled { .. } => format!(
+                "core Nelder-Mead, {} restarts, {} evaluations",
+                search.restarts, search.max_evaluations
+            ),
+        }
+    }
+
     /// Rows of the score table (one alias entry each in `awfqi-embedded`'s memory).
     pub fn score_rows(&self) -> usize {
         self.values.len()
@@ -431,7 +675,7 @@ impl<const N: usize> EmbeddedSetup<N> {
 
     /// The realistic score table's values, one per row (what the builder's
     /// `stored_scores` reads; a firmware keeps them in flash).
-    pub fn score_values(&self) -> &[Scores<T, 2>] {
+    pub fn score_values(&self) -> &[Scores<T, D>] {
         &self.values
     }
 
@@ -441,22 +685,47 @@ impl<const N: usize> EmbeddedSetup<N> {
     }
 
     /// Each source's reward mean function.
-    fn means(&self) -> &[MeanFunction<T, N, 3>] {
+    fn means(&self) -> &[MeanFunction<T, N, I>] {
         &self.means
     }
 
     /// The source records, one slice per source (what a run borrows).
-    pub fn source_slices(&self) -> Vec<&[Record32]> {
+    pub fn source_slices(&self) -> Vec<&[Record32<D>]> {
         self.records.iter().map(Vec::as_slice).collect()
     }
 }
 
-fn row_set<'a>(
+impl<const N: usize, const D: usize, const I: usize> SharedSetup for EmbeddedSetup<N, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    fn config(&self) -> &EmbeddedConfig {
+        &self.config
+    }
+
+    fn parameters(&self, q: EmbeddedQ) -> serde_json::Value {
+        EmbeddedSetup::parameters(self, q)
+    }
+
+    fn gp_search(&self) -> String {
+        EmbeddedSetup::gp_search(self)
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+fn row_set<'a, const D: usize>(
     config: &EmbeddedConfig,
-    slices: &'a [&'a [Record32]],
-) -> anyhow::Result<RowSet<'a, T, 2>> {
-    let grid = PuddleWorld::score_grid(config.spacing as T)?;
-    let grid = GridRows::Points(grid, PUDDLE_ACTIONS);
+    domain: &EmbeddedDomain<D>,
+    pairs: &'a [([T; D], usize)],
+    slices: &'a [&'a [Record32<D>]],
+) -> anyhow::Result<RowSet<'a, T, D>> {
+    let grid = match domain.grid {
+        DomainGrid::Points(grid, actions) => GridRows::Points(grid(config.spacing as T)?, actions),
+        DomainGrid::Pairs(_) => GridRows::Pairs(pairs),
+    };
     Ok(config.mode.row_set(grid, slices)?)
 }
 
@@ -464,11 +733,11 @@ fn row_set<'a>(
 /// ([`awfqi::StepReport::warnings`]) to stderr naming the algorithm, append the target
 /// samples the step added to `collected` (in f64), and return the step's diagnostics
 /// (the transition weights' only when the learner weighs transitions).
-fn after_step<const I: usize>(
+fn after_step<const D: usize, const I: usize>(
     algorithm: &str,
     report: &awfqi::StepReport<T, I>,
-    samples: &[Record32],
-    collected: &mut Vec<Record>,
+    samples: &[Record32<D>],
+    collected: &mut Vec<Record<D>>,
     transition_weights: bool,
 ) -> Diagnostics {
     for warning in report.warnings() {

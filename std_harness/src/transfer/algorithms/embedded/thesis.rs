@@ -4,52 +4,57 @@
 //! by tile coding ([`TILINGS`](super::TILINGS) offset tilings of [`TILES`](super::TILES)
 //! tiles per axis, or the [`CELLS`](super::CELLS) × `CELLS` table) instead of Extra-Trees,
 //! transition weights on request (`--transition-weights true`), and the realistic score
-//! table of the set-up ([`EmbeddedSetup`]).
+//! table of the set-up ([`EmbeddedSetup`]), on any domain ([`Plant`]) with its settings
+//! ([`EmbeddedDomain`](super::EmbeddedDomain)).
 
-use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::env::GenerativeModel;
 use awfqi::{
-    AliasEntry, Awfqi, AwfqiBuffers, AwfqiConfig, Estimator, FqiEntry, Gp, Transition, WeightParams,
+    AliasEntry, Awfqi, AwfqiBuffers, Dims, Estimator, FqiEntry, Gp, StatePlusAction, Transition,
+    WeightParams,
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{EmbeddedSetup, GP_POINTS, Record32, T, after_step, row_set};
+use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, T, after_step, setup_of};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
-use crate::transfer::sources::Record;
 
 /// The memory one run writes, on the heap and sized at run time: what a
 /// firmware holds in an [`awfqi::AwfqiStorage`].
 #[derive(Debug)]
-pub struct EmbeddedMemory<const N: usize = GP_POINTS> {
-    gp: Box<Gp<T, N, 3>>,
-    samples: Vec<Record32>,
+pub struct EmbeddedMemory<const N: usize = GP_POINTS, const D: usize = 2, const I: usize = 3> {
+    gp: Box<Gp<T, N, I>>,
+    samples: Vec<Record32<D>>,
     weights: Vec<T>,
     alias: Vec<AliasEntry<T>>,
     fqi: Vec<FqiEntry<T>>,
     transition_weights: Vec<T>,
 }
 
-impl<const N: usize> EmbeddedMemory<N> {
+impl<const N: usize, const D: usize, const I: usize> EmbeddedMemory<N, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
     /// Room for `steps × budget` target samples, one weight per stored posterior, one alias
-    /// entry per score row, the FQI entries of `setup`'s approximator and, with
-    /// `transition_weights`, one transition weight per source record.
+    /// entry per score row, the FQI entries of `setup`'s approximator for `actions` actions
+    /// and, with `transition_weights`, one transition weight per source record.
     ///
     /// Errors: an approximator too large for memory.
     pub fn new(
-        setup: &EmbeddedSetup<N>,
+        setup: &EmbeddedSetup<N, D, I>,
         steps: usize,
         budget: usize,
+        actions: usize,
         transition_weights: bool,
     ) -> anyhow::Result<Self> {
         let entries = setup
             .config
             .q
-            .approximator()?
-            .required_entries(PUDDLE_ACTIONS)
+            .approximator(&setup.domain.bounds)?
+            .required_entries(actions)
             .ok_or_else(|| anyhow::anyhow!("FQI approximator too large"))?;
         let records = setup.posteriors.len();
         Ok(Self {
-            gp: Box::new(Gp::<T, N, 3>::empty()),
+            gp: Box::new(Gp::<T, N, I>::empty()),
             samples: vec![Transition::EMPTY; steps * budget],
             weights: vec![0.0; records],
             alias: vec![AliasEntry::EMPTY; setup.values.len()],
@@ -59,7 +64,7 @@ impl<const N: usize> EmbeddedMemory<N> {
     }
 
     /// The core's buffers and the transition-weight buffer.
-    fn buffers(&mut self) -> (AwfqiBuffers<'_, T, 2, 3, N>, &mut [T]) {
+    fn buffers(&mut self) -> (AwfqiBuffers<'_, T, D, I, N>, &mut [T]) {
         (
             AwfqiBuffers {
                 gp: &mut self.gp,
@@ -76,36 +81,47 @@ impl<const N: usize> EmbeddedMemory<N> {
 /// `awfqi-embedded` as a [`Learner`]: each protocol step is one [`Awfqi::step`] (score →
 /// draw → query → weights → weighted FQI); the greedy action is the `f32` table's, and `D₀`
 /// is kept in `f64` for the result files.
-pub struct EmbeddedLearner<'a, const N: usize = GP_POINTS> {
-    awfqi: Awfqi<'a, T, PuddleWorld<T>, 2, 3, N>,
-    collected: Vec<Record>,
+pub struct EmbeddedLearner<
+    'a,
+    P,
+    const N: usize = GP_POINTS,
+    const D: usize = 2,
+    const I: usize = 3,
+> {
+    awfqi: Awfqi<'a, T, P, D, I, N>,
+    collected: Vec<Record<D>>,
 }
 
-impl<'a, const N: usize> EmbeddedLearner<'a, N> {
+impl<'a, P, const N: usize, const D: usize, const I: usize> EmbeddedLearner<'a, P, N, D, I>
+where
+    P: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
+{
     /// The builder's set-up from the shared source data and score values (`sources` are
     /// `setup`'s [`EmbeddedSetup::source_slices`]) over `memory`, with a per-step budget, on
-    /// the Puddle World target of `dynamics`, from the stream `rng`; with `transition` (the
-    /// estimator variance `v_s`), transition weights on every coordinate.
+    /// the target `plant`, from the stream `rng`; with `transition` (the estimator variance
+    /// `v_s`), transition weights on every coordinate.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
-        setup: &'a EmbeddedSetup<N>,
-        sources: &'a [&'a [Record32]],
-        memory: &'a mut EmbeddedMemory<N>,
+        setup: &'a EmbeddedSetup<N, D, I>,
+        sources: &'a [&'a [Record32<D>]],
+        memory: &'a mut EmbeddedMemory<N, D, I>,
         budget: usize,
-        dynamics: Dynamics,
+        plant: P,
         transition: Option<f64>,
         rng: &mut ChaCha8Rng,
     ) -> anyhow::Result<Self> {
         let (buffers, transition_weights) = memory.buffers();
         let mut builder = Awfqi::builder(
-            AwfqiConfig::thesis(budget).validate()?,
-            setup.config.q.approximator()?,
+            setup.awfqi_config(budget).validate()?,
+            setup.config.q.approximator(&setup.domain.bounds)?,
             sources,
-            row_set(&setup.config, sources)?,
+            setup.rows(sources)?,
         )
         .stored_posteriors(&setup.posteriors)
         .stored_scores(&setup.values);
         if let Some(v_s) = transition {
-            if setup.transition_posteriors.len() != 2 * setup.posteriors.len() {
+            if setup.transition_posteriors.len() != D * setup.posteriors.len() {
                 anyhow::bail!("transition weights need the sources' stored next-state posteriors");
             }
             builder = builder.transition_weights(
@@ -114,7 +130,7 @@ impl<'a, const N: usize> EmbeddedLearner<'a, N> {
                 transition_weights,
             );
         }
-        let awfqi = builder.build(PuddleWorld::target(dynamics), buffers, rng)?;
+        let awfqi = builder.build(plant, buffers, rng)?;
         Ok(Self {
             awfqi,
             collected: Vec::new(),
@@ -122,7 +138,12 @@ impl<'a, const N: usize> EmbeddedLearner<'a, N> {
     }
 }
 
-impl<const N: usize> Learner for EmbeddedLearner<'_, N> {
+impl<P, const N: usize, const D: usize, const I: usize> Learner<D>
+    for EmbeddedLearner<'_, P, N, D, I>
+where
+    P: GenerativeModel<T, State = [T; D]>,
+    Dims<D, I>: StatePlusAction,
+{
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.awfqi.step(rng)?;
         let samples = self.awfqi.target_samples();
@@ -135,32 +156,29 @@ impl<const N: usize> Learner for EmbeddedLearner<'_, N> {
         ))
     }
 
-    fn greedy_action(&self, s: &[f64; 2]) -> usize {
-        let state = [s[0] as T, s[1] as T];
-        self.awfqi.q().greedy_action(state).unwrap_or(0)
+    fn greedy_action(&self, s: &[f64; D]) -> usize {
+        self.awfqi.q().greedy_action(s.map(|x| x as T)).unwrap_or(0)
     }
 
-    fn target_samples(&self) -> &[Record] {
+    fn target_samples(&self) -> &[Record<D>] {
         &self.collected
     }
 }
 
-/// Hands a fresh learner for one run of `experiment` to `f`: the core's AWFQI borrows its
-/// memory and the source data for the whole run, so they live in this frame while
-/// [`protocol::run`](crate::transfer::protocol::run) drives the learner inside `f`.
-pub fn with_learner(
-    experiment: &Experiment,
+/// Hands a fresh learner for one run of `experiment` on the plant `P` to `f`: the core's
+/// AWFQI borrows its memory and the source data for the whole run, so they live in this
+/// frame while [`protocol::run`](crate::transfer::protocol::run) drives the learner inside
+/// `f`.
+pub fn with_learner<P: Plant<D>, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
     rng: &mut ChaCha8Rng,
-    f: &mut dyn FnMut(&mut dyn Learner, &mut ChaCha8Rng) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
-    let setup = experiment
-        .embedded
-        .as_deref()
-        .ok_or_else(|| anyhow::anyhow!("no embedded set-up"))?;
-    let dynamics = experiment
-        .protocol
-        .dynamics
-        .ok_or_else(|| anyhow::anyhow!("awfqi-embedded runs on Puddle World only"))?;
+    f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+) -> anyhow::Result<()>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    let setup = setup_of::<GP_POINTS, D, I>(experiment)?;
+    let plant = P::target(experiment)?;
     let budget = experiment.budget();
     let sources = setup.source_slices();
     // Transition weights only on request (`--transition-weights true`), on every
@@ -176,16 +194,10 @@ pub fn with_learner(
         setup,
         experiment.protocol.steps,
         budget,
+        plant.num_actions(),
         transition.is_some(),
     )?;
-    let mut learner = EmbeddedLearner::new(
-        setup,
-        &sources,
-        &mut memory,
-        budget,
-        dynamics,
-        transition,
-        rng,
-    )?;
+    let mut learner =
+        EmbeddedLearner::new(setup, &sources, &mut memory, budget, plant, transition, rng)?;
     f(&mut learner, rng)
 }
