@@ -237,7 +237,7 @@ impl<'a> FqiOptions<'a> {
         let scheduled = iteration == k
             || self
                 .regrow_every
-                .is_some_and(|r| iteration > k && (iteration - k) % r == 0);
+                .is_some_and(|r| iteration > k && (iteration - k).is_multiple_of(r));
         scheduled && iteration < self.iterations
     }
 
