@@ -104,8 +104,8 @@ pub struct AdaptiveArgs {
     #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
     pub adaptive_sweep_lookahead: bool,
     /// `--adaptive-q sweep`: value-iteration sweeps of the model (its planning horizon).
-    /// Default: FQI's `--iterations` on Puddle World and Acrobot, 400 on the Dam (chosen
-    /// on the tuning runs).
+    /// Default: the core's FQI iterations (Puddle World: the thesis's 60; Acrobot:
+    /// `--iterations`), 400 on the Dam (chosen on the tuning runs).
     #[arg(long)]
     pub adaptive_sweeps: Option<usize>,
     /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
