@@ -60,6 +60,8 @@ choices! {
     FixedGpUpdate {
         FixedGpUpdate::Incremental => "incremental":
             "Append each step's records to the factor (the refit's posterior to rounding)",
+        FixedGpUpdate::Compact => "compact":
+            "As incremental, holding only the factor's triangle (≈ 30 % of the memory)",
         FixedGpUpdate::Refit => "refit":
             "Recondition on all target records every step, as the reference does",
     }

@@ -22,12 +22,20 @@
 //! kernel decorrelates exactly along the split coordinate (checked again on every batch;
 //! when a batch ends the separation, everything is reconditioned unsplit), and the same
 //! jitter ladder `10⁻¹⁰, 10⁻⁸, 10⁻⁶, 10⁻⁴` (a batch that cannot be appended at the
-//! current jitter reconditions all points at the next one). Memory: the factor (`n²`) and
-//! `V` (`n·q`) of every block, in `f64`.
+//! current jitter reconditions all points at the next one).
+//!
+//! **Memory** ([`Storage`]). [`Storage::Stored`] keeps the square factor (`n²`) and `V`
+//! (`n·q`) of every block in `f64` (Acrobot, `n` = 9 137, `q` = 8 400: 1.28 GB a GP).
+//! [`Storage::Compact`] keeps only the factor's lower triangle, as one row panel
+//! `[L₂₁ L₂₂]` per batch (`n²/2`: 0.33 GB), and recomputes the rows an append needs,
+//! `L₂₁V₁ = (L₁₁⁻ᵀL₂₁ᵀ)ᵀK(X₁, Q)`, from kernel evaluations in column chunks: one more
+//! triangular solve (`n²Δ`) and `n·q` kernel evaluations an append. The same posterior
+//! in exact arithmetic; in floating point it differs by rounding.
 
 use awfqi::{Error, Result};
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::prelude::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatRef, Par};
 
 use super::JITTER;
@@ -36,19 +44,36 @@ use super::fixed::{FixedKernel, check_training, cholesky_lower, separable};
 /// The largest jitter of the ladder (as [`super::fixed::FixedGp`]).
 const MAX_JITTER: f64 = 1e-4;
 
+/// What a [`GrowingFixedGp`] keeps between appends (see the [module docs](self)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Storage {
+    /// The square factor and `V = L⁻¹K(X, Q)`.
+    #[default]
+    Stored,
+    /// The factor's lower triangle in row panels; `V`'s rows recomputed when needed.
+    Compact,
+}
+
+/// The columns of `K(X₁, Q)` evaluated at a time by [`Storage::Compact`].
+const QUERY_CHUNK: usize = 512;
+
 /// The points sharing one value of the split coordinate (or all points), with the
 /// posterior accumulated at the queries of that value (or all queries).
 #[derive(Debug, Clone)]
 struct Block<const Z: usize> {
     key: f64,
     inputs: Vec<[f64; Z]>,
-    /// Lower Cholesky factor of `K + (σ²ₙ + jitter) I` (zeros above the diagonal).
+    /// [`Storage::Stored`]: lower Cholesky factor of `K + (σ²ₙ + jitter) I` (zeros above
+    /// the diagonal); empty for [`Storage::Compact`].
     factor: Mat<f64>,
+    /// [`Storage::Compact`]: the same factor's rows, one panel `[L₂₁ L₂₂]` per batch
+    /// (`Δ × (n + Δ)`, `n` the rows before it); empty for [`Storage::Stored`].
+    rows: Vec<Mat<f64>>,
     /// `u = L⁻¹y`.
     whitened_targets: Vec<f64>,
     /// The queries this block predicts (indices into the GP's queries).
     queries: Vec<usize>,
-    /// `V = L⁻¹K(X, Q)`, one row panel per appended batch.
+    /// `V = L⁻¹K(X, Q)`, one row panel per appended batch ([`Storage::Stored`] only).
     panels: Vec<Mat<f64>>,
     /// `Σᵢ Vᵢⱼuᵢ` per query of the block.
     means: Vec<f64>,
@@ -58,6 +83,8 @@ struct Block<const Z: usize> {
 
 /// What appending a batch to a block produces, computed before anything is committed.
 struct Growth {
+    /// The new square factor ([`Storage::Stored`]) or the new row panel
+    /// ([`Storage::Compact`]).
     factor: Mat<f64>,
     whitened_targets: Vec<f64>,
     panel: Mat<f64>,
@@ -77,6 +104,7 @@ pub struct GrowingFixedGp<const Z: usize> {
     targets: Vec<f64>,
     blocks: Vec<Block<Z>>,
     jitter: f64,
+    storage: Storage,
     par: Par,
 }
 
@@ -106,8 +134,23 @@ impl<const Z: usize> GrowingFixedGp<Z> {
             targets: Vec::new(),
             blocks: Vec::new(),
             jitter: JITTER,
+            storage: Storage::default(),
             par,
         })
+    }
+
+    /// The same GP, keeping `storage` between appends; a GP that already holds points
+    /// keeps the storage it has (its blocks are laid out for it).
+    pub fn with_storage(mut self, storage: Storage) -> Self {
+        if self.blocks.is_empty() {
+            self.storage = storage;
+        }
+        self
+    }
+
+    /// What the GP keeps between appends.
+    pub fn storage(&self) -> Storage {
+        self.storage
     }
 
     /// Training points so far.
@@ -248,6 +291,10 @@ impl<const Z: usize> GrowingFixedGp<Z> {
                         &own_queries
                     }
                 };
+                let grow = match self.storage {
+                    Storage::Stored => grow,
+                    Storage::Compact => grow_compact,
+                };
                 let growth = grow(
                     index.map(|b| &self.blocks[b]),
                     &xs,
@@ -288,6 +335,7 @@ impl<const Z: usize> GrowingFixedGp<Z> {
                         key,
                         inputs: Vec::new(),
                         factor: Mat::zeros(0, 0),
+                        rows: Vec::new(),
                         whitened_targets: Vec::new(),
                         means: vec![0.0; queries.len()],
                         explained: vec![0.0; queries.len()],
@@ -311,9 +359,14 @@ impl<const Z: usize> GrowingFixedGp<Z> {
                 block.means[j] += mean;
                 block.explained[j] += explained;
             }
-            block.factor = growth.factor;
             block.whitened_targets.extend(growth.whitened_targets);
-            block.panels.push(growth.panel);
+            match self.storage {
+                Storage::Stored => {
+                    block.factor = growth.factor;
+                    block.panels.push(growth.panel);
+                }
+                Storage::Compact => block.rows.push(growth.factor),
+            }
             let key_of = |x: &[f64; Z]| split.map_or(0.0, |c| x[c]);
             block
                 .inputs
@@ -341,6 +394,7 @@ impl<const Z: usize> GrowingFixedGp<Z> {
             targets: Vec::new(),
             blocks: Vec::new(),
             jitter,
+            storage: self.storage,
             par: self.par,
         };
         // Borrowed, not cloned: the queries move back whatever happens.
@@ -443,6 +497,195 @@ fn grow<const Z: usize>(
         whitened_targets,
         panel,
     })
+}
+
+/// [`grow`] for [`Storage::Compact`]: the old factor as row panels, `L₂₁V₁` recomputed
+/// as `(L₁₁⁻ᵀL₂₁ᵀ)ᵀK(X₁, Q)`; the growth's `factor` is the new row panel `[L₂₁ L₂₂]`.
+#[allow(clippy::too_many_arguments)]
+fn grow_compact<const Z: usize>(
+    old: Option<&Block<Z>>,
+    xs: &[[f64; Z]],
+    ys: &[f64],
+    kernel: &FixedKernel,
+    jitter: f64,
+    all_queries: &[[f64; Z]],
+    queries: &[usize],
+    par: Par,
+) -> Option<Growth> {
+    let n = old.map_or(0, |b| b.inputs.len());
+    let d = xs.len();
+    // L₂₁ᵀ = L₁₁⁻¹K₁₂.
+    let mut l21t = Mat::<f64>::zeros(n, d);
+    if let Some(old) = old {
+        l21t = Mat::<f64>::from_fn(n, d, |i, j| kernel.covariance(&old.inputs[i], &xs[j]));
+        forward_solve(&old.rows, l21t.as_mut(), par);
+    }
+    // L₂₂ = chol(K₂₂ + (σ²ₙ + jitter) I − L₂₁L₂₁ᵀ).
+    let diagonal = kernel.covariance(&xs[0], &xs[0]) + kernel.noise_variance + jitter;
+    let mut schur = Mat::<f64>::from_fn(d, d, |i, j| {
+        if i == j {
+            diagonal
+        } else {
+            kernel.covariance(&xs[i], &xs[j])
+        }
+    });
+    if n > 0 {
+        matmul(
+            schur.as_mut(),
+            Accum::Add,
+            l21t.transpose(),
+            l21t.as_ref(),
+            -1.0,
+            par,
+        );
+    }
+    cholesky_lower(schur.as_mut(), par)?;
+    let mut row_panel = Mat::<f64>::zeros(d, n + d);
+    row_panel
+        .submatrix_mut(0, 0, d, n)
+        .copy_from(l21t.transpose());
+    row_panel
+        .submatrix_mut(0, n, d, d)
+        .copy_from_triangular_lower(schur.as_ref());
+    let l22 = row_panel.submatrix(0, n, d, d);
+    // u₂ = L₂₂⁻¹(y₂ − L₂₁u₁).
+    let mut u2 = Mat::<f64>::from_fn(d, 1, |i, _| ys[i]);
+    if let Some(old) = old {
+        let u1 = MatRef::from_column_major_slice(&old.whitened_targets, n, 1);
+        matmul(u2.as_mut(), Accum::Add, l21t.transpose(), u1, -1.0, par);
+    }
+    solve_lower_triangular_in_place(l22, u2.as_mut(), par);
+    // V₂ = L₂₂⁻¹(K(X₂, Q) − L₂₁V₁), with L₂₁V₁ = (L₁₁⁻ᵀL₂₁ᵀ)ᵀK(X₁, Q).
+    let mut panel = Mat::<f64>::from_fn(d, queries.len(), |i, j| {
+        kernel.covariance(&xs[i], &all_queries[queries[j]])
+    });
+    if let Some(old) = old {
+        backward_solve(&old.rows, l21t.as_mut(), par);
+        let weights = l21t;
+        let scaled = Scaled::new(kernel, &old.inputs);
+        let mut cross = Mat::<f64>::zeros(n, QUERY_CHUNK.min(queries.len()));
+        let mut start = 0;
+        for chunk in queries.chunks(QUERY_CHUNK) {
+            cross.truncate(n, chunk.len());
+            for (col, &q) in chunk.iter().enumerate() {
+                scaled.covariances_into(&all_queries[q], cross.col_as_slice_mut(col));
+            }
+            matmul(
+                panel.submatrix_mut(0, start, d, chunk.len()),
+                Accum::Add,
+                weights.transpose(),
+                cross.as_ref(),
+                -1.0,
+                par,
+            );
+            start += chunk.len();
+        }
+    }
+    solve_lower_triangular_in_place(l22, panel.as_mut(), par);
+    let whitened_targets = u2.col_as_slice(0).to_vec();
+    let finite = whitened_targets.iter().all(|v| v.is_finite())
+        && (0..panel.ncols()).all(|j| panel.col_as_slice(j).iter().all(|v| v.is_finite()));
+    finite.then_some(Growth {
+        factor: row_panel,
+        whitened_targets,
+        panel,
+    })
+}
+
+/// Training inputs divided by each RBF term's length scales, so that a column of
+/// `K(X₁, Q)` costs no division: `n·q` kernel evaluations an append
+/// ([`Storage::Compact`]). Equal to [`FixedKernel::covariance`] to rounding.
+struct Scaled<const Z: usize> {
+    /// Per term: signal variance, `1/ℓ_d` (0 beyond the listed coordinates), and the
+    /// scaled inputs.
+    terms: Vec<(f64, [f64; Z], Vec<[f64; Z]>)>,
+}
+
+impl<const Z: usize> Scaled<Z> {
+    fn new(kernel: &FixedKernel, inputs: &[[f64; Z]]) -> Self {
+        let terms = kernel
+            .terms
+            .iter()
+            .map(|t| {
+                let mut inverse = [0.0; Z];
+                for (v, l) in inverse.iter_mut().zip(&t.length_scales) {
+                    *v = 1.0 / l;
+                }
+                let scaled = inputs
+                    .iter()
+                    .map(|x| core::array::from_fn(|d| x[d] * inverse[d]))
+                    .collect();
+                (t.signal_variance, inverse, scaled)
+            })
+            .collect();
+        Self { terms }
+    }
+
+    /// `out[i] = k(xᵢ, z)` for every training input `xᵢ`.
+    fn covariances_into(&self, z: &[f64; Z], out: &mut [f64]) {
+        out.fill(0.0);
+        for (c, inverse, scaled) in &self.terms {
+            let zs: [f64; Z] = core::array::from_fn(|d| z[d] * inverse[d]);
+            for (v, x) in out.iter_mut().zip(scaled) {
+                let mut q = 0.0;
+                for d in 0..Z {
+                    let u = x[d] - zs[d];
+                    q += u * u;
+                }
+                *v += c * (-0.5 * q).exp();
+            }
+        }
+    }
+}
+
+/// `B ← L⁻¹B` for the lower factor `L` held as row panels (each `Δ × (r + Δ)`, `r` the
+/// rows above it).
+fn forward_solve(rows: &[Mat<f64>], mut b: faer::MatMut<'_, f64>, par: Par) {
+    let mut r = 0;
+    for p in rows {
+        let d = p.nrows();
+        let (done, rest) = b.rb_mut().split_at_row_mut(r);
+        let mut this = rest.subrows_mut(0, d);
+        if r > 0 {
+            matmul(
+                this.rb_mut(),
+                Accum::Add,
+                p.submatrix(0, 0, d, r),
+                done.rb(),
+                -1.0,
+                par,
+            );
+        }
+        solve_lower_triangular_in_place(p.submatrix(0, r, d, d), this, par);
+        r += d;
+    }
+}
+
+/// `B ← L⁻ᵀB` for the lower factor `L` held as row panels (as [`forward_solve`]).
+fn backward_solve(rows: &[Mat<f64>], mut b: faer::MatMut<'_, f64>, par: Par) {
+    let mut end = b.nrows();
+    for p in rows.iter().rev() {
+        let d = p.nrows();
+        let r = end - d;
+        let (mut above, rest) = b.rb_mut().split_at_row_mut(r);
+        let mut this = rest.subrows_mut(0, d);
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            p.submatrix(0, r, d, d).transpose(),
+            this.rb_mut(),
+            par,
+        );
+        if r > 0 {
+            matmul(
+                above.rb_mut(),
+                Accum::Add,
+                p.submatrix(0, 0, d, r).transpose(),
+                this.rb(),
+                -1.0,
+                par,
+            );
+        }
+        end = r;
+    }
 }
 
 #[cfg(test)]

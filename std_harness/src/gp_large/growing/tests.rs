@@ -1,5 +1,6 @@
-//! The growing GP against a refit ([`FixedGp`]) on all points: the same posterior to
-//! rounding, the same blocks and jitter, and errors that leave it unchanged.
+//! The growing GP, in both storages, against a refit ([`FixedGp`]) on all points: the
+//! same posterior to rounding, the same blocks and jitter, and errors that leave it
+//! unchanged.
 
 use super::*;
 use crate::gp_large::fixed::tests::points;
@@ -33,15 +34,22 @@ fn queries() -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// Means and stds of the growing GP fed in `batches`, and of a refit on all points.
+const STORAGES: [Storage; 2] = [Storage::Stored, Storage::Compact];
+
+/// Means and stds of the growing GP (keeping `storage`) fed in `batches`, and of a refit
+/// on all points.
 fn both(
+    storage: Storage,
     xs: &[[f64; 3]],
     ys: &[f64],
     kernel: &FixedKernel,
     batches: &[usize],
     queries: &[[f64; 3]],
 ) -> (GrowingFixedGp<3>, FixedGp<3>, [Vec<f64>; 4]) {
-    let mut growing = GrowingFixedGp::new(kernel, Some(2), queries.to_vec(), Par::Seq).unwrap();
+    let mut growing = GrowingFixedGp::new(kernel, Some(2), queries.to_vec(), Par::Seq)
+        .unwrap()
+        .with_storage(storage);
+    assert_eq!(growing.storage(), storage);
     let mut start = 0;
     for &b in batches {
         growing
@@ -77,20 +85,23 @@ fn batches_give_the_refit_posterior_with_and_without_splitting() {
         noise_variance: 1e-3,
         ..split_kernel()
     };
-    for (kernel, blocks) in [(split_noisy, 3), (noisy, 1)] {
-        for batches in [&[60][..], &[20, 25, 15], &[1, 1, 58], &[7; 8]] {
-            let (growing, refit, [gm, gs, rm, rs]) = both(&xs, &ys, &kernel, batches, &queries());
-            assert_eq!(growing.blocks(), blocks);
-            assert_eq!(refit.blocks(), blocks);
-            assert_eq!(growing.jitter(), refit.jitter());
-            assert_close(&gm, &rm, 1e-10, "mean");
-            assert_close(&gs, &rs, 1e-10, "std");
+    for storage in STORAGES {
+        for (kernel, blocks) in [(split_noisy.clone(), 3), (noisy.clone(), 1)] {
+            for batches in [&[60][..], &[20, 25, 15], &[1, 1, 58], &[7; 8]] {
+                let (growing, refit, [gm, gs, rm, rs]) =
+                    both(storage, &xs, &ys, &kernel, batches, &queries());
+                assert_eq!(growing.blocks(), blocks);
+                assert_eq!(refit.blocks(), blocks);
+                assert_eq!(growing.jitter(), refit.jitter());
+                assert_close(&gm, &rm, 1e-10, "mean");
+                assert_close(&gs, &rs, 1e-10, "std");
+            }
         }
+        // A query at an action without training points keeps the prior, as in the refit.
+        let (_, _, [gm, gs, ..]) = both(storage, &xs, &ys, &split_kernel(), &[30, 30], &queries());
+        assert_eq!(gm[3], 0.0);
+        assert_eq!(gs[3], split_kernel().prior_variance().sqrt());
     }
-    // A query at an action without training points keeps the prior, as in the refit.
-    let (_, _, [gm, gs, ..]) = both(&xs, &ys, &split_kernel(), &[30, 30], &queries());
-    assert_eq!(gm[3], 0.0);
-    assert_eq!(gs[3], split_kernel().prior_variance().sqrt());
 }
 
 #[test]
@@ -111,10 +122,13 @@ fn a_noise_free_kernel_on_many_close_points_matches_the_refit() {
     let qs: Vec<[f64; 3]> = (0..50)
         .map(|i| [i as f64 * 0.08 - 2.0, 1.0 - i as f64 * 0.05, (i % 2) as f64])
         .collect();
-    let (growing, refit, [gm, gs, rm, rs]) = both(&xs, &ys, &kernel, &[80, 80, 80], &qs);
-    assert_eq!(growing.jitter(), refit.jitter());
-    assert_close(&gm, &rm, 1e-5, "mean");
-    assert_close(&gs, &rs, 1e-4, "std");
+    for storage in STORAGES {
+        let (growing, refit, [gm, gs, rm, rs]) =
+            both(storage, &xs, &ys, &kernel, &[80, 80, 80], &qs);
+        assert_eq!(growing.jitter(), refit.jitter());
+        assert_close(&gm, &rm, 1e-5, "mean");
+        assert_close(&gs, &rs, 1e-4, "std");
+    }
 }
 
 #[test]
@@ -124,11 +138,14 @@ fn a_batch_that_ends_the_separation_reconditions_unsplit() {
     for x in &mut xs[40..] {
         x[2] = 3.00001;
     }
-    let (growing, refit, [gm, gs, rm, rs]) = both(&xs, &ys, &split_kernel(), &[40, 5], &queries());
-    assert_eq!(growing.blocks(), 1);
-    assert_eq!(refit.blocks(), 1);
-    assert_close(&gm, &rm, 1e-6, "mean");
-    assert_close(&gs, &rs, 1e-6, "std");
+    for storage in STORAGES {
+        let (growing, refit, [gm, gs, rm, rs]) =
+            both(storage, &xs, &ys, &split_kernel(), &[40, 5], &queries());
+        assert_eq!(growing.blocks(), 1);
+        assert_eq!(refit.blocks(), 1);
+        assert_close(&gm, &rm, 1e-6, "mean");
+        assert_close(&gs, &rs, 1e-6, "std");
+    }
 }
 
 #[test]
@@ -145,10 +162,13 @@ fn duplicates_climb_the_same_jitter_ladder_as_a_refit() {
             .find(|(k, _)| *k == c)
             .map(|(_, j)| *j)
             .unwrap();
-        for batches in [&[1, 19][..], &[10, 10], &[20]] {
-            let (growing, refit, [gm, _, rm, _]) = both(&xs, &ys, &kernel, batches, &qs);
+        for (storage, batches) in STORAGES
+            .iter()
+            .flat_map(|&s| [(s, &[1, 19][..]), (s, &[10, 10]), (s, &[20])])
+        {
+            let (growing, refit, [gm, _, rm, _]) = both(storage, &xs, &ys, &kernel, batches, &qs);
             assert_eq!(refit.jitter(), expected);
-            assert_eq!(growing.jitter(), expected, "{c} {batches:?}");
+            assert_eq!(growing.jitter(), expected, "{c} {storage:?} {batches:?}");
             assert!((gm[0] - 2.0).abs() < 1e-9, "{}", gm[0]);
             assert_close(&gm, &rm, 1e-12, "mean");
         }
@@ -157,9 +177,17 @@ fn duplicates_climb_the_same_jitter_ladder_as_a_refit() {
 
 #[test]
 fn bad_input_is_an_error_and_leaves_the_gp_as_it_was() {
+    for storage in STORAGES {
+        bad_input_leaves_the_gp_as_it_was(storage);
+    }
+}
+
+fn bad_input_leaves_the_gp_as_it_was(storage: Storage) {
     let (xs, ys) = points(30);
     let kernel = split_kernel();
-    let mut gp = GrowingFixedGp::new(&kernel, Some(2), queries(), Par::Seq).unwrap();
+    let mut gp = GrowingFixedGp::new(&kernel, Some(2), queries(), Par::Seq)
+        .unwrap()
+        .with_storage(storage);
     let (mut m, mut s) = (vec![0.0; 40], vec![0.0; 40]);
     assert_eq!(gp.posterior_into(&mut m, &mut s), Err(Error::EmptyData));
     gp.extend(&xs[..20], &ys[..20]).unwrap();
@@ -198,4 +226,42 @@ fn bad_input_is_an_error_and_leaves_the_gp_as_it_was() {
             parameter: "queries"
         })
     );
+}
+
+#[test]
+fn scaled_inputs_give_the_kernels_covariances() {
+    let (xs, _) = points(30);
+    // Two terms, one listing fewer length scales than coordinates (the rest ignored).
+    let kernel = FixedKernel {
+        terms: vec![
+            RbfTerm {
+                signal_variance: 2.0,
+                length_scales: vec![1.3, 0.7, 0.0161],
+            },
+            RbfTerm {
+                signal_variance: 0.5,
+                length_scales: vec![4.0],
+            },
+        ],
+        noise_variance: 0.25,
+    };
+    let scaled = Scaled::new(&kernel, &xs);
+    let mut out = vec![f64::NAN; xs.len()];
+    for z in queries() {
+        scaled.covariances_into(&z, &mut out);
+        let expected: Vec<f64> = xs.iter().map(|x| kernel.covariance(x, &z)).collect();
+        assert_close(&out, &expected, 1e-13, "covariance");
+    }
+}
+
+#[test]
+fn the_storage_is_chosen_before_the_first_point() {
+    let (xs, ys) = points(20);
+    let mut gp = GrowingFixedGp::new(&split_kernel(), Some(2), queries(), Par::Seq).unwrap();
+    assert_eq!(gp.storage(), Storage::Stored);
+    gp.extend(&xs, &ys).unwrap();
+    // Blocks laid out for one storage are not reinterpreted as the other's.
+    let gp = gp.with_storage(Storage::Compact);
+    assert_eq!(gp.storage(), Storage::Stored);
+    assert_eq!(gp.len(), 20);
 }

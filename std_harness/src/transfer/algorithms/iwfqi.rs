@@ -32,9 +32,7 @@ use super::Experiment;
 use super::episodic::{Episodic, EpisodicLearner};
 use crate::domains::{Domain, GpInput, IdealMeans};
 use crate::forest_fqi::{Dataset, FqiOptions};
-use crate::transfer::gp::{
-    FixedGpUpdate, GpOptions, GpSearch, GpSummary, GrowingRecordGp, Output, RecordGp,
-};
+use crate::transfer::gp::{GpOptions, GpSearch, GpSummary, GrowingRecordGp, Output, RecordGp};
 use crate::transfer::protocol::Diagnostics;
 use crate::transfer::score_tables::ScoreTableData;
 use crate::transfer::sources::SourceSet;
@@ -66,7 +64,7 @@ pub struct Iwfqi<'e, const D: usize = 2> {
     /// The target GPs' options (the experiment's, with the search this learner runs).
     gp: GpOptions,
     /// Fixed-kernel target GPs kept conditioned between steps
-    /// ([`FixedGpUpdate::Incremental`]), by output.
+    /// ([`FixedGpUpdate::storage`](crate::transfer::gp::FixedGpUpdate::storage) says how), by output.
     growing: Vec<(Output, GrowingRecordGp)>,
 }
 
@@ -135,7 +133,7 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
 
     /// The target GP of `output` on this step's `D₀`, as posteriors at each source's
     /// `zs` (noise-subtracted per source), and its summary. A fixed kernel is appended to
-    /// ([`FixedGpUpdate::Incremental`]) while it can be; otherwise the GP is refitted.
+    /// (unless [`FixedGpUpdate::Refit`](crate::transfer::gp::FixedGpUpdate::Refit)) while it can be; otherwise the GP is refitted.
     fn target_posteriors(
         &mut self,
         output: Output,
@@ -147,16 +145,19 @@ impl<'e, const D: usize> Iwfqi<'e, D> {
         let noise = self.experiment.options.noise;
         let target = &self.run.data;
         // The growing GP keeps no `K⁻¹`, so the explicit-inverse variance always refits.
-        if self.gp.fixed_update == FixedGpUpdate::Incremental && self.gp.fixed_variance.is_default()
-        {
+        let storage = self.gp.fixed_update.storage();
+        if let (Some(storage), true) = (storage, self.gp.fixed_variance.is_default()) {
             let index = match self.growing.iter().position(|(o, _)| *o == output) {
                 Some(i) => Some(i),
-                None => GrowingRecordGp::new(domain, &weighting.gp_spec(output), output, zs)
-                    .transpose()?
-                    .map(|gp| {
-                        self.growing.push((output, gp));
-                        self.growing.len() - 1
-                    }),
+                None => {
+                    let spec = weighting.gp_spec(output);
+                    GrowingRecordGp::new(domain, &spec, output, zs, storage)
+                        .transpose()?
+                        .map(|gp| {
+                            self.growing.push((output, gp));
+                            self.growing.len() - 1
+                        })
+                }
             };
             if let Some(i) = index {
                 let gp = &mut self.growing[i].1;

@@ -33,7 +33,8 @@ fn largest_difference(a: &[Vec<Posterior<f64>>], b: &[Vec<Posterior<f64>>]) -> (
     (mean, std)
 }
 
-/// Appending three batches lands as close to a refit on all records as two refits on the
+/// Appending three batches (keeping `V`, or only the factor's triangle) lands as close to a
+/// refit on all records as two refits on the
 /// same records in two orders land to each other: the incremental route adds no error
 /// beyond the rounding the refit itself carries (Acrobot's kernels are noise-free, so
 /// that rounding is far above machine precision).
@@ -68,22 +69,27 @@ fn appended_batches_stay_within_the_refits_own_rounding() {
         };
         let in_order = refit(&records, &mut rng);
         let in_reverse = refit(&reversed, &mut rng);
-        let mut growing = GrowingRecordGp::new(&domain, &spec, output, &zs)
-            .unwrap()
-            .unwrap();
-        for end in [120, 250, 300] {
-            assert!(growing.update(&domain, &records[..end], 10_000).unwrap());
-        }
-        assert_eq!(growing.summary().points, 300);
-        let appended = growing.posteriors(NoiseSubtraction::Reference);
         let rounding = largest_difference(&in_order, &in_reverse);
-        let incremental = largest_difference(&appended, &in_order);
-        eprintln!("{output:?}: refits {rounding:?}, incremental {incremental:?}");
-        assert!(
-            incremental.0 <= 4.0 * rounding.0 + 1e-12,
-            "{output:?} means"
-        );
-        assert!(incremental.1 <= 4.0 * rounding.1 + 1e-12, "{output:?} stds");
+        for storage in [Storage::Stored, Storage::Compact] {
+            let mut growing = GrowingRecordGp::new(&domain, &spec, output, &zs, storage)
+                .unwrap()
+                .unwrap();
+            for end in [120, 250, 300] {
+                assert!(growing.update(&domain, &records[..end], 10_000).unwrap());
+            }
+            assert_eq!(growing.summary().points, 300);
+            let appended = growing.posteriors(NoiseSubtraction::Reference);
+            let incremental = largest_difference(&appended, &in_order);
+            eprintln!("{output:?} {storage:?}: refits {rounding:?}, incremental {incremental:?}");
+            assert!(
+                incremental.0 <= 4.0 * rounding.0 + 1e-12,
+                "{output:?} {storage:?} means"
+            );
+            assert!(
+                incremental.1 <= 4.0 * rounding.1 + 1e-12,
+                "{output:?} {storage:?} stds"
+            );
+        }
     }
 }
 
@@ -98,12 +104,19 @@ fn the_growing_gp_refuses_what_it_cannot_follow() {
         .weighting
         .reward;
     assert!(
-        GrowingRecordGp::new(&puddle, &fitted, Output::Reward, &[vec![[0.0; GP_INPUT]]]).is_none()
+        GrowingRecordGp::new(
+            &puddle,
+            &fitted,
+            Output::Reward,
+            &[vec![[0.0; GP_INPUT]]],
+            Storage::Stored
+        )
+        .is_none()
     );
     let reward = crate::transfer::domain_data::acrobot::data()
         .weighting
         .reward;
-    let mut gp = GrowingRecordGp::new(&domain, &reward, Output::Reward, &zs)
+    let mut gp = GrowingRecordGp::new(&domain, &reward, Output::Reward, &zs, Storage::Stored)
         .unwrap()
         .unwrap();
     assert!(gp.update(&domain, &records[..10], 10_000).unwrap());
