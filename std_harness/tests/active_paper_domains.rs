@@ -122,6 +122,36 @@ fn every_active_algorithm_runs_on_the_dam_with_a_query_budget() {
     let e = &read(&out, "awfqi-adaptive")["runs"][0]["parameters"]["embedded"];
     assert_eq!(e["fqi_sweep_rewards"], "Backfilled");
     assert_eq!(e["fqi_discount"].as_f64().unwrap(), f64::from(0.999f32));
+    assert_eq!(e["fqi_sweep_iterations"], 400, "the Dam's default sweeps");
+    // One sweep plans only the next day's cost: the same streams decide otherwise.
+    let myopic = base.join("myopic");
+    let mut w = words(
+        "dam",
+        sources.to_str().unwrap(),
+        myopic.to_str().unwrap(),
+        &[
+            "--setting",
+            "source",
+            "--adaptive-sweep-cells",
+            "3",
+            "--adaptive-sweeps",
+            "1",
+        ],
+    );
+    w[4] = "awfqi-adaptive";
+    dam::run(&common::parse(&w)).unwrap();
+    let one = &read(&myopic, "awfqi-adaptive")["runs"][0];
+    assert_eq!(one["parameters"]["embedded"]["fqi_sweep_iterations"], 1);
+    let returns = |run: &serde_json::Value| -> Vec<f64> {
+        run["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["perf_disc_greedy_mean"].as_f64().unwrap())
+            .collect()
+    };
+    let default = returns(&read(&out, "awfqi-adaptive")["runs"][0]);
+    assert_ne!(returns(one), default, "--adaptive-sweeps reaches the sweep");
     let _ = std::fs::remove_dir_all(&base);
 }
 
@@ -153,6 +183,10 @@ fn every_active_algorithm_runs_on_acrobot_with_a_query_budget() {
     let e = &read(&out, "awfqi-adaptive")["runs"][0]["parameters"]["embedded"];
     assert_eq!(e["fqi_sweep_rewards"], "Pooled");
     assert_eq!(e["fqi_sweep_cells"], 2);
+    assert!(
+        e.get("fqi_sweep_iterations").is_none(),
+        "Acrobot's sweep runs FQI's iterations, recorded as those"
+    );
     let e = &read(&out, "awfqi-embedded")["runs"][0]["parameters"]["embedded"];
     assert_eq!(e["fqi_tiles"], serde_json::json!([2, 2, 2, 2]));
     let _ = std::fs::remove_dir_all(&base);

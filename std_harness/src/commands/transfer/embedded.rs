@@ -103,6 +103,11 @@ pub struct AdaptiveArgs {
     /// interpolating the node Q-values.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = false)]
     pub adaptive_sweep_lookahead: bool,
+    /// `--adaptive-q sweep`: value-iteration sweeps of the model (its planning horizon).
+    /// Default: the core's FQI iterations (Puddle World: the thesis's 60; Acrobot:
+    /// `--iterations`), 400 on the Dam (chosen on the tuning runs).
+    #[arg(long)]
+    pub adaptive_sweeps: Option<usize>,
     /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
     #[arg(long, default_value_t = ADAPTIVE_TILES)]
     pub adaptive_tiles: usize,
@@ -210,9 +215,9 @@ impl AdaptiveArgs {
         }
     }
 
-    /// The FQI approximator the options name (a model sweep's cells and reward model the
-    /// domain's `sweep` unless `--adaptive-sweep-cells` or `--adaptive-sweep-rewards` name
-    /// them).
+    /// The FQI approximator the options name (a model sweep's cells, reward model and
+    /// sweeps the domain's `sweep` unless `--adaptive-sweep-cells`,
+    /// `--adaptive-sweep-rewards` or `--adaptive-sweeps` name them).
     ///
     /// Errors: an approximator the core refuses (zero tiles, neighbours or trees, …).
     pub fn q(&self, sweep: SweepDefaults) -> anyhow::Result<EmbeddedQ> {
@@ -249,6 +254,7 @@ impl AdaptiveArgs {
                     .map_or(sweep.rewards, Into::into),
                 min_mass: self.adaptive_sweep_min_mass,
                 lookahead: self.adaptive_sweep_lookahead,
+                sweeps: self.adaptive_sweeps.or(sweep.sweeps),
             })?,
         })
     }
@@ -261,6 +267,8 @@ pub struct SweepDefaults {
     pub cells: usize,
     /// Which records a node's reward averages.
     pub rewards: awfqi::RewardModel,
+    /// Value-iteration sweeps (`None`: FQI's iterations).
+    pub sweeps: Option<usize>,
 }
 
 impl SweepDefaults {
@@ -269,14 +277,17 @@ impl SweepDefaults {
     pub const PUDDLE: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
         rewards: awfqi::RewardModel::Pooled,
+        sweeps: None,
     };
     /// The Dam's: 24 cells per axis (chosen on the tuning runs, `--seed 100`, 20 runs at
     /// 50 queries a step, among 4, 8, 12, 16, 24, 32: the best mean over 10 steps,
     /// `docs/results-active-paper-domains.md`), backfilled rewards (the cost depends on the
-    /// release).
+    /// release) and 400 value-iteration sweeps (chosen on the same runs among 60, 120, 200,
+    /// 400: at γ = 0.999 the protocol's 60 iterations value only the next 60 days).
     pub const DAM: Self = Self {
         cells: 24,
         rewards: awfqi::RewardModel::Backfilled,
+        sweeps: Some(400),
     };
     /// Acrobot's: [`ADAPTIVE_SWEEP_CELLS`] cells per axis (chosen on the tuning runs,
     /// `--seed 100`, 20 runs at 100 queries a step, among 3, 4, 6, 8, 12), pooled rewards
@@ -284,6 +295,7 @@ impl SweepDefaults {
     pub const ACROBOT: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
         rewards: awfqi::RewardModel::Pooled,
+        sweeps: None,
     };
 }
 
@@ -311,4 +323,79 @@ pub fn embedded_config(
     Ok(EmbeddedConfig::new(mode, spacing)
         .with_q(q)
         .with_adaptive_q(adaptive_q))
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        adaptive: AdaptiveArgs,
+    }
+
+    fn q(words: &[&str], sweep: SweepDefaults) -> anyhow::Result<EmbeddedQ> {
+        let cli = Cli::try_parse_from([&["cli"], words].concat())?;
+        cli.adaptive.q(sweep)
+    }
+
+    fn iterations(q: EmbeddedQ) -> usize {
+        q.fqi(awfqi::FqiConfig::published()).unwrap().iterations()
+    }
+
+    #[test]
+    fn the_sweeps_default_to_the_domains_and_the_option_overrides_them() {
+        assert_eq!(iterations(q(&[], SweepDefaults::PUDDLE).unwrap()), 60);
+        assert_eq!(iterations(q(&[], SweepDefaults::ACROBOT).unwrap()), 60);
+        assert_eq!(iterations(q(&[], SweepDefaults::DAM).unwrap()), 400);
+        for sweep in [SweepDefaults::PUDDLE, SweepDefaults::DAM] {
+            let q = q(&["--adaptive-sweeps", "7"], sweep).unwrap();
+            assert!(matches!(
+                q,
+                EmbeddedQ::Sweep(SweepKnobs {
+                    sweeps: Some(7),
+                    ..
+                })
+            ));
+            assert_eq!(iterations(q), 7);
+        }
+    }
+
+    #[test]
+    fn the_sweeps_keep_the_rest_of_fqi() {
+        let fqi = awfqi::FqiConfig::new(0.999, 60, awfqi::EmptyCells::Value(-2.0))
+            .unwrap()
+            .with_min_weight(0.25)
+            .unwrap();
+        let q = q(&["--adaptive-sweeps", "9"], SweepDefaults::PUDDLE).unwrap();
+        let got = q.fqi(fqi).unwrap();
+        assert_eq!(got.iterations(), 9);
+        assert!((got.discount() - 0.999).abs() < 1e-7);
+        assert!((got.min_weight() - 0.25).abs() < 1e-7);
+        assert_eq!(got.empty_cells(), awfqi::EmptyCells::Value(-2.0));
+    }
+
+    #[test]
+    fn the_sweeps_are_the_sweeps_only() {
+        let tiles = q(
+            &["--adaptive-q", "tiles", "--adaptive-sweeps", "9"],
+            SweepDefaults::DAM,
+        )
+        .unwrap();
+        assert_eq!(
+            iterations(tiles),
+            60,
+            "other approximators run FQI's iterations"
+        );
+    }
+
+    #[test]
+    fn zero_sweeps_are_refused() {
+        let err = q(&["--adaptive-sweeps", "0"], SweepDefaults::PUDDLE).unwrap_err();
+        assert!(format!("{err:#}").contains("iterations"), "{err:#}");
+        assert!(q(&["--adaptive-sweeps", "-1"], SweepDefaults::PUDDLE).is_err());
+    }
 }

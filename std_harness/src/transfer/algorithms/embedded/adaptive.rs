@@ -84,11 +84,14 @@ impl Default for AdaptiveOptions {
 }
 
 /// The core's configuration for `experiment`: the recommended one on the set-up's
-/// domain settings ([`EmbeddedSetup::awfqi_config`]) with the experiment's adaptive options.
+/// domain settings ([`EmbeddedSetup::awfqi_config`]) with the experiment's adaptive options
+/// and the FQI iterations its approximator runs ([`super::EmbeddedQ::fqi`]).
+///
+/// Errors: those of [`super::EmbeddedQ::fqi`].
 fn config<const N: usize, const D: usize, const I: usize>(
     experiment: &Experiment<D>,
     setup: &EmbeddedSetup<N, D, I>,
-) -> AdaptiveConfig<T, D, I>
+) -> anyhow::Result<AdaptiveConfig<T, D, I>>
 where
     Dims<D, I>: StatePlusAction,
 {
@@ -105,6 +108,7 @@ where
         bounds,
     );
     c.awfqi = setup.awfqi_config(budget);
+    c.awfqi.fqi = setup.config.adaptive_q.fqi(c.awfqi.fqi)?;
     c.sub_batches = o.sub_batches;
     c.verify = o.verify as T;
     c.surprise = o.surprise;
@@ -122,7 +126,7 @@ where
         }),
         None => awfqi::adaptive::Refit::Search,
     };
-    c
+    Ok(c)
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
@@ -278,7 +282,7 @@ where
     let setup = setup_of::<GP_POINTS, D, I>(experiment)?;
     let plant = P::target(experiment)?;
     let actions = plant.num_actions();
-    let config = config(experiment, setup).validate()?;
+    let config = config(experiment, setup)?.validate()?;
     let sources = setup.source_slices();
     let rows = setup.rows(&sources)?;
     let approximator = setup.config.adaptive_q.approximator(&setup.domain.bounds)?;

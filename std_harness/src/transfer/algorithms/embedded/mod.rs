@@ -68,6 +68,7 @@ pub const ADAPTIVE_Q: EmbeddedQ = EmbeddedQ::Sweep(SweepKnobs {
     rewards: awfqi::RewardModel::Pooled,
     min_mass: 0.0,
     lookahead: false,
+    sweeps: None,
 });
 /// Tiles per axis of `awfqi-adaptive`'s tile coding by default: chosen on the tuning runs
 /// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
@@ -107,6 +108,9 @@ pub struct SweepKnobs {
     pub min_mass: f64,
     /// Decide by one step of lookahead.
     pub lookahead: bool,
+    /// Value-iteration sweeps of its own (`None`: FQI's iterations): at a discount near 1
+    /// the protocol's iterations value too short a horizon.
+    pub sweeps: Option<usize>,
 }
 
 /// The knobs of [`EmbeddedQ::Trees`].
@@ -184,7 +188,22 @@ impl EmbeddedQ {
 
     /// Checks the knobs (their checks do not depend on the state box).
     fn check(self) -> anyhow::Result<()> {
+        self.fqi(FqiConfig::published())?;
         self.approximator(&[(0.0, 1.0); 2]).map(|_| ())
+    }
+
+    /// `fqi` with the iterations this approximator runs: a model sweep's own sweeps where
+    /// it has them, `fqi`'s otherwise.
+    ///
+    /// Errors: zero sweeps ([`FqiConfig::new`]).
+    pub fn fqi(self, fqi: FqiConfig<T>) -> anyhow::Result<FqiConfig<T>> {
+        Ok(match self {
+            Self::Sweep(SweepKnobs {
+                sweeps: Some(n), ..
+            }) => FqiConfig::new(fqi.discount(), n, fqi.empty_cells())?
+                .with_min_weight(fqi.min_weight())?,
+            _ => fqi,
+        })
     }
 
     /// The core's approximator over the box `bounds` (`(lower, upper)` of every state
@@ -651,6 +670,9 @@ where
                 out["fqi_sweep_rewards"] = format!("{:?}", k.rewards).into();
                 out["fqi_sweep_min_mass"] = k.min_mass.into();
                 out["fqi_sweep_lookahead"] = k.lookahead.into();
+                if let Some(n) = k.sweeps {
+                    out["fqi_sweep_iterations"] = n.into();
+                }
             }
         }
         out
