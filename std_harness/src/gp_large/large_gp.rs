@@ -2,6 +2,7 @@
 
 use super::conditioning::{check_condition, diagonal_condition};
 use super::kernel::squared_distance;
+use super::likelihood::validate_data;
 use super::search::{best_run, search};
 use super::*;
 use awfqi::{Error, Result};
@@ -31,28 +32,6 @@ pub struct LargeGp<const D: usize> {
     pub(super) lml: f64,
     pub(super) par: Par,
     pub(super) jitter: f64,
-}
-
-pub(super) fn validate_data<const D: usize>(inputs: &[[f64; D]], targets: &[f64]) -> Result<()> {
-    if inputs.is_empty() {
-        return Err(Error::EmptyData);
-    }
-    if targets.len() != inputs.len() {
-        return Err(Error::InvalidParameter {
-            parameter: "targets",
-        });
-    }
-    if inputs.iter().flatten().any(|v| !v.is_finite()) {
-        return Err(Error::NonFinite {
-            parameter: "inputs",
-        });
-    }
-    if targets.iter().any(|v| !v.is_finite()) {
-        return Err(Error::NonFinite {
-            parameter: "targets",
-        });
-    }
-    Ok(())
 }
 
 impl<const D: usize> LargeGp<D> {

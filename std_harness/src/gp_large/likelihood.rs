@@ -1,10 +1,9 @@
 //! The log marginal likelihood and its gradient ([`LikelihoodEvaluator`]), and the
-//! memoised objective the optimiser minimises.
+//! memoised objective the optimiser minimises, and the check of a training set both need.
 
 use super::kernel::*;
-use super::large_gp::validate_data;
 use super::*;
-use awfqi::Result;
+use awfqi::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::matmul::triangular::BlockStructure;
 use faer::{Accum, Mat, Par};
@@ -221,4 +220,27 @@ impl<const D: usize> optimizer::Objective<3> for NegativeLml<'_, '_, D> {
             .gradient()
             .map_or([f64::NAN; 3], |g| [-g[0], -g[1], -g[2]])
     }
+}
+
+/// Checks a training set: non-empty, one target per input, every number finite.
+pub(super) fn validate_data<const D: usize>(inputs: &[[f64; D]], targets: &[f64]) -> Result<()> {
+    if inputs.is_empty() {
+        return Err(Error::EmptyData);
+    }
+    if targets.len() != inputs.len() {
+        return Err(Error::InvalidParameter {
+            parameter: "targets",
+        });
+    }
+    if inputs.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            parameter: "inputs",
+        });
+    }
+    if targets.iter().any(|v| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            parameter: "targets",
+        });
+    }
+    Ok(())
 }

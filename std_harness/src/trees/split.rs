@@ -2,9 +2,33 @@
 //! candidate, and the partition of the node's records.
 
 use super::CONSTANT_FEATURE_TOLERANCE;
-use super::growth::{NodeStats, feature_order};
 use super::layout::Record;
 use rand_chacha::ChaCha8Rng;
+use rand_core::Rng;
+
+/// Weighted sums of a node: `W = Σw`, `S = Σwy`, `Q = Σwy²`, and per-feature min and max.
+pub(super) struct NodeStats<const D: usize> {
+    pub(super) w: f64,
+    pub(super) s: f64,
+    pub(super) q: f64,
+    pub(super) lo: [f64; D],
+    pub(super) hi: [f64; D],
+}
+
+/// The features in a uniformly random order (Fisher–Yates).
+#[inline]
+pub(super) fn feature_order<const D: usize>(rng: &mut ChaCha8Rng) -> [usize; D] {
+    let mut order = [0usize; D];
+    for (i, o) in order.iter_mut().enumerate() {
+        *o = i;
+    }
+    for i in (1..D).rev() {
+        // Lemire's multiply-shift: an index in 0..=i from 32 random bits.
+        let j = ((u64::from(rng.next_u32()) * (i as u64 + 1)) >> 32) as usize;
+        order.swap(i, j);
+    }
+    order
+}
 
 /// Draws the random trial order of the features and the candidate threshold of every
 /// non-constant one (§4.1): uniform in `[lo, hi)`. A feature that is not a candidate keeps
