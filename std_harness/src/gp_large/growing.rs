@@ -443,32 +443,13 @@ fn grow<const Z: usize>(
             .submatrix_mut(n, 0, d, n)
             .copy_from(cross.as_ref().transpose());
     }
-    // L₂₂ = chol(K₂₂ + (σ²ₙ + jitter) I − L₂₁L₂₁ᵀ).
-    let diagonal = kernel.covariance(&xs[0], &xs[0]) + kernel.noise_variance + jitter;
-    let mut schur = Mat::<f64>::from_fn(d, d, |i, j| {
-        if i == j {
-            diagonal
-        } else {
-            kernel.covariance(&xs[i], &xs[j])
-        }
-    });
-    if n > 0 {
-        let l21 = factor.submatrix(n, 0, d, n);
-        matmul(schur.as_mut(), Accum::Add, l21, l21.transpose(), -1.0, par);
-    }
-    cholesky_lower(schur.as_mut(), par)?;
+    let schur = schur_factor(xs, kernel, jitter, factor.submatrix(n, 0, d, n), par)?;
     factor
         .submatrix_mut(n, n, d, d)
         .copy_from_triangular_lower(schur.as_ref());
     let l21 = factor.submatrix(n, 0, d, n);
     let l22 = factor.submatrix(n, n, d, d);
-    // u₂ = L₂₂⁻¹(y₂ − L₂₁u₁).
-    let mut u2 = Mat::<f64>::from_fn(d, 1, |i, _| ys[i]);
-    if let Some(old) = old {
-        let u1 = MatRef::from_column_major_slice(&old.whitened_targets, n, 1);
-        matmul(u2.as_mut(), Accum::Add, l21, u1, -1.0, par);
-    }
-    solve_lower_triangular_in_place(l22, u2.as_mut(), par);
+    let u2 = whiten_targets(old, ys, l21, l22, par);
     // V₂ = L₂₂⁻¹(K(X₂, Q) − L₂₁V₁), V₁ a stack of row panels.
     let mut panel = Mat::<f64>::from_fn(d, queries.len(), |i, j| {
         kernel.covariance(&xs[i], &all_queries[queries[j]])
@@ -489,14 +470,7 @@ fn grow<const Z: usize>(
         }
     }
     solve_lower_triangular_in_place(l22, panel.as_mut(), par);
-    let whitened_targets = u2.col_as_slice(0).to_vec();
-    let finite = whitened_targets.iter().all(|v| v.is_finite())
-        && (0..panel.ncols()).all(|j| panel.col_as_slice(j).iter().all(|v| v.is_finite()));
-    finite.then_some(Growth {
-        factor,
-        whitened_targets,
-        panel,
-    })
+    finished(factor, &u2, panel)
 }
 
 /// [`grow`] for [`Storage::Compact`]: the old factor as row panels, `L₂₁V₁` recomputed
@@ -520,26 +494,7 @@ fn grow_compact<const Z: usize>(
         l21t = Mat::<f64>::from_fn(n, d, |i, j| kernel.covariance(&old.inputs[i], &xs[j]));
         forward_solve(&old.rows, l21t.as_mut(), par);
     }
-    // L₂₂ = chol(K₂₂ + (σ²ₙ + jitter) I − L₂₁L₂₁ᵀ).
-    let diagonal = kernel.covariance(&xs[0], &xs[0]) + kernel.noise_variance + jitter;
-    let mut schur = Mat::<f64>::from_fn(d, d, |i, j| {
-        if i == j {
-            diagonal
-        } else {
-            kernel.covariance(&xs[i], &xs[j])
-        }
-    });
-    if n > 0 {
-        matmul(
-            schur.as_mut(),
-            Accum::Add,
-            l21t.transpose(),
-            l21t.as_ref(),
-            -1.0,
-            par,
-        );
-    }
-    cholesky_lower(schur.as_mut(), par)?;
+    let schur = schur_factor(xs, kernel, jitter, l21t.transpose(), par)?;
     let mut row_panel = Mat::<f64>::zeros(d, n + d);
     row_panel
         .submatrix_mut(0, 0, d, n)
@@ -548,13 +503,7 @@ fn grow_compact<const Z: usize>(
         .submatrix_mut(0, n, d, d)
         .copy_from_triangular_lower(schur.as_ref());
     let l22 = row_panel.submatrix(0, n, d, d);
-    // u₂ = L₂₂⁻¹(y₂ − L₂₁u₁).
-    let mut u2 = Mat::<f64>::from_fn(d, 1, |i, _| ys[i]);
-    if let Some(old) = old {
-        let u1 = MatRef::from_column_major_slice(&old.whitened_targets, n, 1);
-        matmul(u2.as_mut(), Accum::Add, l21t.transpose(), u1, -1.0, par);
-    }
-    solve_lower_triangular_in_place(l22, u2.as_mut(), par);
+    let u2 = whiten_targets(old, ys, l21t.transpose(), l22, par);
     // V₂ = L₂₂⁻¹(K(X₂, Q) − L₂₁V₁), with L₂₁V₁ = (L₁₁⁻ᵀL₂₁ᵀ)ᵀK(X₁, Q).
     let mut panel = Mat::<f64>::from_fn(d, queries.len(), |i, j| {
         kernel.covariance(&xs[i], &all_queries[queries[j]])
@@ -582,11 +531,58 @@ fn grow_compact<const Z: usize>(
         }
     }
     solve_lower_triangular_in_place(l22, panel.as_mut(), par);
+    finished(row_panel, &u2, panel)
+}
+
+/// `L₂₂ = chol(K₂₂ + (σ²ₙ + jitter) I − L₂₁L₂₁ᵀ)` for the appended inputs `xs`, `l21`
+/// being `d × n` (`n = 0` on a first block); `None` when not positive definite.
+fn schur_factor<const Z: usize>(
+    xs: &[[f64; Z]],
+    kernel: &FixedKernel,
+    jitter: f64,
+    l21: MatRef<'_, f64>,
+    par: Par,
+) -> Option<Mat<f64>> {
+    let d = xs.len();
+    let diagonal = kernel.covariance(&xs[0], &xs[0]) + kernel.noise_variance + jitter;
+    let mut schur = Mat::<f64>::from_fn(d, d, |i, j| {
+        if i == j {
+            diagonal
+        } else {
+            kernel.covariance(&xs[i], &xs[j])
+        }
+    });
+    if l21.ncols() > 0 {
+        matmul(schur.as_mut(), Accum::Add, l21, l21.transpose(), -1.0, par);
+    }
+    cholesky_lower(schur.as_mut(), par)?;
+    Some(schur)
+}
+
+/// `u₂ = L₂₂⁻¹(y₂ − L₂₁u₁)`, `u₁` the old block's whitened targets.
+fn whiten_targets<const Z: usize>(
+    old: Option<&Block<Z>>,
+    ys: &[f64],
+    l21: MatRef<'_, f64>,
+    l22: MatRef<'_, f64>,
+    par: Par,
+) -> Mat<f64> {
+    let mut u2 = Mat::<f64>::from_fn(l22.nrows(), 1, |i, _| ys[i]);
+    if let Some(old) = old {
+        let u1 = MatRef::from_column_major_slice(&old.whitened_targets, l21.ncols(), 1);
+        matmul(u2.as_mut(), Accum::Add, l21, u1, -1.0, par);
+    }
+    solve_lower_triangular_in_place(l22, u2.as_mut(), par);
+    u2
+}
+
+/// The growth, or `None` when a whitened target or a panel entry is not finite.
+fn finished(factor: Mat<f64>, u2: &Mat<f64>, panel: Mat<f64>) -> Option<Growth> {
     let whitened_targets = u2.col_as_slice(0).to_vec();
     let finite = whitened_targets.iter().all(|v| v.is_finite())
         && (0..panel.ncols()).all(|j| panel.col_as_slice(j).iter().all(|v| v.is_finite()));
     finite.then_some(Growth {
-        factor: row_panel,
+        factor,
         whitened_targets,
         panel,
     })
