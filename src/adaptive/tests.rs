@@ -1,10 +1,12 @@
 extern crate std;
+use super::replan::relabel_rewards;
 use super::*;
 use crate::env::{Dynamics, Puddle, PuddleWorld};
 use crate::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry};
-use crate::gp::SearchOptions;
-use crate::record_gp::{GpTraining, SubsetRule};
+use crate::gp::{Hyperparameters, SearchOptions};
+use crate::record_gp::{GpTraining, SubsetRule, input};
 use crate::score::PointGrid;
+use crate::weights::NoiseSubtraction;
 use crate::weights::Posterior;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
