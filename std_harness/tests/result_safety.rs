@@ -463,3 +463,43 @@ fn a_write_that_fails_is_an_error_and_leaves_the_old_file() {
     assert_eq!(names(&out), listing, "a temporary file was left behind");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_result_file_holding_a_run_index_twice_is_refused_in_runs_and_merges() {
+    let dir = scratch("duplicate");
+    let (edited, shard) = (dir.join("edited"), dir.join("shard"));
+    ok(&puddle(&edited, "0..2", &["--no-plots"]));
+    ok(&puddle(&shard, "2..3", &["--no-plots"]));
+    // A hand edit: run 1 saved twice, the copy with another value.
+    let path = edited.join("fqi.json");
+    let mut v = json(&path);
+    let mut copy = v["runs"][1].clone();
+    copy["steps"][0]["perf_disc_greedy_mean"] = serde_json::json!(0.0);
+    v["runs"].as_array_mut().unwrap().push(copy);
+    v["n_runs"] = serde_json::json!(3);
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    std::fs::write(&path, &text).unwrap();
+    let named = format!("{} holds run 1 more than once", path.display());
+    // Summarising, adding runs, merging it as a shard or into it: refused, nothing written.
+    for words in [
+        puddle(&edited, "0..2", &["--no-plots", "--no-run"]),
+        puddle(&edited, "2..3", &["--no-plots"]),
+        vec![
+            "merge".into(),
+            dir.join("merged").display().to_string(),
+            edited.display().to_string(),
+            shard.display().to_string(),
+        ],
+        vec![
+            "merge".into(),
+            edited.display().to_string(),
+            shard.display().to_string(),
+        ],
+    ] {
+        let err = refused(&words);
+        assert!(err.contains(&named), "{words:?}: {err}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+    }
+    assert!(!dir.join("merged").join("fqi.json").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
