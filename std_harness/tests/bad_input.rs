@@ -441,3 +441,47 @@ fn the_published_dam_and_acrobot_sources_pass_the_same_checks() {
     let acrobot = SourceSet::<4>::read_layout(&dir, &acrobot::layout(), 2, 2).unwrap();
     assert_eq!(acrobot.total_records(), 3_400 + 5_000);
 }
+
+#[test]
+fn errors_are_plain_messages_unless_a_debug_report_is_asked_for() {
+    let dir = scratch("backtrace");
+    let out = dir.join("out");
+    let words = [
+        "puddle",
+        "--algorithms",
+        "fqi",
+        "--steps",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let run = |env: &[(&str, &str)]| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_awfqi-harness"));
+        command.args(words).env_remove("AWFQI_DEBUG");
+        for (k, v) in env {
+            command.env(k, v);
+        }
+        let output = command.output().unwrap();
+        assert_eq!(output.status.code(), Some(1));
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    for env in [
+        &[][..],
+        &[("RUST_BACKTRACE", "1")],
+        &[("RUST_BACKTRACE", "full")],
+    ] {
+        let stderr = run(env);
+        assert!(
+            stderr.starts_with("Error: --steps 0 is out of range"),
+            "{stderr}"
+        );
+        assert!(
+            !stderr.to_lowercase().contains("backtrace"),
+            "{env:?}: {stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    let stderr = run(&[("AWFQI_DEBUG", "1")]);
+    assert!(stderr.contains("--steps 0 is out of range"), "{stderr}");
+    assert!(stderr.contains("Stack backtrace"), "{stderr}");
+}
