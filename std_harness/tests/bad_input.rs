@@ -443,6 +443,33 @@ fn the_published_dam_and_acrobot_sources_pass_the_same_checks() {
 }
 
 #[test]
+fn run_counts_and_threads_have_upper_bounds() {
+    let dir = scratch("bounds");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let base = ["puddle", "--algorithms", "fqi", "--quiet", "--out", out_s];
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let too_many = (4 * cores + 1).to_string();
+    for (extra, named) in [
+        (
+            &["--runs", "0..100000000"][..],
+            "100000000 runs, more than the 100000",
+        ),
+        (&["--runs", "100001"], "100001 runs"),
+        (&["--threads", "100000"], "--threads 100000 is out of range"),
+        (&["--threads", &too_many], "4 per core"),
+    ] {
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        refused(harness(&args), &[named], &out);
+        assert!(!out.exists(), "{extra:?} created {}", out.display());
+    }
+    // The identification study shares `--runs`.
+    let (ok, stderr) = harness(&["identify", "--runs", "0..200000", "--out", out_s]);
+    assert!(!ok && stderr.contains("200000 runs"), "{stderr}");
+    assert!(!out.exists());
+}
+
+#[test]
 fn errors_are_plain_messages_unless_a_debug_report_is_asked_for() {
     let dir = scratch("backtrace");
     let out = dir.join("out");

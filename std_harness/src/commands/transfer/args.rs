@@ -53,7 +53,8 @@ pub struct CommonArgs {
     /// Steps K. Default: Puddle World 6, Dam 10, Acrobot 20.
     #[arg(long)]
     pub steps: Option<usize>,
-    /// Runs: a count N (runs 0..N) or a range A..B; results merge with those in --out.
+    /// Runs: a count N (runs 0..N) or a range A..B (at most 100 000 runs); results merge
+    /// with those in --out.
     /// Default: Puddle World 10, Dam and Acrobot 20.
     #[arg(long)]
     pub runs: Option<RunRange>,
@@ -73,7 +74,7 @@ pub struct CommonArgs {
     /// Output directory. Default: `results/<command>`.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Worker threads (0: all cores).
+    /// Worker threads (0: all cores; at most 4 per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// FQI iterations. Default: Puddle World and Dam 60, Acrobot 50.
