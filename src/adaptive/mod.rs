@@ -43,6 +43,7 @@
 //! **Errors part-way** are those of [`crate::Awfqi`]: records already queried stay in `D₀`,
 //! the Q-function keeps its last fit, the step counter does not advance.
 
+pub mod builder;
 pub mod candidates;
 mod draw;
 mod evidence;
@@ -52,11 +53,12 @@ mod replan;
 pub mod storage;
 mod verify;
 
+pub use builder::AdaptiveBuilder;
 pub use candidates::Candidate;
 pub use mean_function::MeanFunction;
 pub use plausibility::SourceBelief;
 pub use replan::relabelled_reward;
-pub use storage::{AdaptiveBuffers, AdaptiveStorage};
+pub use storage::{AdaptiveBuffers, AdaptiveCapacities, AdaptiveParts, AdaptiveStorage};
 
 use draw::Draw;
 use evidence::Evidence;

@@ -71,7 +71,10 @@ pub use hybrid::HybridFqi;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
-pub use sweep::{ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
-pub use table::TabularFqi;
+pub use sweep::{
+    ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage, sweep_entries,
+    sweep_nodes,
+};
+pub use table::{TableStorage, TabularFqi};
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};
