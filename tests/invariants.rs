@@ -7,8 +7,8 @@
 //! * the same seed gives the same bytes (GP hyperparameter search, mutual-information
 //!   score).
 
-use awfqi::Transition;
-use awfqi::env::FiniteMdp;
+use awfqi::model::Transition;
+use awfqi::model::FiniteMdp;
 use awfqi::env::GridWorld;
 use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions};

@@ -14,14 +14,15 @@
 
 use super::storage::{AdaptiveParts, AdaptiveStorage};
 use super::{AdaptiveAwfqi, AdaptiveConfig, Evidence, Lent};
-use crate::awfqi::builder::{buffer, short};
-use crate::awfqi::{SourceData, SourceScales};
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::{SourceData, SourceScales};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, CellGrid, ModelSweep, RewardModel};
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{Dims, InputDim, StatePlusAction, predict_posteriors};
 use crate::score::{PointGrid, RowSet};
+use crate::weights::Posterior;
 use rand_core::Rng;
 
 /// Candidate rows per sweep cell and axis of the default candidate grid.
@@ -53,6 +54,7 @@ pub struct AdaptiveBuilder<
     rows: Option<RowSet<'a, T, D>>,
     rewards: RewardModel,
     approximator: Option<Approximator<T, D>>,
+    stored: Option<&'a [Posterior<T>]>,
     configure: F,
 }
 
@@ -88,6 +90,7 @@ where
             rows: None,
             rewards: RewardModel::Backfilled,
             approximator: None,
+            stored: None,
             configure: |_| {},
         }
     }
@@ -143,6 +146,14 @@ where
         self
     }
 
+    /// The sources' reward posteriors computed earlier, one per record, source after
+    /// source (e.g. on the host, in flash): the builder then fits the mean functions only,
+    /// and the block needs no `source_posteriors`.
+    pub fn stored_posteriors(mut self, posteriors: &'a [Posterior<T>]) -> Self {
+        self.stored = Some(posteriors);
+        self
+    }
+
     /// Other candidate rows than the grid over the bounds.
     pub fn rows(mut self, rows: RowSet<'a, T, D>) -> Self {
         self.rows = Some(rows);
@@ -168,6 +179,7 @@ where
             rows: self.rows,
             rewards: self.rewards,
             approximator: self.approximator,
+            stored: self.stored,
             configure,
         }
     }
@@ -276,29 +288,36 @@ where
         let records = self.sources;
         let total = records.iter().map(|r| r.len()).sum::<usize>();
         short(means.len(), records.len(), buffer::MEANS)?;
-        short(posteriors.len(), total, buffer::POSTERIORS)?;
+        if self.stored.is_none() {
+            short(posteriors.len(), total, buffer::POSTERIORS)?;
+        }
         let mut lent = Lent::check(&config, approximator, records, &rows, &self.target, buffers)?;
         let capacity = means.len();
         let means = means
             .get_mut(..records.len())
             .ok_or(Error::CapacityExceeded { capacity })?;
         let capacity = posteriors.len();
-        let posteriors = posteriors
-            .get_mut(..total)
-            .ok_or(Error::CapacityExceeded { capacity })?;
+        let fitted = match self.stored {
+            Some(_) => &mut [],
+            None => posteriors
+                .get_mut(..total)
+                .ok_or(Error::CapacityExceeded { capacity })?,
+        };
         // Each source's reward GP, fitted once in the learner's GP: its mean function and
         // the posteriors at its records.
         let (training, subset) = (&config.awfqi.gp_training, config.awfqi.subset);
-        let mut rest = &mut *posteriors;
+        let mut rest = &mut *fitted;
         for (mean, source) in means.iter_mut().zip(records) {
-            let (stored, tail) = core::mem::take(&mut rest)
-                .split_at_mut_checked(source.len())
-                .ok_or(Error::CapacityExceeded { capacity: total })?;
-            rest = tail;
             mean.fit_rewards(lent.gp, source, training, subset, rng)?;
-            predict_posteriors(lent.gp, source, config.awfqi.noise_subtraction, stored)?;
+            if self.stored.is_none() {
+                let (out, tail) = core::mem::take(&mut rest)
+                    .split_at_mut_checked(source.len())
+                    .ok_or(Error::CapacityExceeded { capacity: total })?;
+                rest = tail;
+                predict_posteriors(lent.gp, source, config.awfqi.noise_subtraction, out)?;
+            }
         }
-        let sources = SourceData::new(records, posteriors)?;
+        let sources = SourceData::new(records, self.stored.unwrap_or(fitted))?;
         let evidence = Evidence::new(means, lent.beliefs(), records.len())?;
         Ok(lent.assemble(config, sources, rows, self.target, evidence))
     }

@@ -5,8 +5,8 @@
 use super::ValidAdaptiveConfig;
 use super::candidates::{self, Candidate};
 use super::evidence::Evidence;
-use crate::awfqi::builder::{buffer, short};
-use crate::awfqi::transfer::Transfer;
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::gp::Hyperparameters;

@@ -4,8 +4,8 @@
 use super::mean_function::MeanFunction;
 use super::plausibility::{self, SourceBelief};
 use super::{ValidAdaptiveConfig, candidates};
-use crate::awfqi::builder::{buffer, short};
-use crate::awfqi::transfer::Transfer;
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::model::{GenerativeModel, Transition};

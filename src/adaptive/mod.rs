@@ -43,31 +43,30 @@
 //! **Errors part-way** are those of [`crate::Awfqi`]: records already queried stay in `D₀`,
 //! the Q-function keeps its last fit, the step counter does not advance.
 
-pub mod builder;
+mod builder;
 pub mod candidates;
 mod draw;
 mod evidence;
-pub mod mean_function;
+mod mean_function;
 pub mod plausibility;
 mod replan;
-pub mod storage;
+mod storage;
 mod verify;
 
-pub use builder::AdaptiveBuilder;
-pub use candidates::Candidate;
+pub use builder::{AdaptiveBuilder, ROWS_PER_AXIS, ROWS_PER_CELL};
 pub use mean_function::MeanFunction;
-pub use plausibility::SourceBelief;
 pub use replan::relabelled_reward;
 pub use storage::{AdaptiveBuffers, AdaptiveCapacities, AdaptiveParts, AdaptiveStorage};
 
 use draw::Draw;
+use plausibility::SourceBelief;
 use evidence::Evidence;
 use replan::Replan;
 use verify::Verification;
 
-use crate::awfqi::builder::{buffer, short};
-use crate::awfqi::transfer::Transfer;
-use crate::awfqi::{AwfqiConfig, SourceData, SourceScales, StepReport};
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
+use crate::thesis::{AwfqiConfig, SourceData, SourceScales, StepReport};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};

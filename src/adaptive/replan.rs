@@ -4,9 +4,9 @@
 
 use super::evidence::Evidence;
 use super::{Refit, ValidAdaptiveConfig};
-use crate::awfqi::SourceData;
-use crate::awfqi::StepReport;
-use crate::awfqi::transfer::{ReplanGp, SourceValues, Transfer, for_each_source};
+use crate::thesis::SourceData;
+use crate::thesis::StepReport;
+use crate::thesis::transfer::{ReplanGp, SourceValues, Transfer, for_each_source};
 use crate::error::Result;
 use crate::float::Real;
 use crate::gp::{Gp, Hyperparameters};

@@ -66,6 +66,9 @@ pub struct AdaptiveCapacities {
     pub sources: usize,
     /// Source records, all sources together.
     pub source_records: usize,
+    /// Stored reward posteriors the builder fits (0 when they are stored elsewhere, e.g.
+    /// in flash: [`AdaptiveBuilder::stored_posteriors`](super::AdaptiveBuilder::stored_posteriors)).
+    pub source_posteriors: usize,
     /// Candidate slots of a sub-batch.
     pub candidates: usize,
     /// Cells per axis of the model sweep (0 for a table).
@@ -85,6 +88,7 @@ impl AdaptiveCapacities {
         budget: usize,
         sources: usize,
         source_records: usize,
+        source_posteriors: usize,
         candidates: usize,
         sweep_cells: usize,
         table_entries: usize,
@@ -96,6 +100,7 @@ impl AdaptiveCapacities {
             budget,
             sources,
             source_records,
+            source_posteriors,
             candidates,
             sweep_cells,
             table_entries,
@@ -120,8 +125,11 @@ pub struct AdaptiveParts<'a, T, const D: usize, const I: usize, const N: usize> 
 /// the [`AdaptiveStorage`](crate::adaptive::AdaptiveStorage) trait for
 /// [`AdaptiveAwfqi::builder`](crate::adaptive::AdaptiveAwfqi::builder).
 ///
-/// The fields come in this order, each named (the last either `sweep_cells`, the cells
-/// per axis of a model sweep, or `table_entries`, the entries of a table or tiles):
+/// The fields come in this order, each named: `source_posteriors` is the source records
+/// (the builder fits and stores their posteriors here) or 0 (they are stored elsewhere,
+/// e.g. in flash); the last is either `sweep_cells`, the cells per axis of a model sweep,
+/// or `table_entries`, the entries of a table or tiles (0 when the approximator's memory
+/// is lent beside the block):
 ///
 /// ```rust
 /// awfqi::adaptive_storage! {
@@ -135,6 +143,7 @@ pub struct AdaptiveParts<'a, T, const D: usize, const I: usize, const N: usize> 
 ///         budget: 50,
 ///         sources: 3,
 ///         source_records: 300,
+///         source_posteriors: 300,
 ///         candidates: 250,
 ///         sweep_cells: 12,
 ///     }
@@ -151,7 +160,8 @@ pub struct AdaptiveParts<'a, T, const D: usize, const I: usize, const N: usize> 
 /// awfqi::adaptive_storage! {
 ///     struct NoSources {
 ///         scalar: f32, state_dim: 2, actions: 4, gp_points: 32, steps: 2, budget: 50,
-///         sources: 0, source_records: 300, candidates: 250, sweep_cells: 12,
+///         sources: 0, source_records: 300, source_posteriors: 300, candidates: 250,
+///         sweep_cells: 12,
 ///     }
 /// }
 /// ```
@@ -171,6 +181,7 @@ macro_rules! adaptive_storage {
             budget: $budget:expr,
             sources: $m:expr,
             source_records: $w:expr,
+            source_posteriors: $p:expr,
             candidates: $c:expr,
             $fqi:ident: $x:expr $(,)?
         }
@@ -181,11 +192,11 @@ macro_rules! adaptive_storage {
             gp: $crate::gp::Gp<$t, { $n }, { $d + 1 }>,
             samples: [$crate::model::Transition<[$t; $d], $t>; $steps * $budget],
             weights: [$t; $w],
-            candidates: [$crate::adaptive::Candidate<$t>; $c],
+            candidates: [$crate::adaptive::candidates::Candidate<$t>; $c],
             path: [[$t; $d]; $budget],
-            beliefs: [$crate::adaptive::SourceBelief<$t>; $m],
+            beliefs: [$crate::adaptive::plausibility::SourceBelief<$t>; $m],
             means: [$crate::adaptive::MeanFunction<$t, { $n }, { $d + 1 }>; $m],
-            posteriors: [$crate::weights::Posterior<$t>; $w],
+            posteriors: [$crate::weights::Posterior<$t>; $p],
             fqi: $crate::__adaptive_fqi!(type $fqi, $t, $d, $a, $x),
         }
 
@@ -203,7 +214,7 @@ macro_rules! adaptive_storage {
         impl $name {
             /// The capacities it was declared with.
             pub const CAPACITIES: $crate::adaptive::AdaptiveCapacities =
-                $crate::__adaptive_fqi!(capacities $fqi, $a, $n, $steps, $budget, $m, $w, $c, $x);
+                $crate::__adaptive_fqi!(capacities $fqi, $a, $n, $steps, $budget, $m, $w, $p, $c, $x);
 
             /// Empty, all-zero storage.
             pub const fn new() -> Self {
@@ -211,11 +222,11 @@ macro_rules! adaptive_storage {
                     gp: $crate::gp::Gp::zeroed(),
                     samples: [$crate::model::Transition::EMPTY; $steps * $budget],
                     weights: [<$t as $crate::float::Real>::ZERO; $w],
-                    candidates: [$crate::adaptive::Candidate::EMPTY; $c],
+                    candidates: [$crate::adaptive::candidates::Candidate::EMPTY; $c],
                     path: [[<$t as $crate::float::Real>::ZERO; $d]; $budget],
-                    beliefs: [$crate::adaptive::SourceBelief::EMPTY; $m],
+                    beliefs: [$crate::adaptive::plausibility::SourceBelief::EMPTY; $m],
                     means: [$crate::adaptive::MeanFunction::EMPTY; $m],
-                    posteriors: [$crate::weights::Posterior::EMPTY; $w],
+                    posteriors: [$crate::weights::Posterior::EMPTY; $p],
                     fqi: <$crate::__adaptive_fqi!(type $fqi, $t, $d, $a, $x)>::new(),
                 }
             }
@@ -292,10 +303,10 @@ macro_rules! __adaptive_fqi {
     (type table_entries, $t:ty, $d:expr, $a:expr, $x:expr) => {
         $crate::fqi::TableStorage<$t, { $x }>
     };
-    (capacities sweep_cells, $a:expr, $n:expr, $s:expr, $b:expr, $m:expr, $w:expr, $c:expr, $x:expr) => {
-        $crate::adaptive::AdaptiveCapacities::declared($a, $n, $s, $b, $m, $w, $c, $x, 0)
+    (capacities sweep_cells, $a:expr, $n:expr, $s:expr, $b:expr, $m:expr, $w:expr, $p:expr, $c:expr, $x:expr) => {
+        $crate::adaptive::AdaptiveCapacities::declared($a, $n, $s, $b, $m, $w, $p, $c, $x, 0)
     };
-    (capacities table_entries, $a:expr, $n:expr, $s:expr, $b:expr, $m:expr, $w:expr, $c:expr, $x:expr) => {
-        $crate::adaptive::AdaptiveCapacities::declared($a, $n, $s, $b, $m, $w, $c, 0, $x)
+    (capacities table_entries, $a:expr, $n:expr, $s:expr, $b:expr, $m:expr, $w:expr, $p:expr, $c:expr, $x:expr) => {
+        $crate::adaptive::AdaptiveCapacities::declared($a, $n, $s, $b, $m, $w, $p, $c, 0, $x)
     };
 }

@@ -1,7 +1,7 @@
 extern crate std;
 use super::replan::relabel_rewards;
 use super::*;
-use crate::awfqi::SourceScales;
+use crate::thesis::SourceScales;
 use crate::env::{Dynamics, Puddle, PuddleWorld};
 use crate::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, RewardModel};
 use crate::gp::{Hyperparameters, SearchOptions};
@@ -107,6 +107,7 @@ crate::adaptive_storage! {
         budget: 12,
         sources: 3,
         source_records: 120,
+        source_posteriors: 120,
         candidates: 40,
         table_entries: 144,
     }
@@ -122,6 +123,7 @@ crate::adaptive_storage! {
         budget: 12,
         sources: 3,
         source_records: 119,
+        source_posteriors: 119,
         candidates: 40,
         table_entries: 144,
     }
@@ -137,6 +139,7 @@ crate::adaptive_storage! {
         budget: 12,
         sources: 3,
         source_records: 120,
+        source_posteriors: 120,
         candidates: 40,
         table_entries: 144,
     }
@@ -152,6 +155,7 @@ crate::adaptive_storage! {
         budget: 12,
         sources: 2,
         source_records: 80,
+        source_posteriors: 80,
         candidates: 40,
         table_entries: 144,
     }
@@ -167,6 +171,7 @@ crate::adaptive_storage! {
         budget: 12,
         sources: 3,
         source_records: 120,
+        source_posteriors: 120,
         candidates: 40,
         table_entries: 0,
     }
@@ -722,6 +727,7 @@ crate::adaptive_storage! {
         budget: 12,
         sources: 3,
         source_records: 120,
+        source_posteriors: 120,
         candidates: 40,
         sweep_cells: 6,
     }
@@ -738,6 +744,7 @@ crate::adaptive_storage! {
         budget: 99,
         sources: 3,
         source_records: 120,
+        source_posteriors: 120,
         candidates: 40,
         sweep_cells: 6,
     }
@@ -812,7 +819,7 @@ fn a_target_buffer_with_room_for_99_of_100_samples_is_refused_before_the_first_s
     assert_eq!(
         built.err(),
         Some(Error::BufferTooSmall {
-            buffer: crate::awfqi::builder::buffer::SAMPLES,
+            buffer: crate::thesis::builder::buffer::SAMPLES,
             capacity: 99,
             needed: 100,
         })

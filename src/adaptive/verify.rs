@@ -3,8 +3,8 @@
 
 use super::ValidAdaptiveConfig;
 use super::evidence::Evidence;
-use crate::awfqi::builder::{buffer, short};
-use crate::awfqi::transfer::Transfer;
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
 use crate::error::Result;
 use crate::float::Real;
 use crate::model::GenerativeModel;

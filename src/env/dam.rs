@@ -23,7 +23,7 @@
 //! The memory of an instance is three scalars and a byte; the inflow means are computed on
 //! demand (in `f64`, as the reference does, then rounded to `T`).
 
-use super::{GenerativeModel, Transition};
+use crate::model::{GenerativeModel, Transition};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::rng;

@@ -26,4 +26,3 @@ pub use grid_world::GridWorld;
 pub use grid_world::{GRID_WORLD_ACTIONS, THESIS_GOALS};
 pub use puddle::*;
 
-pub use crate::model::{FiniteMdp, GenerativeModel, Transition};

@@ -24,7 +24,8 @@
 //!   give all budgets: cheaper, and smoother curves, but budgets are then correlated).
 
 use anyhow::{anyhow, bail};
-use awfqi::env::{FiniteMdp, GridWorld};
+use awfqi::env::{GridWorld};
+use awfqi::model::{FiniteMdp};
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, belief_weighted_policy, compute_score,
     run_queries,

@@ -10,7 +10,7 @@
 
 use awfqi::alias::{AliasEntry, AliasTable};
 use awfqi::score::{PointGrid, RowSet};
-use awfqi::{Real, Transition};
+use awfqi::prelude::{Real, Transition};
 use rand_chacha::ChaCha8Rng;
 
 use super::gp::{GpOptions, Output, SourceGps, Weighting};

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use awfqi::env::Dynamics;
 use awfqi::weights::NoiseSubtraction;
-use awfqi::{Dims, StatePlusAction};
+use awfqi::prelude::{Dims, StatePlusAction};
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::Domain;

@@ -18,7 +18,8 @@ use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{Dims, InputDim, Output, StatePlusAction, fit_gp, predict_posteriors};
-use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
+use crate::model::SourceModel;
+use crate::score::{RowSet, ScoreTable, Scores};
 use crate::weights::{Posterior, WeightParams};
 use rand_core::Rng;
 
@@ -29,7 +30,7 @@ use rand_core::Rng;
 ///
 /// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
 /// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
-/// (39 096 bytes on a Cortex-M4F, see [`crate::awfqi`]). The builder hands out its parts as
+/// (39 096 bytes on a Cortex-M4F, see [`crate::thesis`]). The builder hands out its parts as
 /// slices, so the learner's code does not depend on the capacities.
 #[derive(Debug, Clone)]
 pub struct AwfqiStorage<
