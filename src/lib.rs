@@ -362,8 +362,8 @@ pub mod prelude {
     pub use crate::fqi::{
         Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi,
         Kernel, KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage,
-        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi,
-        TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
+        Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
     };
     pub use crate::gp::{
         Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull,

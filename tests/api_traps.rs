@@ -5,10 +5,15 @@
 //! compile-fail doctest of `awfqi::record_gp::Dims`; named capacity errors are in `tests/bad_input.rs`
 //! and the kernels' unit tests; `Real`'s methods are the doctest of `awfqi::float`.)
 
-use awfqi::adaptive::candidates::{Candidate};
-use awfqi::adaptive::plausibility::{SourceBelief};
+use awfqi::adaptive::candidates::Candidate;
+use awfqi::adaptive::plausibility::SourceBelief;
+use awfqi::prelude::{
+    AdaptiveConfig, AliasEntry, Approximator, AwfqiConfig, CellGrid, EmptyCells, ExtraTrees,
+    FqiConfig, FqiEntry, Kernel, KnnRecord, KnnStorage, MeanFunction, ModelSweep, Neighbours,
+    Posterior, SampleSet, Scores, SweepEntry, SweepNode, SweepStorage, Transition, TreeNode,
+    TreeRecord, TreeStorage,
+};
 use awfqi::rand_core::{Rng, SeedableRng};
-use awfqi::prelude::{AdaptiveConfig, AliasEntry, Approximator, AwfqiConfig, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Kernel, KnnRecord, KnnStorage, MeanFunction, ModelSweep, Neighbours, Posterior, SampleSet, Scores, SweepEntry, SweepNode, SweepStorage, Transition, TreeNode, TreeRecord, TreeStorage};
 use rand_chacha::ChaCha8Rng;
 
 /// Every element type of a buffer a kernel borrows has a `const` empty value, so every

@@ -32,7 +32,11 @@
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi::prelude::{AliasEntry, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Evaluation, FqiConfig, FqiEntry, Gp, GpTraining, Greedy, Posterior, QFunction, RowSet, SampleSet, Scores, TabularFqi, Transition, evaluate, evaluate_greedy};
+use awfqi::prelude::{
+    AliasEntry, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Evaluation, FqiConfig, FqiEntry, Gp,
+    GpTraining, Greedy, Posterior, QFunction, RowSet, SampleSet, Scores, TabularFqi, Transition,
+    evaluate, evaluate_greedy,
+};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 

@@ -24,7 +24,11 @@
 //! recover π* in every checked cell and three miss one or two cells, all at `|Σ s| = 1`
 //! (measured while writing the test; a 48-point GP instead of 64 missed 10–50 cells).
 
-use awfqi::prelude::{Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, FqiConfig, GenerativeModel, PointGrid, Policy, Posterior, Real, RowSet, Scores, SourceMeans, SourceModel, Transition, evaluate};
+use awfqi::prelude::{
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, FqiConfig,
+    GenerativeModel, PointGrid, Policy, Posterior, Real, RowSet, Scores, SourceMeans, SourceModel,
+    Transition, evaluate,
+};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 

@@ -5,8 +5,11 @@
 #![allow(clippy::needless_range_loop)]
 
 use awfqi::Error;
-use awfqi::env::{ACROBOT_DISCOUNT, ACROBOT_HORIZON, Acrobot, AcrobotTask, DAM_ACTIONS, DAM_DISCOUNT, DAM_HORIZON, DAM_INFLOW_STD, Dam, InflowProfile};
-use awfqi::model::{GenerativeModel};
+use awfqi::env::{
+    ACROBOT_DISCOUNT, ACROBOT_HORIZON, Acrobot, AcrobotTask, DAM_ACTIONS, DAM_DISCOUNT,
+    DAM_HORIZON, DAM_INFLOW_STD, Dam, InflowProfile,
+};
+use awfqi::model::GenerativeModel;
 use awfqi::rng::standard_normal;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};

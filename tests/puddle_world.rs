@@ -1,10 +1,13 @@
 //! Puddle World through the public API only: the four instances of spec §2.6 in both
 //! dynamics variants, episodes into fixed storage, and the §3.3 evaluation protocol.
 
-use awfqi::env::{ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
-use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi::env::{
+    ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PUDDLE_DISCOUNT,
+    PUDDLE_HORIZON, PuddleWorld,
+};
 use awfqi::model::{GenerativeModel, Transition};
-use awfqi::{Result, prelude::{Real}};
+use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi::{Result, prelude::Real};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 

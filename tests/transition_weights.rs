@@ -9,7 +9,14 @@
 //! means with std 0 (oracle posteriors), so the expectations below are those of the §7.3
 //! estimator with a target GP that has learnt the target's dynamics.
 
-use awfqi::{Error, prelude::{Awfqi, AwfqiConfig, AwfqiStorage, FqiConfig, FqiEntry, GenerativeModel, PointGrid, Posterior, QFunction, RowSet, SampleSet, Scores, SourceMeans, SourceModel, TabularFqi, TileFqi, Tilings, Transition, WeightParams}};
+use awfqi::{
+    Error,
+    prelude::{
+        Awfqi, AwfqiConfig, AwfqiStorage, FqiConfig, FqiEntry, GenerativeModel, PointGrid,
+        Posterior, QFunction, RowSet, SampleSet, Scores, SourceMeans, SourceModel, TabularFqi,
+        TileFqi, Tilings, Transition, WeightParams,
+    },
+};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 

@@ -23,7 +23,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use awfqi::env::{DAM_ACTIONS, DAM_DAYS, DAM_MAX_STORAGE, DAM_MIN_STORAGE, Dam};
-use awfqi::prelude::{Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel, Transition};
+use awfqi::prelude::{
+    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
+    Scores, SourceMeans, SourceModel, Transition,
+};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -366,10 +369,10 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     );
 }
 
-#[path = "../examples/firmware/src/reservoir.rs"]
+#[path = "../../examples/firmware/src/reservoir.rs"]
 #[allow(dead_code)]
 mod reservoir;
-#[path = "../examples/firmware/src/tables.rs"]
+#[path = "../../examples/firmware/src/tables.rs"]
 #[rustfmt::skip]
 mod tables;
 

@@ -6,7 +6,7 @@
 //! and the message prints the recomputed table.
 
 #[allow(dead_code)]
-#[path = "on_target/src/golden.rs"]
+#[path = "../../tests/on_target/src/golden.rs"]
 mod golden;
 
 use awfqi_reference::gp::{Hyperparameters, ReferenceGp};

@@ -14,14 +14,14 @@
 
 use super::storage::{AdaptiveParts, AdaptiveStorage};
 use super::{AdaptiveAwfqi, AdaptiveConfig, Evidence, Lent};
-use crate::thesis::builder::{buffer, short};
-use crate::thesis::{SourceData, SourceScales};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, CellGrid, ModelSweep, RewardModel};
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{Dims, InputDim, StatePlusAction, predict_posteriors};
 use crate::score::{PointGrid, RowSet};
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::{SourceData, SourceScales};
 use crate::weights::Posterior;
 use rand_core::Rng;
 

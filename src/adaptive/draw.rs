@@ -5,14 +5,14 @@
 use super::ValidAdaptiveConfig;
 use super::candidates::{self, Candidate};
 use super::evidence::Evidence;
-use crate::thesis::builder::{buffer, short};
-use crate::thesis::transfer::Transfer;
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::gp::Hyperparameters;
 use crate::model::GenerativeModel;
 use crate::record_gp::{Dims, StatePlusAction, input};
 use crate::score::RowSet;
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
 use crate::weights::{NoiseSubtraction, StdTransform};
 use rand_core::Rng;
 

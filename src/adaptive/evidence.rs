@@ -4,12 +4,12 @@
 use super::mean_function::MeanFunction;
 use super::plausibility::{self, SourceBelief};
 use super::{ValidAdaptiveConfig, candidates};
-use crate::thesis::builder::{buffer, short};
-use crate::thesis::transfer::Transfer;
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{Dims, StatePlusAction, input};
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
 
 /// The sources' mean functions and beliefs (one each per source).
 #[derive(Debug)]

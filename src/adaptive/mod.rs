@@ -59,14 +59,11 @@ pub use replan::relabelled_reward;
 pub use storage::{AdaptiveBuffers, AdaptiveCapacities, AdaptiveParts, AdaptiveStorage};
 
 use draw::Draw;
-use plausibility::SourceBelief;
 use evidence::Evidence;
+use plausibility::SourceBelief;
 use replan::Replan;
 use verify::Verification;
 
-use crate::thesis::builder::{buffer, short};
-use crate::thesis::transfer::Transfer;
-use crate::thesis::{AwfqiConfig, SourceData, SourceScales, StepReport};
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};
@@ -74,6 +71,9 @@ use crate::gp::{Gp, SearchOptions};
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{Dims, InputDim, StatePlusAction};
 use crate::score::RowSet;
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
+use crate::thesis::{AwfqiConfig, SourceData, SourceScales, StepReport};
 use rand_core::Rng;
 #[cfg(test)]
 use replan::median;

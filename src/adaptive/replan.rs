@@ -4,9 +4,6 @@
 
 use super::evidence::Evidence;
 use super::{Refit, ValidAdaptiveConfig};
-use crate::thesis::SourceData;
-use crate::thesis::StepReport;
-use crate::thesis::transfer::{ReplanGp, SourceValues, Transfer, for_each_source};
 use crate::error::Result;
 use crate::float::Real;
 use crate::gp::{Gp, Hyperparameters};
@@ -14,6 +11,9 @@ use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{
     Dims, GpTraining, StatePlusAction, fit_gp_searched, input, visit_posteriors,
 };
+use crate::thesis::SourceData;
+use crate::thesis::StepReport;
+use crate::thesis::transfer::{ReplanGp, SourceValues, Transfer, for_each_source};
 use crate::weights::{NoiseSubtraction, WeightSummary, WeightTally};
 use rand_core::Rng;
 

@@ -1,12 +1,12 @@
 extern crate std;
 use super::replan::relabel_rewards;
 use super::*;
-use crate::thesis::SourceScales;
 use crate::env::{Dynamics, Puddle, PuddleWorld};
 use crate::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, RewardModel};
 use crate::gp::{Hyperparameters, SearchOptions};
 use crate::record_gp::{GpTraining, SubsetRule, input};
 use crate::score::PointGrid;
+use crate::thesis::SourceScales;
 use crate::weights::NoiseSubtraction;
 use crate::weights::Posterior;
 use rand_chacha::ChaCha8Rng;

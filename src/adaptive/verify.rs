@@ -3,12 +3,12 @@
 
 use super::ValidAdaptiveConfig;
 use super::evidence::Evidence;
-use crate::thesis::builder::{buffer, short};
-use crate::thesis::transfer::Transfer;
 use crate::error::Result;
 use crate::float::Real;
 use crate::model::GenerativeModel;
 use crate::record_gp::{Dims, StatePlusAction};
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
 use rand_core::Rng;
 
 /// The states verified in the current step, in a buffer with room for one budget.

@@ -19,9 +19,9 @@ mod episode;
 
 pub use episode::EpisodeRecord;
 
-use crate::model::{GenerativeModel, Transition};
 use crate::error::{Error, Result};
 use crate::float::Real;
+use crate::model::{GenerativeModel, Transition};
 use crate::model::{SourceMeans, SourceModel};
 use crate::rng;
 use crate::score::PointGrid;

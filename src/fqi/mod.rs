@@ -78,5 +78,6 @@ pub use sweep::{
 pub use table::{TableStorage, TabularFqi};
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{
-    CONSTANT_FEATURE_TOLERANCE, ExtraTrees, MIN_IMPURITY, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+    CONSTANT_FEATURE_TOLERANCE, ExtraTrees, MIN_IMPURITY, TreeFqi, TreeNode, TreeRecord,
+    TreeStorage,
 };

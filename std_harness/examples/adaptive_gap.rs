@@ -17,7 +17,10 @@
 
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::evaluation::{EvaluationProtocol, evaluate};
-use awfqi::prelude::{AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, GpTraining, MeanFunction, Posterior, RowSet, SourceData, SubsetRule, Tilings, Transition};
+use awfqi::prelude::{
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, GpTraining, MeanFunction,
+    Posterior, RowSet, SourceData, SubsetRule, Tilings, Transition,
+};
 use awfqi_harness::domains::puddle::domain;
 use awfqi_harness::forest_fqi::{Dataset, FqiOptions, fqi};
 use awfqi_harness::transfer::protocol::Protocol;

@@ -9,7 +9,7 @@
 use std::time::Instant;
 
 use awfqi::env::{Dynamics, PuddleWorld};
-use awfqi::model::{GenerativeModel};
+use awfqi::model::GenerativeModel;
 use awfqi::prelude::{ExtraTrees, FqiConfig, SampleSet, Transition, TreeFqi, TreeNode, TreeRecord};
 use awfqi_harness::transfer::sources::SourceSet;
 use rand_chacha::ChaCha8Rng;

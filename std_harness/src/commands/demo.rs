@@ -14,9 +14,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
-use awfqi::policy::{EpsilonGreedyPolicy};
-use awfqi::model::{GenerativeModel};
 use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions};
+use awfqi::model::GenerativeModel;
+use awfqi::policy::EpsilonGreedyPolicy;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::Serialize;

@@ -20,8 +20,8 @@ pub mod puddle;
 use std::fmt::Debug;
 use std::sync::Arc;
 
-use awfqi::model::Transition;
 use awfqi::evaluation::Evaluation;
+use awfqi::model::Transition;
 use awfqi::policy::Policy;
 use rand_chacha::ChaCha8Rng;
 

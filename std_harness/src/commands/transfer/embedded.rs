@@ -343,7 +343,9 @@ mod tests {
     }
 
     fn iterations(q: EmbeddedQ) -> usize {
-        q.fqi(awfqi::fqi::FqiConfig::published()).unwrap().iterations()
+        q.fqi(awfqi::fqi::FqiConfig::published())
+            .unwrap()
+            .iterations()
     }
 
     #[test]

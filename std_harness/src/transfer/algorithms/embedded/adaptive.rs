@@ -14,7 +14,10 @@
 //! [`ADAPTIVE_Q`]: super::ADAPTIVE_Q
 
 use awfqi::model::GenerativeModel;
-use awfqi::prelude::{AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, Dims, FqiEntry, Gp, KnnRecord, MeanFunction, QStorage, SourceData, StatePlusAction, Transition, TreeNode, TreeRecord};
+use awfqi::prelude::{
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, Dims, FqiEntry, Gp, KnnRecord, MeanFunction,
+    QStorage, SourceData, StatePlusAction, Transition, TreeNode, TreeRecord,
+};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
@@ -116,11 +119,13 @@ where
     c.relevance_width = o.relevance_width as T;
     c.relabel = o.relabel;
     c.refit = match o.refit {
-        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
-            max_evaluations,
-            restarts,
-            isotropic: c.awfqi.gp_training.search.isotropic,
-        }),
+        Some((max_evaluations, restarts)) => {
+            awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
+                max_evaluations,
+                restarts,
+                isotropic: c.awfqi.gp_training.search.isotropic,
+            })
+        }
         None => awfqi::adaptive::Refit::Search,
     };
     Ok(c)

@@ -24,8 +24,12 @@ use std::any::Any;
 use std::fmt::Debug;
 
 use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::model::{GenerativeModel};
-use awfqi::prelude::{AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp, Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores, SourceScales, StatePlusAction, SubsetRule, Tilings, Transition};
+use awfqi::model::GenerativeModel;
+use awfqi::prelude::{
+    AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp,
+    Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores, SourceScales,
+    StatePlusAction, SubsetRule, Tilings, Transition,
+};
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::{Domain, Rows};
@@ -230,11 +234,13 @@ impl EmbeddedQ {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
-            Self::Sweep(k) => awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
-                .with_rewards(k.rewards)
-                .with_min_mass(k.min_mass as T)?
-                .with_lookahead(k.lookahead)
-                .into(),
+            Self::Sweep(k) => {
+                awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
+                    .with_rewards(k.rewards)
+                    .with_min_mass(k.min_mass as T)?
+                    .with_lookahead(k.lookahead)
+                    .into()
+            }
         })
     }
 }

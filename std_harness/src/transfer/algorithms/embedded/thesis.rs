@@ -8,7 +8,10 @@
 //! ([`EmbeddedDomain`](super::EmbeddedDomain)).
 
 use awfqi::model::GenerativeModel;
-use awfqi::prelude::{AliasEntry, Awfqi, AwfqiBuffers, Dims, Estimator, FqiEntry, Gp, StatePlusAction, Transition, WeightParams};
+use awfqi::prelude::{
+    AliasEntry, Awfqi, AwfqiBuffers, Dims, Estimator, FqiEntry, Gp, StatePlusAction, Transition,
+    WeightParams,
+};
 use rand_chacha::ChaCha8Rng;
 
 use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, T, after_step, setup_of};
