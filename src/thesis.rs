@@ -175,6 +175,7 @@ use transfer::{ReplanGp, SourceValues, Transfer};
 /// [`ValidAwfqiConfig`], which is what the builder takes).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct AwfqiConfig<T, const I: usize> {
     /// Queries per step, `n = H·B` (§12: 500 for B = 10, 50 for B = 1).
     pub budget: usize,

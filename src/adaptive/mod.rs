@@ -83,6 +83,7 @@ use replan::median;
 /// column is unused) and its own. [`AdaptiveConfig::validate`] checks them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     /// The AWFQI settings: per-step budget `n`, the reward weights' estimator (`v_r` is
     /// also the plausibilities' scale), noise subtraction, subset rule, GP training, FQI.
