@@ -43,6 +43,12 @@ pub enum Error {
         /// Name of the offending parameter.
         parameter: &'static str,
     },
+    /// A finite input is too large for the working precision: computing with it overflows
+    /// (for example GP targets whose whitened values `L⁻¹y` exceed the largest `f32`).
+    Overflow {
+        /// Name of the offending parameter or data field.
+        parameter: &'static str,
+    },
     /// An operation needs at least one data point and got none.
     EmptyData,
     /// A kernel matrix could not be factorised even after the largest jitter was added to
@@ -164,6 +170,10 @@ impl fmt::Display for Error {
                 write!(f, "invalid value for parameter `{parameter}`")
             }
             Error::OutOfRange { parameter } => write!(f, "`{parameter}` is out of range"),
+            Error::Overflow { parameter } => write!(
+                f,
+                "`{parameter}` is too large for the working precision: computing with it overflows"
+            ),
             Error::EmptyData => f.write_str("empty data: at least one point is required"),
             Error::NotPositiveDefinite => f.write_str(
                 "matrix is not positive definite, even after the largest jitter was added",
