@@ -504,3 +504,48 @@ fn a_result_file_holding_a_run_index_twice_is_refused_in_runs_and_merges() {
     assert!(!dir.join("merged").join("fqi.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn merge_names_shards_without_an_algorithm_s_file_and_refuses_an_empty_shard() {
+    let dir = scratch("merge-shapes");
+    let (a, b, empty) = (dir.join("a"), dir.join("b"), dir.join("empty"));
+    ok(&puddle(&a, "0..1", &["--no-plots"]));
+    ok(&puddle(&b, "1..2", &["--no-plots"]));
+    std::fs::create_dir_all(&empty).unwrap();
+    let merge = |out: &Path, shards: &[&Path]| -> Vec<String> {
+        let mut words = vec!["merge".to_string(), out.display().to_string()];
+        words.extend(shards.iter().map(|s| s.display().to_string()));
+        words.push("--no-plots".into());
+        words
+    };
+    // An empty shard: refused by name, and OUT is not created.
+    let merged = dir.join("merged");
+    let err = refused(&merge(&merged, &[&a, &empty, &b]));
+    assert!(
+        err.contains(&format!(
+            "shard(s) {} hold no result files",
+            empty.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        !merged.exists(),
+        "the refused merge created {}",
+        merged.display()
+    );
+    // A shard without an algorithm's file (here: a's rbt.json, which b lacks) is named.
+    std::fs::copy(a.join("fqi.json"), a.join("rbt.json")).unwrap();
+    let out = ok(&merge(&merged, &[&a, &b]));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "rbt.json is in {} but not in {}",
+            a.display(),
+            b.display()
+        )),
+        "{err}"
+    );
+    assert_eq!(run_indices(&merged.join("rbt.json")), [0]);
+    assert_eq!(run_indices(&merged.join("fqi.json")), [0, 1]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
