@@ -506,6 +506,43 @@ fn a_result_file_holding_a_run_index_twice_is_refused_in_runs_and_merges() {
 }
 
 #[test]
+fn replace_starts_anew_only_the_files_of_the_algorithms_asked_for() {
+    let dir = scratch("replace-only");
+    let out = dir.join("out");
+    ok(&puddle(&out, "0..1", &["--no-plots"]));
+    // Another algorithm's file of this configuration (a copy stands in for it).
+    std::fs::copy(out.join("fqi.json"), out.join("rbt.json")).unwrap();
+    let (fqi, rbt) = (bytes(&out.join("fqi.json")), bytes(&out.join("rbt.json")));
+    let listing = names(&out);
+    // Another configuration with --replace for fqi only: rbt.json would have to go too,
+    // so nothing is touched and the error names it.
+    let err = refused(&puddle(
+        &out,
+        "0..1",
+        &["--no-plots", "--steps", "2", "--replace"],
+    ));
+    assert!(
+        err.contains(&format!("{}", out.join("rbt.json").display())),
+        "{err}"
+    );
+    assert!(err.contains("add rbt to them"), "{err}");
+    assert_eq!(names(&out), listing, "a file was moved or written");
+    assert!(bytes(&out.join("fqi.json")) == fqi && bytes(&out.join("rbt.json")) == rbt);
+    // Without the other file, --replace starts fqi.json anew as before.
+    std::fs::remove_file(out.join("rbt.json")).unwrap();
+    ok(&puddle(
+        &out,
+        "0..1",
+        &["--no-plots", "--steps", "2", "--replace"],
+    ));
+    assert_eq!(
+        json(&out.join("fqi.json"))["experiment"]["protocol"]["steps"],
+        2
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn merge_names_shards_without_an_algorithm_s_file_and_refuses_an_empty_shard() {
     let dir = scratch("merge-shapes");
     let (a, b, empty) = (dir.join("a"), dir.join("b"), dir.join("empty"));

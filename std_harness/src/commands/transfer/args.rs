@@ -168,7 +168,8 @@ pub struct CommonArgs {
     /// Compute nothing: summarise and plot the runs of this configuration already in --out.
     #[arg(long)]
     pub no_run: bool,
-    /// Recompute runs already in --out, and start anew a result file that holds another
+    /// Recompute runs already in --out, and start anew a result file of an algorithm asked
+    /// for that holds another
     /// configuration or cannot be read, keeping the old file as
     /// `<name>.json.<timestamp>.bak`. Without it such a file is an error (nothing is
     /// written) and runs already there are kept, so rerunning an interrupted command
