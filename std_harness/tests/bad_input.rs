@@ -470,6 +470,47 @@ fn run_counts_and_threads_have_upper_bounds() {
 }
 
 #[test]
+fn a_refused_invocation_creates_no_output_directory() {
+    let dir = scratch("no-dir");
+    // Sources that cannot be read, and a range error: refused before anything is created.
+    let out = dir.join("out");
+    std::fs::create_dir_all(dir.join("sources")).unwrap();
+    refused(
+        puddle_on(&dir.join("sources"), &out),
+        &["shared_dynamics_source_1.csv"],
+        &out,
+    );
+    assert!(!out.exists(), "{} was created", out.display());
+    // An existing file that is not a directory is named as such.
+    for blocker in [Path::new("/dev/null").to_path_buf(), dir.join("a-file")] {
+        if !blocker.exists() {
+            std::fs::write(&blocker, "x").unwrap();
+        }
+        let (ok, stderr) = harness(&[
+            "puddle",
+            "--algorithms",
+            "fqi",
+            "--steps",
+            "1",
+            "--runs",
+            "1",
+            "--quiet",
+            "--out",
+            blocker.to_str().unwrap(),
+        ]);
+        assert!(!ok);
+        assert!(
+            stderr.contains(&format!(
+                "{}: it exists and is not a directory",
+                blocker.display()
+            )),
+            "{stderr}"
+        );
+    }
+    assert_eq!(std::fs::read(dir.join("a-file")).unwrap(), b"x");
+}
+
+#[test]
 fn errors_are_plain_messages_unless_a_debug_report_is_asked_for() {
     let dir = scratch("backtrace");
     let out = dir.join("out");
