@@ -511,6 +511,56 @@ fn a_refused_invocation_creates_no_output_directory() {
 }
 
 #[test]
+fn a_source_file_that_is_not_utf8_names_the_line() {
+    let dir = scratch("utf8");
+    sources_with(&dir, 2, |_| {});
+    let path = dir.join("shared_dynamics_source_2.csv");
+    let mut bytes = std::fs::read(&path).unwrap();
+    // Line 4 starts after the third newline; put a Latin-1 byte two bytes into it.
+    let at = bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| **b == b'\n')
+        .nth(2)
+        .unwrap()
+        .0
+        + 3;
+    bytes[at] = 0xE9;
+    std::fs::write(&path, bytes).unwrap();
+    let out = dir.join("out");
+    refused(
+        puddle_on(&dir, &out),
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 4, byte 3",
+            "not UTF-8",
+        ],
+        &out,
+    );
+}
+
+#[test]
+fn long_values_are_cut_in_messages() {
+    let dir = scratch("long");
+    let out = dir.join("out");
+    let long = "9".repeat(5_000) + "x";
+    sources_with(&dir, 5, |c| c[4] = long.clone());
+    let (ok, stderr) = puddle_on(&dir, &out);
+    assert!(!ok);
+    let shown = format!("\"{}\"… ({} bytes in all)", "9".repeat(80), long.len());
+    assert!(stderr.contains("line 5, field `r`"), "{stderr}");
+    assert!(stderr.contains(&shown), "{stderr}");
+    assert!(stderr.len() < 1_000, "{} bytes of stderr", stderr.len());
+    // A header of one huge column name too.
+    sources_with(&dir, 1, |c| c[7] = "y".repeat(100_000));
+    let (ok, stderr) = puddle_on(&dir, &out);
+    assert!(
+        !ok && stderr.contains("line 1") && stderr.len() < 2_000,
+        "{stderr}"
+    );
+}
+
+#[test]
 fn errors_are_plain_messages_unless_a_debug_report_is_asked_for() {
     let dir = scratch("backtrace");
     let out = dir.join("out");

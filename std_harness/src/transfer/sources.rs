@@ -198,14 +198,16 @@ impl<const D: usize> SourceDataset<D> {
                 .filter(|e| !names.contains(e))
                 .copied()
                 .collect();
-            let unknown: Vec<&str> = names
+            let unknown: Vec<String> = names
                 .iter()
                 .filter(|n| !expected.contains(n))
-                .copied()
+                .map(|n| shown(n))
                 .collect();
             bail!(
-                "line 1: unexpected header {header:?} (missing columns {missing:?}, unknown \
-                 columns {unknown:?}); expected {:?}",
+                "line 1: unexpected header {} (missing columns {missing:?}, unknown columns \
+                 [{}]); expected {:?}",
+                shown(header),
+                unknown.join(", "),
                 layout.header
             );
         }
@@ -228,7 +230,10 @@ impl<const D: usize> SourceDataset<D> {
             let mut v = Vec::with_capacity(columns);
             for (cell, name) in cells.iter().zip(&expected) {
                 let x: f64 = cell.parse().with_context(|| {
-                    format!("line {row}, field `{name}`: {cell:?} is not a number")
+                    format!(
+                        "line {row}, field `{name}`: {} is not a number",
+                        shown(cell)
+                    )
                 })?;
                 if !x.is_finite() {
                     bail!("line {row}, field `{name}`: non-finite value {cell}");
@@ -410,8 +415,7 @@ impl<const D: usize> SourceSet<D> {
         let sources = (1..=count)
             .map(|k| {
                 let path = dir.join(layout.file_name(k));
-                let text = std::fs::read_to_string(&path)
-                    .with_context(|| format!("reading {}", path.display()))?;
+                let text = read_text(&path)?;
                 SourceDataset::from_csv(&text, layout, num_actions)
                     .with_context(|| format!("{}", path.display()))
             })
@@ -460,6 +464,33 @@ impl<const D: usize> SourceSet<D> {
         }
         data
     }
+}
+
+/// The most characters of a value an error message shows.
+const SHOWN_CHARS: usize = 80;
+
+/// `value` as an error message quotes it: at most [`SHOWN_CHARS`] characters, the rest cut
+/// with an ellipsis and counted, so a field of megabytes does not fill the terminal.
+fn shown(value: &str) -> String {
+    match value.char_indices().nth(SHOWN_CHARS) {
+        None => format!("{value:?}"),
+        Some((end, _)) => format!("{:?}… ({} bytes in all)", &value[..end], value.len()),
+    }
+}
+
+/// The file at `path` as text. Errors name the file, and for bytes that are not UTF-8 the
+/// line and the byte in it.
+fn read_text(path: &Path) -> anyhow::Result<String> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + valid.iter().rev().take_while(|&&b| b != b'\n').count();
+        anyhow::anyhow!(
+            "{}: line {line}, byte {column}: not UTF-8 text (a source file is UTF-8 CSV)",
+            path.display()
+        )
+    })
 }
 
 /// How fresh source data are generated.
