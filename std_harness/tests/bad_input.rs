@@ -278,8 +278,8 @@ fn a_malformed_gp_case_file_names_file_line_and_field() {
     assert!(!ok && stderr.contains("absent.json"), "{stderr}");
 }
 
-/// The IWFQI paper's published Dam and Acrobot source files (gzip copies of
-/// `shared/data/iwfqi-paper-sources/`).
+/// The IWFQI paper's published Dam and Acrobot source files (gzip-compressed CSV, see
+/// `data/iwfqi-sources/README.md`).
 const IWFQI_PUBLISHED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/iwfqi-sources");
 
 /// Copies of `prefix`'s `count` published source files in `dir`, with line `line` of source

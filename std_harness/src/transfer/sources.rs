@@ -9,7 +9,7 @@
 //!
 //! Layout ([`SourceLayout`]): `t`, the state, `a`, `r`, the next state, `absorbing`, then
 //! `(mean, std)` of the reward GP and of each stored next-state GP. Puddle World's files
-//! (`shared/data/puddle-sources/`) and the IWFQI paper's Dam and Acrobot files
+//! (`std_harness/data/puddle-sources/`) and the IWFQI paper's Dam and Acrobot files
 //! (`std_harness/data/iwfqi-sources/`, see its README) differ only in the column names
 //! and in the Dam's `a`, which holds the release rather than the action index.
 //!
@@ -34,7 +34,7 @@ use crate::trees::{ActionForests, TreeParams};
 /// One record in `f64` (Puddle World's, by default).
 pub type Record<const D: usize = 2> = crate::domains::Record<D>;
 
-/// The CSV header of Puddle World's published layout (`shared/data/puddle-sources/README.md`).
+/// The CSV header of Puddle World's published layout (`std_harness/data/puddle-sources/README.md`).
 pub const CSV_HEADER: &str = "t,s_x,s_y,a,r,next_s_x,next_s_y,absorbing,src_gp_r_mean,\
 src_gp_r_std_noise_subtracted,src_gp_next_x_mean,src_gp_next_x_std_noise_subtracted,\
 src_gp_next_y_mean,src_gp_next_y_std_noise_subtracted";
@@ -368,7 +368,7 @@ const PUBLISHED_PUDDLE: [&str; 3] = [
 
 impl SourceSet<2> {
     /// Puddle World's published source datasets of the reference runs (spec §6, embedded
-    /// copies of `shared/data/puddle-sources/`).
+    /// copies of `std_harness/data/puddle-sources/`).
     pub fn published(dynamics: Dynamics) -> anyhow::Result<Self> {
         let texts = match dynamics {
             Dynamics::Shared => PUBLISHED_SHARED,
