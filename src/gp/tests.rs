@@ -587,10 +587,7 @@ fn overflowing_targets_are_refused_by_name() {
     assert_unchanged(&gp, &before);
     assert_eq!(gp.add_point([2.0], 1e308, WhenFull::Refuse), overflow);
     assert_unchanged(&gp, &before);
-    assert!(
-        std::string::ToString::to_string(&Error::Overflow { parameter: "y" })
-            .contains("`y` is too large")
-    );
+    assert!(std::format!("{}", Error::Overflow { parameter: "y" }).contains("`y` is too large"));
     // Targets of 1e200 whiten to finite values, but yᵀK⁻¹y overflows: the likelihood is
     // the targets' error, not −∞ (which JSON would write as null).
     gp.fit(&[[0.0], [1.0]], &[1e200, 1e200]).unwrap();
