@@ -79,10 +79,10 @@
 //!
 //! ```rust
 //! use awfqi::record_gp::predict_posteriors;
-//! use awfqi::{
-//!     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, GenerativeModel, MeanFunction, ModelSweep,
-//!     NoiseSubtraction, PointGrid, Posterior, RewardModel, RowSet, SourceData, SourceMeans,
-//!     SourceModel, SweepStorage, Transition,
+//! use awfqi::prelude::{
+//!     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, GenerativeModel, MeanFunction,
+//!     ModelSweep, NoiseSubtraction, PointGrid, Posterior, RewardModel, RowSet, SourceData,
+//!     SourceMeans, SourceModel, SweepStorage, Transition,
 //! };
 //! use rand_chacha::ChaCha8Rng;
 //! use rand_core::{Rng, SeedableRng};
@@ -182,9 +182,9 @@
 //! sampler → source data → FQI table).
 //!
 //! ```rust
-//! use awfqi::{
-//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
-//!     Scores, SourceMeans, SourceModel, Transition,
+//! use awfqi::prelude::{
+//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior,
+//!     RowSet, Scores, SourceMeans, SourceModel, Transition,
 //! };
 //! use rand_chacha::ChaCha8Rng;
 //! use rand_core::{Rng, SeedableRng};
@@ -260,7 +260,7 @@
 //! Streamed Extra-Trees as the Q-function on their own (a corridor of four cells):
 //!
 //! ```rust
-//! use awfqi::{Approximator, EmptyCells, ExtraTrees, FqiConfig, SampleSet, Transition, TreeStorage};
+//! use awfqi::prelude::{Approximator, EmptyCells, ExtraTrees, FqiConfig, SampleSet, Transition, TreeStorage};
 //! use rand_chacha::ChaCha8Rng;
 //! use rand_core::SeedableRng;
 //!
@@ -314,9 +314,8 @@
 
 pub mod adaptive;
 pub mod alias;
-pub mod awfqi;
 pub mod env;
-pub mod error;
+mod error;
 pub mod evaluation;
 pub mod float;
 pub mod fqi;
@@ -328,6 +327,7 @@ pub mod policy;
 pub mod record_gp;
 pub mod rng;
 pub mod score;
+pub mod thesis;
 pub mod weights;
 
 /// The README's examples, compiled and run as doctests (the crate docs are the embedding
@@ -336,40 +336,47 @@ pub mod weights;
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
-pub use error::{Error, Result};
-pub use float::Real;
+pub use error::{Error, Number, Result};
 /// The `rand_core` (0.10) whose [`Rng`](rand_core::Rng) every randomised call takes:
 /// depend on this one (`awfqi::rand_core::Rng`, `awfqi::rand_core::SeedableRng`) and the
 /// versions cannot drift apart. Generators of `rand_core` 0.6 and 0.9 go through
 /// [`rng::compat`].
 pub use rand_core;
 
-// The types a user of the transfer path meets, at the crate root (as heapless does).
-pub use adaptive::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, MeanFunction,
-    ValidAdaptiveConfig,
-};
-pub use alias::AliasEntry;
-pub use awfqi::{
-    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
-    StepReport, ValidAwfqiConfig, Warning, Warnings,
-};
-pub use evaluation::{
-    Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
-    evaluate_greedy_multi_start, evaluate_multi_start, rollout,
-};
-pub use fqi::{
-    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
-    KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
-    SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings,
-    TreeFqi, TreeNode, TreeRecord, TreeStorage,
-};
-pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
-pub use model::{GenerativeModel, Transition};
-pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-pub use record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
-pub use score::{
-    GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
-    SourceModel,
-};
-pub use weights::{Estimator, NoiseSubtraction, Posterior, WeightParams};
+/// What an embedder of the transfer path uses, in one import: `use awfqi::prelude::*;`.
+/// Every item here also lives at one path in its own module (the prelude is the only
+/// second path).
+pub mod prelude {
+    pub use crate::adaptive::{
+        AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, MeanFunction,
+        ValidAdaptiveConfig,
+    };
+    pub use crate::adaptive_storage;
+    pub use crate::alias::AliasEntry;
+    pub use crate::error::{Error, Result};
+    pub use crate::evaluation::{
+        Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
+        evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+    };
+    pub use crate::float::Real;
+    pub use crate::fqi::{
+        Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi,
+        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage,
+        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
+        Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+    };
+    pub use crate::gp::{
+        Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull,
+    };
+    pub use crate::model::{GenerativeModel, SourceMeans, SourceModel, Transition};
+    pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+    pub use crate::record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
+    pub use crate::score::{
+        GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores,
+    };
+    pub use crate::thesis::{
+        Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
+        StepReport, ValidAwfqiConfig, Warning, Warnings,
+    };
+    pub use crate::weights::{Estimator, NoiseSubtraction, Posterior, WeightParams};
+}

@@ -32,7 +32,7 @@
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi::{
+use awfqi::prelude::{
     AliasEntry, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, Evaluation, FqiConfig, FqiEntry, Gp,
     GpTraining, Greedy, Posterior, QFunction, RowSet, SampleSet, Scores, TabularFqi, Transition,
     evaluate, evaluate_greedy,
@@ -222,7 +222,7 @@ impl Setup {
 fn uniform_return(n: usize, seed: u64) -> T {
     let target = PuddleWorld::<T>::target(Dynamics::Shared);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let protocol = awfqi::EvaluationProtocol {
+    let protocol = awfqi::evaluation::EvaluationProtocol {
         rollouts: n,
         ..target.evaluation_protocol()
     };
@@ -331,7 +331,7 @@ fn measure_returns_per_step() {
 }
 
 /// Prints the memory of the kernel state for this configuration with 3 steps of 50 queries
-/// (host sizes; on Cortex-M `usize` is 4 bytes, see `awfqi::awfqi` for the target sizes).
+/// (host sizes; on Cortex-M `usize` is 4 bytes, see `awfqi::thesis` for the target sizes).
 fn memory_report(source_records: usize) {
     use std::mem::size_of;
     let parts = [

@@ -11,8 +11,8 @@
 //! return finite values or typed errors.
 #![no_main]
 
-use awfqi::Real;
-use awfqi::env::Transition;
+use awfqi::float::Real;
+use awfqi::model::Transition;
 use awfqi::fqi::{
     Approximator, CellGrid, EmptyCells, FqiConfig, ModelSweep, QStorage, RewardModel, SampleSet,
     SweepEntry, SweepFqi, SweepNode,

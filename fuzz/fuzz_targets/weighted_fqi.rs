@@ -10,8 +10,8 @@
 //! checked before the table changes); queries return finite values or typed errors.
 #![no_main]
 
-use awfqi::Real;
-use awfqi::env::Transition;
+use awfqi::float::Real;
+use awfqi::model::Transition;
 use awfqi::fqi::{Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, Tilings};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;

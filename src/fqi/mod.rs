@@ -56,22 +56,28 @@ mod fill;
 mod grid;
 mod hybrid;
 mod iteration;
-pub mod knn;
+mod knn;
 mod q_function;
 mod samples;
-pub mod sweep;
+mod sweep;
 mod table;
 mod tiles;
-pub mod trees;
+mod trees;
 
 pub use config::{EmptyCells, FqiConfig};
 pub use entry::FqiEntry;
 pub use grid::CellGrid;
 pub use hybrid::HybridFqi;
-pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
+pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, MAX_NEIGHBOURS, NO_LINK, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
-pub use sweep::{ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
-pub use table::TabularFqi;
+pub use sweep::{
+    ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage, sweep_entries,
+    sweep_nodes,
+};
+pub use table::{TableStorage, TabularFqi};
 pub use tiles::{TileFqi, Tilings};
-pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};
+pub use trees::{
+    CONSTANT_FEATURE_TOLERANCE, ExtraTrees, MIN_IMPURITY, TreeFqi, TreeNode, TreeRecord,
+    TreeStorage,
+};

@@ -283,8 +283,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
 
     /// An empty GP whose every bit is zero, hyperparameters included, so storage holding
     /// it can be a zero-initialised `static` (`.bss`); it must get hyperparameters
-    /// ([`Gp::set_hyperparameters`]) before use, as `crate::awfqi::AwfqiStorage` does.
-    pub(crate) const fn zeroed() -> Self {
+    /// ([`Gp::set_hyperparameters`]) before use; the learners set them when they are built.
+    pub const fn zeroed() -> Self {
         Self::with(Hyperparameters::isotropic(T::ZERO, T::ZERO, T::ZERO))
     }
 

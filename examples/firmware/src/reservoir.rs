@@ -5,7 +5,7 @@
 //! [`learn_and_compare_thesis`], the thesis's AWFQI (the faithful variant).
 
 use awfqi::env::{DAM_ACTIONS, DAM_DISCOUNT, DAM_EVALUATION_STATE, DAM_HORIZON, Dam};
-use awfqi::{
+use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid,
     Conditioning, EmptyCells, Estimator, Evaluation, EvaluationProtocol, FqiConfig,
     HyperparameterBounds, Hyperparameters, MeanFunction, ModelSweep, PointGrid, RewardModel,

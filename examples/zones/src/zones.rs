@@ -7,14 +7,14 @@
 //! sources' scales, take the recommended adaptive kernel on the scaled settings.
 
 use awfqi::adaptive::MeanFunction;
-use awfqi::rand_core::{Rng, SeedableRng};
-use awfqi::record_gp::predict_posteriors;
-use awfqi::{
+use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, EmptyCells, Evaluation,
     FqiConfig, GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, Posterior, Real,
     RewardModel, RowSet, SampleSet, SourceData, SourceScales, StepReport, SweepStorage, Transition,
     evaluate_greedy_multi_start, evaluate_multi_start,
 };
+use awfqi::rand_core::{Rng, SeedableRng};
+use awfqi::record_gp::predict_posteriors;
 use rand_chacha::ChaCha8Rng;
 
 // ---- The plant: three heated zones in a row. ----

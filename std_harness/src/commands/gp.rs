@@ -23,7 +23,7 @@ use std::fmt;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use awfqi::Real;
+use awfqi::float::Real;
 use awfqi::gp::{Conditioning, Gp, Hyperparameters};
 use serde::{Deserialize, Serialize};
 

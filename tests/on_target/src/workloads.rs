@@ -3,7 +3,7 @@
 
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::rng::{normal, uniform_in};
-use awfqi::{Real, Result};
+use awfqi::{Result, prelude::{Real}};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -48,15 +48,8 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 }
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::{
-    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, ExtraTrees, MeanFunction,
-    ModelSweep, SourceData, Tilings,
-};
-use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
-    FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
-    StepReport, Transition, evaluate_greedy,
-};
+use awfqi::prelude::{AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, ExtraTrees, MeanFunction, ModelSweep, SourceData, Tilings};
+use awfqi::prelude::{Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation, FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel, StepReport, Transition, evaluate_greedy};
 
 /// A transition record in `f32`.
 pub type Record = Transition<[f32; 2], f32>;
@@ -507,7 +500,7 @@ pub enum AdaptiveQ {
     Trees(usize, usize),
     /// A model sweep: cells per axis, reward model, least reward mass (the lent storage
     /// must hold its entries and nodes).
-    Sweep(usize, awfqi::RewardModel, f32),
+    Sweep(usize, awfqi::fqi::RewardModel, f32),
 }
 
 /// What a run of [`adaptive_puddle`] changes from the recommended configuration.
@@ -563,7 +556,7 @@ pub fn adaptive_setup<
     const B: usize,
 >(
     memory: &'m mut AdaptiveMemory<N, Q, C, E, B>,
-    fqi: awfqi::QStorage<'m, f32, 2>,
+    fqi: awfqi::fqi::QStorage<'m, f32, 2>,
     run: &AdaptiveRun,
     rng: &mut ChaCha8Rng,
 ) -> Result<AdaptiveAwfqi<'m, f32, PuddleWorld<f32>, 2, 3, N>> {
@@ -584,7 +577,7 @@ pub fn adaptive_setup<
         config.awfqi.gp_training.search.restarts = restarts;
     }
     config.refit = match run.refit {
-        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
             max_evaluations,
             restarts,
             isotropic: true,
@@ -629,7 +622,7 @@ pub fn adaptive_puddle<
     const B: usize,
 >(
     memory: &mut AdaptiveMemory<N, Q, C, E, B>,
-    fqi: awfqi::QStorage<'_, f32, 2>,
+    fqi: awfqi::fqi::QStorage<'_, f32, 2>,
     run: AdaptiveRun,
     seed: u64,
     inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
@@ -656,7 +649,7 @@ pub type AdaptiveTrees = AdaptiveMemory<64, 300, 4000, 0, 50>;
 
 /// The trees' FQI memory: one record slot per target and source record (300 + 1 033) and
 /// a 1 023-node scratch tree.
-pub type AdaptiveTreeMemory = awfqi::TreeStorage<f32, 2, 1333, 1023>;
+pub type AdaptiveTreeMemory = awfqi::fqi::TreeStorage<f32, 2, 1333, 1023>;
 
 /// The trees' run: 6 steps of 50 queries, 4 000 candidates, 50 streamed trees per action,
 /// the thesis's GP search.
@@ -688,14 +681,14 @@ pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
 /// [`AdaptiveRecommendedFqi`] lent beside it.
 pub type AdaptiveRecommended = AdaptiveMemory<32, 300, 250, 0, 50>;
 /// Its FQI memory: a model sweep of 12 × 12 cells (13² nodes), 4 actions.
-pub type AdaptiveRecommendedFqi = awfqi::SweepStorage<f32, 2, { 169 * 4 }, 169>;
+pub type AdaptiveRecommendedFqi = awfqi::fqi::SweepStorage<f32, 2, { 169 * 4 }, 169>;
 /// Its run: 6 steps of 50 queries, 250 candidates, the sweep with pooled rewards, warm
 /// refits of 30 evaluations.
 pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
     candidates: 250,
-    q: AdaptiveQ::Sweep(12, awfqi::RewardModel::Pooled, 0.0),
+    q: AdaptiveQ::Sweep(12, awfqi::fqi::RewardModel::Pooled, 0.0),
     search: None,
     relabel: false,
     refit: Some((30, 0)),

@@ -10,7 +10,7 @@
 #![no_main]
 
 use awfqi::RewardModel::{Backfilled, PerAction, Pooled};
-use awfqi::{Result, SweepStorage, TreeStorage};
+use awfqi::{Result, prelude::{SweepStorage, TreeStorage}};
 use awfqi_on_target::probe;
 use awfqi_on_target::workloads::{
     ADAPTIVE_RECOMMENDED, AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_setup,
@@ -44,7 +44,7 @@ fn label<'b>(buffer: &'b mut [u8; 48], name: &str, region: &str) -> &'b str {
 fn measure<const N: usize, const C: usize, const E: usize>(
     name: &str,
     memory: &mut AdaptiveMemory<N, 300, C, E, 50>,
-    fqi: awfqi::QStorage<'_, f32, 2>,
+    fqi: awfqi::fqi::QStorage<'_, f32, 2>,
     fqi_bytes: usize,
     run: AdaptiveRun,
 ) -> Result<()> {

@@ -15,7 +15,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + Copy,
-    awfqi::Dims<D, I>: awfqi::StatePlusAction,
+    awfqi::record_gp::Dims<D, I>: awfqi::record_gp::StatePlusAction,
 {
     let mut config = AdaptiveConfig::<T, D, I>::recommended(
         index(6),
@@ -240,7 +240,7 @@ pub(super) fn kernel<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
-    awfqi::Dims<D, I>: awfqi::StatePlusAction,
+    awfqi::record_gp::Dims<D, I>: awfqi::record_gp::StatePlusAction,
 {
     // Settings that scale themselves.
     if let Ok(scales) = SourceScales::measure(&[&records[..5], &records[5..]]) {

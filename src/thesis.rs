@@ -63,14 +63,17 @@
 //! the GP or the weights fail later, the records already queried stay in `D₀` and the
 //! Q-function keeps its previous fit; the step counter does not advance.
 
-pub mod builder;
-pub mod report;
-pub mod scaled;
+pub(crate) mod builder;
+mod report;
+mod scaled;
 pub(crate) mod transfer;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 pub use report::{COLLAPSED_SHARE, DISCARDED_SHARE, StepReport, Warning, Warnings, Weights};
-pub use scaled::SourceScales;
+pub use scaled::{
+    NOISE_MULTIPLIER, SCALED_ESTIMATOR, SCALED_EVALUATIONS_PER_PARAMETER, SCALED_RESTARTS,
+    SourceScales,
+};
 
 use crate::error::{Error, Result};
 use crate::float::Real;
@@ -129,7 +132,7 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
     /// step's queries, while an even spread keeps them all represented.
     ///
     /// ```
-    /// use awfqi::{AwfqiConfig, EmptyCells, Estimator, NoiseSubtraction, ScoreColumn, SubsetRule};
+    /// use awfqi::prelude::{AwfqiConfig, EmptyCells, Estimator, NoiseSubtraction, ScoreColumn, SubsetRule};
     /// let c = AwfqiConfig::<f64, 3>::thesis(50);
     /// assert_eq!(c.budget, 50);
     /// assert_eq!(c.weights.estimator(), Estimator::Mean);

@@ -168,7 +168,7 @@ impl<T: Real, const I: usize> StepReport<T, I> {
     /// GP), without allocating.
     ///
     /// ```
-    /// # use awfqi::{StepReport, awfqi::Warning};
+    /// # use awfqi::{awfqi::thesis::Warning, prelude::{StepReport}};
     /// # fn log(report: &StepReport<f32, 3>) {
     /// for warning in report.warnings() {
     ///     // e.g. "reward weights collapsed: the 700 source records are worth 15 …"
