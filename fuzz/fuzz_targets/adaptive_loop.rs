@@ -15,11 +15,19 @@
 //! Q-values and beliefs that sum to 1; a failed step leaves the step count as it was.
 #![no_main]
 
-use awfqi::adaptive::candidates::{Candidate};
-use awfqi::adaptive::plausibility::{SourceBelief};
+use awfqi::adaptive::candidates::Candidate;
+use awfqi::adaptive::plausibility::SourceBelief;
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::record_gp::GpTraining;
-use awfqi::{Error, prelude::{AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, ModelSweep, Neighbours, PointGrid, Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition, TreeNode, TreeRecord}};
+use awfqi::{
+    Error,
+    prelude::{
+        AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, CellGrid, EmptyCells, ExtraTrees,
+        FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, ModelSweep, Neighbours,
+        PointGrid, Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition,
+        TreeNode, TreeRecord,
+    },
+};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

@@ -13,7 +13,15 @@
 #![no_main]
 
 use awfqi::env::{Dynamics, PuddleWorld};
-use awfqi::{Error, prelude::{AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells, FqiConfig, FqiEntry, GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real, RowSet, ScoreColumn, Scores, SourceMeans, SourceModel, SubsetRule, Tilings, Transition, WeightParams}};
+use awfqi::{
+    Error,
+    prelude::{
+        AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells,
+        FqiConfig, FqiEntry, GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real,
+        RowSet, ScoreColumn, Scores, SourceMeans, SourceModel, SubsetRule, Tilings, Transition,
+        WeightParams,
+    },
+};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, kind, trace};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

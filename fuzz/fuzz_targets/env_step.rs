@@ -11,7 +11,7 @@
 use awfqi::env::{Dynamics, EpisodeRecord, GridWorld, Puddle, PuddleWorld};
 use awfqi::model::{FiniteMdp, GenerativeModel};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi::{Error, prelude::{Real}};
+use awfqi::{Error, prelude::Real};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

@@ -12,11 +12,11 @@
 #![no_main]
 
 use awfqi::float::Real;
-use awfqi::model::Transition;
 use awfqi::fqi::{
     Approximator, CellGrid, EmptyCells, FqiConfig, ModelSweep, QStorage, RewardModel, SampleSet,
     SweepEntry, SweepFqi, SweepNode,
 };
+use awfqi::model::Transition;
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 

@@ -13,10 +13,10 @@
 
 use awfqi::alias::{AliasEntry, AliasTable};
 use awfqi::env::{Dynamics, PuddleWorld};
-use awfqi::model::{Transition};
-use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+use awfqi::model::Transition;
 use awfqi::model::{SourceMeans, SourceModel};
-use awfqi::{Result, prelude::{Real}};
+use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+use awfqi::{Result, prelude::Real};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, kind, trace};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

@@ -11,8 +11,8 @@
 #![no_main]
 
 use awfqi::float::Real;
-use awfqi::model::Transition;
 use awfqi::fqi::{Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, Tilings};
+use awfqi::model::Transition;
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 

@@ -18,7 +18,8 @@
 //! All candidates must share |𝒮| and |𝒜|.
 //!
 //! ```
-//! use awfqi::env::{FiniteMdp, GridWorld};
+//! use awfqi::env::GridWorld;
+//! use awfqi::model::FiniteMdp;
 //! use awfqi::identify::{Belief, Criterion, Scoring, compute_score, run_queries};
 //! use awfqi::planning::{StoppingRule, greedy_policy, value_iteration};
 //! use rand_chacha::ChaCha8Rng;

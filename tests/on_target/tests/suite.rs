@@ -155,8 +155,8 @@ mod tests {
     use super::{check_predictions, gp_hyper, gp_point, instance};
     use awfqi::Error;
     use awfqi::env::{Dynamics, EpisodeRecord, GridWorld, PuddleWorld};
-    use awfqi::model::{FiniteMdp, GenerativeModel};
     use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions, WhenFull};
+    use awfqi::model::{FiniteMdp, GenerativeModel};
     use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
     use awfqi_on_target::{close, golden};
     use rand_chacha::ChaCha8Rng;
@@ -624,8 +624,23 @@ mod tests {
     /// relabelled source rewards and that every output is finite and in range.
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
+        use awfqi_on_target::workloads::{AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: 16,
+                steps: 2,
+                budget: 12,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: 60,
+                table_entries: 392,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
         // SAFETY: the only reference.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let run = AdaptiveRun {
@@ -674,9 +689,25 @@ mod tests {
     /// of the final trees (grown along each query's path) acts.
     #[test]
     fn adaptive_awfqi_with_streamed_trees() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
-        static mut TREES: awfqi::fqi::TreeStorage<f32, 2, 1057, 511> = awfqi::fqi::TreeStorage::new();
+        use awfqi_on_target::workloads::{AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: 16,
+                steps: 2,
+                budget: 12,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: 60,
+                table_entries: 0,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
+        static mut TREES: awfqi::fqi::TreeStorage<f32, 2, 1057, 511> =
+            awfqi::fqi::TreeStorage::new();
         // SAFETY: the only references.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let trees = unsafe { &mut *core::ptr::addr_of_mut!(TREES) };
@@ -880,8 +911,8 @@ mod tests {
     /// Q(c0) = −2 + 0.9·(1·Q(c1) + 0.5·Q(c0))/1.5, whose fixed point is −2; Q(c1) = 1.
     #[test]
     fn weighted_fqi_sweep_on_a_chain() {
-        use awfqi::model::Transition;
         use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+        use awfqi::model::Transition;
         let t = |s: [f32; 2], r: f32, n: [f32; 2], absorbing: bool| Transition {
             state: s,
             action: 0,
@@ -1026,7 +1057,9 @@ mod tests {
     /// reach of 0.1 of the range caps an action tried only far away (hand-computed).
     #[test]
     fn knn_q_on_a_chain() {
-        use awfqi::prelude::{EmptyCells, FqiConfig, Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet, Transition};
+        use awfqi::prelude::{
+            EmptyCells, FqiConfig, Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet, Transition,
+        };
         let at = super::chain_state;
         let samples = super::chain_samples();
         let nb = Neighbours::<f32, 1>::cube(1, 0.0, 5.0, Kernel::Uniform).unwrap();
@@ -1080,7 +1113,9 @@ mod tests {
     /// iteration and Q is the closed-form Q* at the states.
     #[test]
     fn trees_q_on_a_chain() {
-        use awfqi::prelude::{EmptyCells, ExtraTrees, FqiConfig, SampleSet, TreeFqi, TreeNode, TreeRecord};
+        use awfqi::prelude::{
+            EmptyCells, ExtraTrees, FqiConfig, SampleSet, TreeFqi, TreeNode, TreeRecord,
+        };
         use rand_chacha::ChaCha8Rng;
         use rand_core::SeedableRng;
         let at = super::chain_state;
@@ -1113,7 +1148,10 @@ mod tests {
     /// greedy action between two states is the interpolated one.
     #[test]
     fn sweep_q_on_a_chain() {
-        use awfqi::prelude::{EmptyCells, FqiConfig, ModelSweep, RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode};
+        use awfqi::prelude::{
+            EmptyCells, FqiConfig, ModelSweep, RewardModel, SampleSet, SweepEntry, SweepFqi,
+            SweepNode,
+        };
         let at = super::chain_state;
         let samples = super::chain_samples();
         let config = FqiConfig::new(0.9f32, 80, EmptyCells::Nearest).unwrap();
@@ -1145,9 +1183,25 @@ mod tests {
     /// warm refits. Checks the run's sizes, the weights, and that the greedy policy acts.
     #[test]
     fn adaptive_awfqi_with_a_model_sweep() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
-        static mut SWEEP: awfqi::fqi::SweepStorage<f32, 2, { 49 * 4 }, 49> = awfqi::fqi::SweepStorage::new();
+        use awfqi_on_target::workloads::{AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: 16,
+                steps: 2,
+                budget: 12,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: 60,
+                table_entries: 0,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
+        static mut SWEEP: awfqi::fqi::SweepStorage<f32, 2, { 49 * 4 }, 49> =
+            awfqi::fqi::SweepStorage::new();
         // SAFETY: the only references.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let sweep = unsafe { &mut *core::ptr::addr_of_mut!(SWEEP) };
@@ -1187,7 +1241,11 @@ mod tests {
     #[test]
     fn transition_weights_in_the_loop() {
         use crate::Shift;
-        use awfqi::prelude::{Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiEntry, GenerativeModel, PointGrid, Posterior, RowSet, SampleSet, Scores, SourceModel, TabularFqi, Transition, WeightParams};
+        use awfqi::prelude::{
+            Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiEntry, GenerativeModel, PointGrid,
+            Posterior, RowSet, SampleSet, Scores, SourceModel, TabularFqi, Transition,
+            WeightParams,
+        };
         use rand_chacha::ChaCha8Rng;
         use rand_core::{Rng, SeedableRng};
         const PER: usize = 24;

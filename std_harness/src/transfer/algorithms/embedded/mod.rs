@@ -603,10 +603,9 @@ where
 
     /// The AWFQI settings of a run with `budget` queries per step.
     pub fn awfqi_config(&self, budget: usize) -> AwfqiConfig<T, I> {
-        AwfqiConfig {
-            budget,
-            ..self.awfqi
-        }
+        let mut config = self.awfqi;
+        config.budget = budget;
+        config
     }
 
     /// The score table's rows over `sources` (this set-up's
