@@ -30,6 +30,9 @@ enum Command {
     /// Combines the result files of shard directories (same configuration, disjoint runs)
     /// into OUT and regenerates the summary, metrics and plots.
     Merge(commands::merge::Args),
+    /// The plant suite: every plant at two budget schedules of the same total, against
+    /// the random policy and the best known return.
+    Suite(commands::suite::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -52,5 +55,9 @@ fn main() -> anyhow::Result<()> {
             commands::acrobot::run(&args)
         }
         Command::Merge(args) => commands::merge::run(&args),
+        Command::Suite(mut args) => {
+            args.command = typed();
+            commands::suite::run(&args)
+        }
     }
 }

@@ -23,7 +23,9 @@ use std::time::Instant;
 use std::any::Any;
 use std::fmt::Debug;
 
-use awfqi::env::{Acrobot, Dam, GenerativeModel, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::env::{
+    Acrobot, Dam, GenerativeModel, PUDDLE_ACTIONS, PuddleWorld, Tanks, Thermal, Zones,
+};
 use awfqi::{
     AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp,
     Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores, SourceScales,
@@ -433,6 +435,24 @@ impl Plant<2> for Dam<T> {
 impl Plant<4> for Acrobot<T> {
     fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
         Ok(Acrobot::target())
+    }
+}
+
+impl Plant<3> for Zones<T> {
+    fn target(_: &Experiment<3>) -> anyhow::Result<Self> {
+        Ok(Zones::target())
+    }
+}
+
+impl Plant<3> for Thermal<T> {
+    fn target(_: &Experiment<3>) -> anyhow::Result<Self> {
+        Ok(Thermal::target())
+    }
+}
+
+impl Plant<4> for Tanks<T> {
+    fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
+        Ok(Tanks::target())
     }
 }
 
