@@ -10,7 +10,13 @@ use awfqi_harness::commands;
 
 /// Experiments and tools for the awfqi kernel.
 #[derive(Parser)]
-#[command(name = "awfqi-harness", version, about)]
+#[command(
+    name = "awfqi-harness",
+    version,
+    about,
+    after_help = "An error ends the command with exit status 1 and a plain message; \
+                  AWFQI_DEBUG=1 adds the stack trace (a debug report)."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
