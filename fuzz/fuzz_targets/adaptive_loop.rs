@@ -44,6 +44,7 @@ const ANY: &[Kind] = &[
     Kind::OutOfRange,
     Kind::Invalid,
     Kind::NotPd,
+    Kind::Overflow,
     Kind::Conditioning,
 ];
 
