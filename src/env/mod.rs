@@ -41,5 +41,3 @@ pub use puddle::*;
 pub use tanks::*;
 pub use thermal::*;
 pub use zones::*;
-
-pub use crate::model::{FiniteMdp, GenerativeModel, Transition};

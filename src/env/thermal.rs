@@ -18,9 +18,9 @@
 //! stronger heater (its physics differs, its rewards are the target's).
 
 use super::unit_box;
-use super::{GenerativeModel, Transition};
 use crate::error::Result;
 use crate::float::Real;
+use crate::model::{GenerativeModel, Transition};
 use rand_core::Rng;
 
 /// State dimension.

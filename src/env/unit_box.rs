@@ -3,9 +3,9 @@
 //! next states clamped back into the box, nothing absorbing. One place for the checks and
 //! the noisy step, so each plant file holds only its physics and its rewards.
 
-use super::Transition;
 use crate::error::{Error, Result};
 use crate::float::Real;
+use crate::model::Transition;
 use crate::rng;
 use rand_core::Rng;
 

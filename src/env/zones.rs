@@ -14,9 +14,9 @@
 //! sources whose rewards differ from the target's in half of the state space each.
 
 use super::unit_box;
-use super::{GenerativeModel, Transition};
 use crate::error::Result;
 use crate::float::Real;
+use crate::model::{GenerativeModel, Transition};
 use rand_core::Rng;
 
 /// Zones (the state dimension).

@@ -33,7 +33,7 @@ use crate::transfer::suite::{
     AnchorFile, PlantAnchors, Schedule, StepStats, SuitePlant, anchors_markdown, cell_markdown,
     summarise,
 };
-use awfqi::{Dims, StatePlusAction};
+use awfqi::prelude::{Dims, StatePlusAction};
 
 use super::transfer::{Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of};
 

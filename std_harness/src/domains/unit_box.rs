@@ -36,7 +36,7 @@ macro_rules! unit_box_task {
                 action: usize,
                 rng: &mut ChaCha8Rng,
             ) -> awfqi::Result<Record<$d>> {
-                awfqi::env::GenerativeModel::query(self, state, action, rng)
+                awfqi::model::GenerativeModel::query(self, state, action, rng)
             }
 
             fn mean_reward(&self, state: [f64; $d], action: usize) -> awfqi::Result<f64> {
