@@ -143,12 +143,17 @@ pub enum Kind {
     Invalid,
     /// [`Error::OutOfRange`].
     OutOfRange,
+    /// [`Error::Overflow`]: a finite input too large for the precision.
+    Overflow,
     /// [`Error::EmptyData`].
     Empty,
     /// [`Error::NotPositiveDefinite`].
     NotPd,
     /// [`Error::JitterLimit`] or [`Error::IllConditioned`]: the GP's conditioning policy.
     Conditioning,
+    /// A variant added to [`Error`] after these kinds: no call documents it, so
+    /// [`expect_kind`] reports it.
+    Unknown,
 }
 
 /// The kind of an error.
@@ -158,9 +163,11 @@ pub fn kind(e: &Error) -> Kind {
         Error::NonFinite { .. } => Kind::NonFinite,
         Error::InvalidParameter { .. } => Kind::Invalid,
         Error::OutOfRange { .. } => Kind::OutOfRange,
+        Error::Overflow { .. } => Kind::Overflow,
         Error::EmptyData => Kind::Empty,
         Error::NotPositiveDefinite => Kind::NotPd,
         Error::JitterLimit { .. } | Error::IllConditioned { .. } => Kind::Conditioning,
+        _ => Kind::Unknown,
     }
 }
 
