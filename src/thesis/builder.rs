@@ -292,7 +292,7 @@ where
     Dims<D, I>: StatePlusAction,
 {
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
-    /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
+    /// Q-function approximator over the state space (a [`crate::fqi::CellGrid`] for the table,
     /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.
     pub fn new(
         config: ValidAwfqiConfig<T, I>,
