@@ -16,8 +16,8 @@ pub enum Error {
         /// The capacity (number of elements) of the container that is full.
         capacity: usize,
     },
-    /// A buffer lent to a kernel (a part of an [`AwfqiStorage`](crate::AwfqiStorage) or
-    /// [`AdaptiveStorage`](crate::AdaptiveStorage), or a set-up buffer) is shorter than the
+    /// A buffer lent to a kernel (a part of an [`AwfqiStorage`](crate::thesis::AwfqiStorage) or
+    /// [`AdaptiveStorage`](crate::adaptive::AdaptiveStorage), or a set-up buffer) is shorter than the
     /// set-up or the run needs: `buffer` names it and the const parameter that sizes it.
     BufferTooSmall {
         /// The buffer and its const parameter, e.g. ``"samples (`Q`: steps × budget target

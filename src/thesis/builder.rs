@@ -1,15 +1,3 @@
-//! Setting up AWFQI once: one storage block and a builder.
-//!
-//! The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
-//! records, the score table over a candidate set, its sampler, the source data, the FQI
-//! table — is the same for every plant, so it lives here once. The memory is one owned
-//! block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
-//! (all-zero: `.bss`, no flash image); anything that can lend the same slices
-//! ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
-//! optional stage (posteriors fitted on the device, score values) is lent to that stage.
-//!
-//! The [crate docs](crate) show the whole loop on a plant of their own.
-
 use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
 use crate::error::{Error, Result};
@@ -262,6 +250,18 @@ enum ScoreValues<'a, T, const D: usize> {
     Realistic(&'a mut [Scores<T, D>]),
 }
 
+/// Setting up AWFQI once: one storage block and a builder.
+///
+/// The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
+/// records, the score table over a candidate set, its sampler, the source data, the FQI
+/// table — is the same for every plant, so it lives here once. The memory is one owned
+/// block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
+/// (all-zero: `.bss`, no flash image); anything that can lend the same slices
+/// ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
+/// optional stage (posteriors fitted on the device, score values) is lent to that stage.
+///
+/// The [crate docs](crate) show the whole loop on a plant of their own.
+///
 /// The set-up of an AWFQI learner, performed once by [`AwfqiBuilder::build`] (the
 /// [crate docs](crate) show it on a plant of their own).
 ///
@@ -292,7 +292,7 @@ where
     Dims<D, I>: StatePlusAction,
 {
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
-    /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
+    /// Q-function approximator over the state space (a [`crate::fqi::CellGrid`] for the table,
     /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.
     pub fn new(
         config: ValidAwfqiConfig<T, I>,
