@@ -359,8 +359,9 @@ pub use evaluation::{
     evaluate_greedy_multi_start, evaluate_multi_start, rollout,
 };
 pub use fqi::{
-    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
-    KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
+    ANCHOR_LINKS, AnchorEntry, AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Approximator,
+    CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel, KnnFqi,
+    KnnRecord, KnnStorage, ModelFqi, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
     SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings,
     TreeFqi, TreeNode, TreeRecord, TreeStorage,
 };

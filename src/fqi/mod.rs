@@ -27,6 +27,7 @@
 //! | [`HybridFqi`] | [`Approximator::Hybrid`] | both of the above | the mean of tiles and kNN |
 //! | [`TreeFqi`] | [`ExtraTrees`] | [`TreeRecord`] per sample, [`TreeNode`]s | Extra-Trees forests, stored or streamed |
 //! | [`SweepFqi`] | [`ModelSweep`] | [`SweepEntry`] per (node, action), [`SweepNode`] per node | none: value iteration on a grid model fitted once per fit |
+//! | [`AnchorFqi`] | [`AnchorSweep`] | [`AnchorEntry`] per (node, action), [`SweepNode`], position and landing per node | none: the same on representative states placed from the records, within a node budget |
 //!
 //! [`Approximator`] is the choice before storage exists; [`Approximator::build`] makes the
 //! [`QFunction`] that AWFQI and adaptive AWFQI hold. Only the trees draw random numbers,
@@ -49,6 +50,7 @@
 //!   `entries` and `as_tabular` aside), and its name in the `Greedy` macro there;
 //! - its public entry points in the no-panic image (`tests/on_target/src/bin/no_panic/`).
 
+mod anchors;
 mod argmax;
 mod config;
 mod entry;
@@ -64,6 +66,9 @@ mod table;
 mod tiles;
 pub mod trees;
 
+pub use anchors::{
+    ANCHOR_LINKS, AnchorEntry, AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Anchors,
+};
 pub use config::{EmptyCells, FqiConfig};
 pub use entry::FqiEntry;
 pub use grid::CellGrid;
@@ -71,7 +76,7 @@ pub use hybrid::HybridFqi;
 pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
-pub use sweep::{ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
+pub use sweep::{ModelFqi, ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
 pub use table::TabularFqi;
 pub use tiles::{TileFqi, Tilings};
 pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};

@@ -144,6 +144,9 @@ struct Memory<const N: usize, const D: usize, const I: usize> {
     nodes: Vec<TreeNode<T>>,
     sweep_entries: Vec<awfqi::SweepEntry<T, D>>,
     sweep_nodes: Vec<awfqi::SweepNode<T>>,
+    anchor_entries: Vec<awfqi::AnchorEntry<T>>,
+    anchor_positions: Vec<[T; D]>,
+    anchor_landings: Vec<[T; D]>,
     path: Vec<[T; D]>,
     beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
 }
@@ -163,6 +166,9 @@ impl<const N: usize, const D: usize, const I: usize> Memory<N, D, I> {
                 nodes: &mut self.nodes,
                 sweep_entries: &mut self.sweep_entries,
                 sweep_nodes: &mut self.sweep_nodes,
+                anchor_entries: &mut self.anchor_entries,
+                anchor_positions: &mut self.anchor_positions,
+                anchor_landings: &mut self.anchor_landings,
             },
             path: &mut self.path,
             beliefs: &mut self.beliefs,
@@ -318,6 +324,16 @@ where
                 .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
             sweep.nodes(),
         ),
+        awfqi::Approximator::Anchors(anchors) => (0, anchors.nodes()),
+        _ => (0, 0),
+    };
+    let (anchor_entries, anchors) = match approximator {
+        awfqi::Approximator::Anchors(anchors) => (
+            anchors
+                .required_entries(actions)
+                .ok_or_else(|| anyhow::anyhow!("anchor entries overflow"))?,
+            anchors.nodes(),
+        ),
         _ => (0, 0),
     };
     let mut memory = Memory::<N, D, I> {
@@ -332,6 +348,9 @@ where
         nodes: vec![TreeNode::EMPTY; nodes],
         sweep_entries: vec![awfqi::SweepEntry::EMPTY; sweep_entries],
         sweep_nodes: vec![awfqi::SweepNode::EMPTY; sweep_nodes],
+        anchor_entries: vec![awfqi::AnchorEntry::EMPTY; anchor_entries],
+        anchor_positions: vec![[0.0; D]; anchors],
+        anchor_landings: vec![[0.0; D]; anchors],
         path: vec![[0.0; D]; budget],
         beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
     };
