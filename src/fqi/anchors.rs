@@ -14,7 +14,8 @@
 //!   the budget is full, `r` grows (×1.25, at least to the closest pair's distance) and the
 //!   nodes closer than `r` to an earlier node are dropped. The nodes then cover the records
 //!   at spacing `r`, dense where the plant goes, absent where it does not; a last pass at
-//!   `r / 1.25` spends what the budget has left;
+//!   `r / 1.25` spends what the budget has left. Records of weight 0 place nothing (when
+//!   all weigh 0, the first record places the one node);
 //! - **reading a point** `s` (clamped into the box, in units of the box's widths): its `k`
 //!   nearest nodes ([`AnchorSweep::with_neighbours`], at most [`ANCHOR_LINKS`]), weighted
 //!   `(1 − d²/ρ²)²` with `ρ` the distance of the `(k+1)`-th nearest, normalised: weights
@@ -135,6 +136,28 @@ impl<T: Real, const D: usize> AnchorSweep<T, D> {
     /// The neighbours a point is read from.
     pub fn neighbours(&self) -> usize {
         self.neighbours
+    }
+
+    /// Bytes of storage one node needs with `actions` actions: its entries, its
+    /// [`SweepNode`], its position and its landing scratch.
+    pub const fn bytes_per_node(actions: usize) -> usize {
+        actions * core::mem::size_of::<AnchorEntry<T>>()
+            + core::mem::size_of::<SweepNode<T>>()
+            + 2 * core::mem::size_of::<[T; D]>()
+    }
+
+    /// The node budget a memory budget buys: the most nodes whose storage with `actions`
+    /// actions fits in `bytes` (at most `u16::MAX`). The rule that sizes a sweep on anchors
+    /// from the plant's dimension (`D`), its actions and what the learner's other buffers
+    /// leave of the RAM budget.
+    pub const fn budget_within(bytes: usize, actions: usize) -> usize {
+        let per = Self::bytes_per_node(actions);
+        let n = if per == 0 { 0 } else { bytes / per };
+        if n > u16::MAX as usize {
+            u16::MAX as usize
+        } else {
+            n
+        }
     }
 
     /// [`AnchorEntry`]s needed with `actions` actions (`None` on overflow).
@@ -368,6 +391,13 @@ impl<T: Real, const D: usize> Anchors<'_, T, D> {
                     }
                     radius = self.thin(radius);
                 }
+            }
+        }
+        if self.count == 0 {
+            // Every record weighs 0: one node at the first record keeps the model defined.
+            if let Some((s, ..)) = sets.clone().flat_map(|set| set.iter()).next() {
+                let x = self.scaled(&s.state);
+                self.push(x);
             }
         }
         // Spend the rest of the budget at a finer spacing.

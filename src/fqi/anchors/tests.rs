@@ -306,3 +306,52 @@ fn a_fresh_or_cleared_q_is_zero_and_it_builds_from_an_approximator() {
     q.clear();
     assert_eq!(q.value([2.0], 0).unwrap(), 0.0);
 }
+
+#[test]
+fn records_of_weight_zero_place_no_node_unless_all_weigh_zero() {
+    let settings = AnchorSweep::new([0.0], [4.0], 8).unwrap();
+    let data = chain();
+    let mut parts = Parts::<1>::new(8, 2);
+    let mut q = AnchorFqi::new(settings, 2, parts.lend()).unwrap();
+    // Only the records at 0 and 4 weigh anything.
+    let w: Vec<f64> = data
+        .iter()
+        .map(|r| {
+            if r.state[0] == 0.0 || r.state[0] == 4.0 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    q.fit(
+        &[SampleSet::weighted(&data, Some(&w), Some(&w))],
+        &config(5),
+    )
+    .unwrap();
+    let mut placed: Vec<f64> = (0..q.placed()).map(|i| q.anchor(i).unwrap()[0]).collect();
+    placed.sort_by(f64::total_cmp);
+    assert_eq!(placed, vec![0.0, 4.0]);
+    let zero = vec![0.0; data.len()];
+    q.fit(
+        &[SampleSet::weighted(&data, Some(&zero), Some(&zero))],
+        &config(5),
+    )
+    .unwrap();
+    assert_eq!(q.placed(), 1);
+    assert_eq!(q.anchor(0), Some(data[0].state));
+    assert!(q.value([2.0], 0).unwrap().is_finite());
+}
+
+#[test]
+fn the_budget_a_memory_buys_is_its_bytes_over_a_nodes() {
+    // f32, D = 4, 2 actions: 2 entries of 4 + 8 + 8 bytes, a node of 12, 2 × 16.
+    assert_eq!(AnchorSweep::<f32, 4>::bytes_per_node(2), 2 * 20 + 12 + 32);
+    assert_eq!(AnchorSweep::<f32, 4>::budget_within(84 * 512 + 83, 2), 512);
+    assert_eq!(AnchorSweep::<f32, 4>::budget_within(0, 2), 0);
+    assert_eq!(AnchorSweep::<f32, 1>::budget_within(usize::MAX, 1), 65_535);
+    assert_eq!(
+        core::mem::size_of::<AnchorStorage<f32, 4, { 512 * 2 }, 512>>(),
+        512 * AnchorSweep::<f32, 4>::bytes_per_node(2)
+    );
+}

@@ -37,7 +37,8 @@ use awfqi::weights::{
     effective_sample_size, ideal_weight, predictive_stds,
 };
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, AnchorEntry,
+    AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
     ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi,
     HyperparameterBounds, Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction,
