@@ -200,7 +200,10 @@ fn run<T: Real, const D: usize>(b: &mut Bytes) {
                     finite("anchor", "position", v.to_f64());
                     let slack = (hi - lo).to_f64().abs() * 1e-5;
                     let (v, lo, hi) = (v.to_f64(), lo.to_f64(), hi.to_f64());
-                    assert!(v >= lo - slack && v <= hi + slack, "node {v} outside [{lo}, {hi}]");
+                    assert!(
+                        v >= lo - slack && v <= hi + slack,
+                        "node {v} outside [{lo}, {hi}]"
+                    );
                 }
             }
         }

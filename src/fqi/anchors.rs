@@ -27,9 +27,10 @@
 //!   round after round (the grid's dilation on the nodes' nearest-neighbour graph).
 //!
 //! **Memory**, `M` nodes, `A` actions, `f32`: an [`AnchorEntry`] per node and action
-//! (`4 + 4k` bytes, 20 at `k = 4`), a [`SweepNode`] (12 bytes), its position and a
-//! landing scratch (`2·4D` bytes) per node. No randomness; the nearest-node searches scan
-//! the nodes sorted on their widest axis and stop at the `(k+1)`-th distance.
+//! (20 bytes: room for [`ANCHOR_LINKS`] links whatever `k`), a [`SweepNode`] (12 bytes),
+//! its position and a landing scratch (`2·4D` bytes) per node
+//! ([`AnchorSweep::bytes_per_node`]). No randomness; the nearest-node searches scan the
+//! nodes sorted on their widest axis and stop at the `(k+1)`-th distance.
 
 use super::sweep::{Layout, ModelFqi, Nodes};
 use super::{RewardModel, SampleSet, SweepNode};

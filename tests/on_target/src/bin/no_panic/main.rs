@@ -38,15 +38,15 @@ use awfqi::weights::{
 };
 use awfqi::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, AnchorEntry,
-    AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Approximator,
-    Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
-    ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi,
-    HyperparameterBounds, Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction,
-    ModelSweep, MultiStartProtocol, Neighbours, Output, QFunction, Real, RewardModel, RowSet,
-    SampleSet, ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData, SourceMeans,
-    SourceModel, SourceScales, SubsetRule, SweepEntry, SweepFqi, SweepNode, SweepStorage,
-    TabularFqi, TileFqi, Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull,
-    evaluate, evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+    AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Approximator, Awfqi, AwfqiBuffers,
+    AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, ExtraTrees, FqiConfig,
+    FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi, HyperparameterBounds,
+    Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, ModelSweep,
+    MultiStartProtocol, Neighbours, Output, QFunction, Real, RewardModel, RowSet, SampleSet,
+    ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel,
+    SourceScales, SubsetRule, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
+    Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate,
+    evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start, rollout,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;
