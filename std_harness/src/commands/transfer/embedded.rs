@@ -407,6 +407,44 @@ mod tests {
     }
 
     #[test]
+    fn anchors_are_the_sweep_on_a_node_budget() {
+        let words = [
+            "--adaptive-q",
+            "anchors",
+            "--adaptive-anchors",
+            "64",
+            "--adaptive-anchor-neighbours",
+            "2",
+            "--adaptive-sweeps",
+            "7",
+        ];
+        let anchors = q(&words, SweepDefaults::ACROBOT).unwrap();
+        assert!(matches!(
+            anchors,
+            EmbeddedQ::Sweep(SweepKnobs {
+                anchors: Some(AnchorKnobs {
+                    nodes: 64,
+                    neighbours: 2
+                }),
+                sweeps: Some(7),
+                ..
+            })
+        ));
+        assert_eq!(iterations(anchors), 7);
+        assert!(matches!(
+            q(&[], SweepDefaults::ACROBOT).unwrap(),
+            EmbeddedQ::Sweep(SweepKnobs { anchors: None, .. })
+        ));
+        for bad in [
+            ["--adaptive-anchors", "0"],
+            ["--adaptive-anchor-neighbours", "5"],
+        ] {
+            let words = [&["--adaptive-q", "anchors"][..], &bad[..]].concat();
+            assert!(q(&words, SweepDefaults::ACROBOT).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
     fn zero_sweeps_are_refused() {
         let err = q(&["--adaptive-sweeps", "0"], SweepDefaults::PUDDLE).unwrap_err();
         assert!(format!("{err:#}").contains("iterations"), "{err:#}");
