@@ -35,7 +35,7 @@ use awfqi::env::{
     DAM_EVALUATION_STATE, DAM_HORIZON, DAM_MAX_STORAGE, Dam,
 };
 use awfqi::evaluation::{MultiStartProtocol, evaluate_greedy_multi_start};
-use awfqi::{
+use awfqi::prelude::{
     CellGrid, EmptyCells, FqiConfig, GenerativeModel, ModelSweep, RewardModel, SampleSet,
     SweepEntry, SweepFqi, SweepNode, Transition,
 };
@@ -72,7 +72,7 @@ fn args() -> anyhow::Result<Args> {
         lookahead: false,
         sweeps: None,
         anchors: Vec::new(),
-        neighbours: awfqi::ANCHOR_LINKS,
+        neighbours: awfqi::fqi::ANCHOR_LINKS,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -216,21 +216,21 @@ where
 {
     for &n in &a.states {
         for &m in &a.anchors {
-            let anchors = awfqi::AnchorSweep::new(s.lower, s.upper, m)?
+            let anchors = awfqi::fqi::AnchorSweep::new(s.lower, s.upper, m)?
                 .with_neighbours(a.neighbours)?
                 .with_rewards(s.rewards)
                 .with_lookahead(a.lookahead);
-            let mut entries = vec![awfqi::AnchorEntry::EMPTY; m * s.actions];
+            let mut entries = vec![awfqi::fqi::AnchorEntry::EMPTY; m * s.actions];
             let mut nodes = vec![SweepNode::EMPTY; m];
             let mut positions = vec![[0.0f32; D]; m];
             let mut landings = vec![[0.0f32; D]; m];
             let mut returns = Vec::new();
             for i in 0..a.repeats {
                 let records = draw(a, s, n, i)?;
-                let mut q = awfqi::AnchorFqi::new(
+                let mut q = awfqi::fqi::AnchorFqi::new(
                     anchors,
                     s.actions,
-                    awfqi::AnchorParts {
+                    awfqi::fqi::AnchorParts {
                         entries: &mut entries,
                         nodes: &mut nodes,
                         positions: &mut positions,

@@ -6,11 +6,11 @@
 //! flooding (storage above 300) and for missing the demand (releasing less than 10). Our
 //! reservoir (the paper's target) has its own inflow season and cost weights; the source
 //! reservoirs' records were logged elsewhere. Yours would be a motor, a pump, a heater:
-//! implement `awfqi::GenerativeModel` for it (one sampled step from any state and action)
+//! implement `awfqi::model::GenerativeModel` for it (one sampled step from any state and action)
 //! and change the sizes in `src/reservoir.rs`.
 //!
 //! What runs where:
-//! - **host, once** (`tests/firmware_tables.rs`): the source records and the posterior of
+//! - **host, once** (`crosscheck/tests/firmware_tables.rs`): the source records and the posterior of
 //!   each source's reward GP at its records → `src/tables.rs`, `static` arrays that stay in
 //!   **flash** (and the score table the thesis's AWFQI draws from);
 //! - **device**: each source's reward mean function fitted at set-up, the plan on the

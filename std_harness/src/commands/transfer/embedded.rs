@@ -56,7 +56,7 @@ pub enum SweepRewardsArg {
     Backfilled,
 }
 
-impl From<SweepRewardsArg> for awfqi::RewardModel {
+impl From<SweepRewardsArg> for awfqi::fqi::RewardModel {
     fn from(r: SweepRewardsArg) -> Self {
         match r {
             SweepRewardsArg::PerAction => Self::PerAction,
@@ -202,6 +202,11 @@ pub struct AdaptiveArgs {
     /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
     #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
     pub adaptive_gp_points: usize,
+    /// Also fit the same approximator on each run's target samples alone after every
+    /// step and evaluate it on the same rollouts' noise (`fqi_same_samples` in the step
+    /// records): FQI paired with the learner, on the very samples it queried.
+    #[arg(long)]
+    pub adaptive_same_samples_fqi: bool,
 }
 
 impl AdaptiveArgs {
@@ -222,6 +227,7 @@ impl AdaptiveArgs {
                 self.adaptive_refit_restarts,
             )),
             gp_points: self.adaptive_gp_points,
+            same_samples_fqi: self.adaptive_same_samples_fqi,
         }
     }
 
@@ -280,7 +286,7 @@ pub struct SweepDefaults {
     /// Cells per axis.
     pub cells: usize,
     /// Which records a node's reward averages.
-    pub rewards: awfqi::RewardModel,
+    pub rewards: awfqi::fqi::RewardModel,
     /// Value-iteration sweeps (`None`: FQI's iterations).
     pub sweeps: Option<usize>,
 }
@@ -290,7 +296,7 @@ impl SweepDefaults {
     /// state only).
     pub const PUDDLE: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
-        rewards: awfqi::RewardModel::Pooled,
+        rewards: awfqi::fqi::RewardModel::Pooled,
         sweeps: None,
     };
     /// The Dam's: 24 cells per axis (chosen on the tuning runs, `--seed 100`, 20 runs at
@@ -300,7 +306,7 @@ impl SweepDefaults {
     /// 400: at γ = 0.999 the protocol's 60 iterations value only the next 60 days).
     pub const DAM: Self = Self {
         cells: 24,
-        rewards: awfqi::RewardModel::Backfilled,
+        rewards: awfqi::fqi::RewardModel::Backfilled,
         sweeps: Some(400),
     };
     /// Acrobot's: [`ADAPTIVE_SWEEP_CELLS`] cells per axis (chosen on the tuning runs,
@@ -308,7 +314,15 @@ impl SweepDefaults {
     /// (they depend on the state only).
     pub const ACROBOT: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
-        rewards: awfqi::RewardModel::Pooled,
+        rewards: awfqi::fqi::RewardModel::Pooled,
+        sweeps: None,
+    };
+    /// The plant suite's unit-box plants' (the zones, the thermal room, the tanks): the
+    /// zones firmware example's recommended sweep, 6 cells per axis of `[0, 1]^D`,
+    /// backfilled rewards (their energy costs depend on the action).
+    pub const UNIT_BOX: Self = Self {
+        cells: 6,
+        rewards: awfqi::prelude::RewardModel::Backfilled,
         sweeps: None,
     };
 }
@@ -357,7 +371,9 @@ mod tests {
     }
 
     fn iterations(q: EmbeddedQ) -> usize {
-        q.fqi(awfqi::FqiConfig::published()).unwrap().iterations()
+        q.fqi(awfqi::fqi::FqiConfig::published())
+            .unwrap()
+            .iterations()
     }
 
     #[test]
@@ -380,7 +396,7 @@ mod tests {
 
     #[test]
     fn the_sweeps_keep_the_rest_of_fqi() {
-        let fqi = awfqi::FqiConfig::new(0.999, 60, awfqi::EmptyCells::Value(-2.0))
+        let fqi = awfqi::fqi::FqiConfig::new(0.999, 60, awfqi::fqi::EmptyCells::Value(-2.0))
             .unwrap()
             .with_min_weight(0.25)
             .unwrap();
@@ -389,7 +405,7 @@ mod tests {
         assert_eq!(got.iterations(), 9);
         assert!((got.discount() - 0.999).abs() < 1e-7);
         assert!((got.min_weight() - 0.25).abs() < 1e-7);
-        assert_eq!(got.empty_cells(), awfqi::EmptyCells::Value(-2.0));
+        assert_eq!(got.empty_cells(), awfqi::fqi::EmptyCells::Value(-2.0));
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! Regenerate after changing anything here (or in the core's Dam, GP or score code):
 //!
 //! ```sh
-//! UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables
+//! UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables
 //! ```
 //!
 //! The second test does the same for the 32 KiB Puddle World footprint image
@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use awfqi::env::{DAM_ACTIONS, DAM_DAYS, DAM_MAX_STORAGE, DAM_MIN_STORAGE, Dam};
-use awfqi::{
+use awfqi::prelude::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
     Scores, SourceMeans, SourceModel, Transition,
 };
@@ -45,7 +45,7 @@ const SCORE_ROWS: usize = 11 * 6 * DAM_ACTIONS;
 /// Seed of the generation.
 const SEED: u64 = 2018;
 /// Where the tables live.
-const TABLES: &str = "examples/firmware/src/tables.rs";
+const TABLES: &str = "../examples/firmware/src/tables.rs";
 
 /// The Dam's noise-free means, for the oracle score table (the core's Dam has them as
 /// methods; `SourceModel` is how the score table asks for them).
@@ -133,15 +133,15 @@ fn render(t: &Tables) -> String {
     let _ = writeln!(
         w,
         "//! Source data of the firmware example, generated on the host by\n\
-         //! `tests/firmware_tables.rs` (do not edit; regenerate with\n\
-         //! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`).\n\
+         //! `crosscheck/tests/firmware_tables.rs` (do not edit; regenerate with\n\
+         //! `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`).\n\
          //!\n\
          //! {SOURCES} Dam sources (the IWFQI paper's sources 1–{SOURCES}) × {RECORDS_PER_SOURCE} \
          one-step transitions from uniform states, the\n\
          //! reward posterior of each source's GP at each of its records, and the oracle score\n\
          //! table over the candidate grid. Everything here is `static`: it stays in flash.\n\
          \n\
-         use awfqi::{{Posterior, Scores, Transition}};\n\
+         use awfqi::prelude::{{Posterior, Scores, Transition}};\n\
          \n\
          /// Records per source.\n\
          pub const RECORDS_PER_SOURCE: usize = {RECORDS_PER_SOURCE};\n\
@@ -257,14 +257,14 @@ fn committed_firmware_tables_are_what_the_generator_makes() {
     assert!(
         committed == text,
         "{TABLES} is not what tests/firmware_tables.rs generates; regenerate it with \
-         `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`"
+         `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`"
     );
 }
 
 /// The 32 KiB configuration's GP capacity and score-grid spacing (324 rows).
 const PUDDLE_GP_POINTS: usize = 24;
 const PUDDLE_SPACING: f32 = 1.25;
-const PUDDLE_TABLES: &str = "tests/on_target/src/puddle_tables.rs";
+const PUDDLE_TABLES: &str = "../tests/on_target/src/puddle_tables.rs";
 
 #[test]
 fn committed_puddle_32k_tables_are_what_the_generator_makes() {
@@ -295,13 +295,13 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     let _ = writeln!(
         w,
         "//! Source data of the 32 KiB Puddle World footprint image, generated on the host by\n\
-         //! `tests/firmware_tables.rs` (do not edit; regenerate with\n\
-         //! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`): the published\n\
+         //! `crosscheck/tests/firmware_tables.rs` (do not edit; regenerate with\n\
+         //! `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`): the published\n\
          //! shared-dynamics source records and their stored reward posteriors, and the\n\
          //! realistic score table (`V_r` from one {PUDDLE_GP_POINTS}-point reward GP per source) over the\n\
          //! spacing-{PUDDLE_SPACING} puddle grid. All `static`: flash.\n\
          \n\
-         use awfqi::{{Posterior, Scores, Transition}};\n\
+         use awfqi::prelude::{{Posterior, Scores, Transition}};\n\
          \n\
          /// Records of all sources.\n\
          pub const SOURCE_RECORDS: usize = {};\n\
@@ -365,14 +365,14 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     assert!(
         committed == s,
         "{PUDDLE_TABLES} is not what tests/firmware_tables.rs generates; regenerate it with \
-         `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`"
+         `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`"
     );
 }
 
-#[path = "../examples/firmware/src/reservoir.rs"]
+#[path = "../../examples/firmware/src/reservoir.rs"]
 #[allow(dead_code)]
 mod reservoir;
-#[path = "../examples/firmware/src/tables.rs"]
+#[path = "../../examples/firmware/src/tables.rs"]
 #[rustfmt::skip]
 mod tables;
 
@@ -387,7 +387,7 @@ fn firmware_example_beats_its_baseline_on_its_seed() {
     let mut storage = Box::new(reservoir::Storage::new());
     for thesis in [false, true] {
         let mut steps = 0;
-        let check = |report: &awfqi::StepReport<f32, 3>| {
+        let check = |report: &awfqi::thesis::StepReport<f32, 3>| {
             steps += 1;
             assert_eq!(report.n_target_samples, steps * reservoir::BUDGET);
             assert_eq!(report.n_source_samples, SOURCES * RECORDS_PER_SOURCE);
