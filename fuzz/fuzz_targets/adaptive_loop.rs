@@ -43,7 +43,9 @@ const ANY: &[Kind] = &[
     Kind::NonFinite,
     Kind::OutOfRange,
     Kind::Invalid,
+    Kind::Overflow,
     Kind::NotPd,
+    Kind::Overflow,
     Kind::Conditioning,
 ];
 

@@ -342,8 +342,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// Sets the conditioning policy and refactorises the data held (O(n³/6)).
     ///
     /// Errors: those of the factorisation ([`Error::JitterLimit`],
-    /// [`Error::IllConditioned`], [`Error::NotPositiveDefinite`]); on error the previous
-    /// policy is kept.
+    /// [`Error::IllConditioned`], [`Error::Overflow`] naming `y`,
+    /// [`Error::NotPositiveDefinite`]); on error the previous policy is kept.
     pub fn set_conditioning(&mut self, conditioning: Conditioning<T>) -> Result<()> {
         let previous = self.conditioning;
         self.conditioning = conditioning;
@@ -491,8 +491,9 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
 
     /// Sets the hyperparameters and refactorises the data held (O(n³/6)).
     ///
-    /// Errors: those of [`Hyperparameters::validate`] and [`Error::NotPositiveDefinite`];
-    /// on error the previous hyperparameters are kept.
+    /// Errors: those of [`Hyperparameters::validate`] and of the factorisation
+    /// ([`Error::JitterLimit`], [`Error::IllConditioned`], [`Error::Overflow`] naming `y`,
+    /// [`Error::NotPositiveDefinite`]); on error the previous hyperparameters are kept.
     pub fn set_hyperparameters(&mut self, hyper: Hyperparameters<T, D>) -> Result<()> {
         hyper.validate()?;
         let previous = self.hyper;

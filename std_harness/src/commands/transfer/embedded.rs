@@ -322,7 +322,7 @@ impl SweepDefaults {
     /// backfilled rewards (their energy costs depend on the action).
     pub const UNIT_BOX: Self = Self {
         cells: 6,
-        rewards: awfqi::prelude::RewardModel::Backfilled,
+        rewards: awfqi::fqi::RewardModel::Backfilled,
         sweeps: None,
     };
 }
