@@ -153,7 +153,10 @@ impl<T: Real, const D: usize> AnchorSweep<T, D> {
     /// leave of the RAM budget.
     pub const fn budget_within(bytes: usize, actions: usize) -> usize {
         let per = Self::bytes_per_node(actions);
-        let n = if per == 0 { 0 } else { bytes / per };
+        let n = match bytes.checked_div(per) {
+            Some(n) => n,
+            None => 0,
+        };
         if n > u16::MAX as usize {
             u16::MAX as usize
         } else {
