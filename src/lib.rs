@@ -217,10 +217,11 @@ pub mod prelude {
     };
     pub use crate::float::Real;
     pub use crate::fqi::{
+        ANCHOR_LINKS, AnchorEntry, AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep,
         Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi,
-        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage,
-        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
-        Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelFqi, ModelSweep, Neighbours, QFunction,
+        QStorage, RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage,
+        TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
     };
     pub use crate::gp::{
         Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull,

@@ -29,6 +29,8 @@
 //! Variances are computed on values shifted by the first source's value, so a row where all
 //! sources agree exactly has score exactly 0 (and the shift keeps the computation accurate
 //! when the values are large and close).
+//!
+//! [`SourceModel`]: crate::model::SourceModel
 
 mod points;
 mod rows;
