@@ -101,17 +101,8 @@
 //! // All the memory the learner and its set-up write (a `static` in `.bss` on a device).
 //! awfqi::adaptive_storage! {
 //!     struct HeaterMemory {
-//!         scalar: f32,
-//!         state_dim: 1,
-//!         actions: 2,
-//!         gp_points: 16,
-//!         steps: 2,
-//!         budget: 10,
-//!         sources: 2,
-//!         source_records: 40,
-//!         source_posteriors: 40,
-//!         candidates: 40,
-//!         sweep_cells: 10,
+//!         scalar: f32, state_dim: 1, actions: 2, gp_points: 16, steps: 2, budget: 10,
+//!         sources: 2, source_records: 40, source_posteriors: 40, candidates: 40, sweep_cells: 10,
 //!     }
 //! }
 //!

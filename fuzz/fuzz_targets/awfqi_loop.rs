@@ -39,7 +39,6 @@ const ANY: &[Kind] = &[
     Kind::Invalid,
     Kind::Overflow,
     Kind::NotPd,
-    Kind::Overflow,
     Kind::Conditioning,
 ];
 

@@ -1,41 +1,3 @@
-//! Weighted FQI as a **model sweep**: value iteration on a grid of nodes over a model
-//! fitted from the weighted records, so an iteration costs `O(nodes · actions)` whatever
-//! the number of records, and the memory is a few scalars per node and action.
-//!
-//! Trees and averagers fit every iteration's regression from the records; a model sweep
-//! fits from the records once per fit, then iterates on the grid. The model, per node `x`
-//! (the corners of a [`CellGrid`]'s cells: `cells + 1` per axis) and action `a`, is made
-//! of multilinear ("hat") averages of the records around `x` — each record spreads its
-//! value over the `2^D` corners of its cell with the interpolation weights `φ`:
-//!
-//! - **reward** `R̂(x, a) = Σ φ w_r r / Σ φ w_r` over the action's records, or over every
-//!   action's ([`RewardModel`]: for plants whose reward depends on the state only, so an
-//!   action never tried at `x` still meets the penalty the others found there);
-//! - **step** `d̂(x, a) = Σ φ w_s (s′ − s) / Σ φ w_s`: the mean displacement, so an action
-//!   tried elsewhere moves the same way at `x` (a locally translation-invariant plant);
-//! - **absorption** `Ω(y) = Σ φ(s′) w_s ω / Σ φ(s′) w_s`, spread at the records' *next*
-//!   states: the chance that landing at `y` ends the episode.
-//!
-//! A node whose total weight is below [`ModelSweep::with_min_mass`] (reward) or 0 (step,
-//! absorption) has no data and takes the value of the nearest node that has (Euclidean in
-//! node units, ties to the smallest index, as the table's [`super::EmptyCells::Nearest`]);
-//! a quantity without data anywhere is 0. Then, with `y = clamp(x + d̂(x, a))` in the box
-//! and `V₀ = 0`:
-//!
-//! ```text
-//! Q_k(x, a) = R̂(x, a) + γ (1 − Ω(y)) V_{k−1}(y),   V_k(x) = maxₐ Q_k(x, a),
-//! ```
-//!
-//! `V` and `Ω` interpolated multilinearly at `y`, for [`FqiConfig::iterations`] iterations
-//! (iteration 1 is `R̂`, as FQI's first). A decision at a state `s` interpolates the node
-//! Q-values of `s`'s cell (or, with [`ModelSweep::with_lookahead`], takes `R̂`, `d̂` at
-//! `s` and looks one step ahead). Reward weights enter `R̂` only, transition weights `d̂`
-//! and `Ω`, as in IWFQI.
-//!
-//! **Memory.** One [`SweepEntry`] per node and action (`1 + D` scalars: 12 bytes for `f32`,
-//! `D = 2`) and one [`SweepNode`] per node (3 scalars). A 21 × 21 node grid (20 cells per
-//! axis) with 4 actions: 21 168 + 5 292 bytes. No randomness.
-
 use super::iteration::{self, NoDraws, Regressor};
 use super::{CellGrid, FqiConfig, SampleSet};
 use crate::error::{Error, Result};
@@ -47,6 +9,44 @@ mod nodes;
 
 pub(crate) use nodes::{Layout, Nodes};
 
+/// Weighted FQI as a **model sweep**: value iteration on a grid of nodes over a model
+/// fitted from the weighted records, so an iteration costs `O(nodes · actions)` whatever
+/// the number of records, and the memory is a few scalars per node and action.
+///
+/// Trees and averagers fit every iteration's regression from the records; a model sweep
+/// fits from the records once per fit, then iterates on the grid. The model, per node `x`
+/// (the corners of a [`CellGrid`]'s cells: `cells + 1` per axis) and action `a`, is made
+/// of multilinear ("hat") averages of the records around `x` — each record spreads its
+/// value over the `2^D` corners of its cell with the interpolation weights `φ`:
+///
+/// - **reward** `R̂(x, a) = Σ φ w_r r / Σ φ w_r` over the action's records, or over every
+///   action's ([`RewardModel`]: for plants whose reward depends on the state only, so an
+///   action never tried at `x` still meets the penalty the others found there);
+/// - **step** `d̂(x, a) = Σ φ w_s (s′ − s) / Σ φ w_s`: the mean displacement, so an action
+///   tried elsewhere moves the same way at `x` (a locally translation-invariant plant);
+/// - **absorption** `Ω(y) = Σ φ(s′) w_s ω / Σ φ(s′) w_s`, spread at the records' *next*
+///   states: the chance that landing at `y` ends the episode.
+///
+/// A node whose total weight is below [`ModelSweep::with_min_mass`] (reward) or 0 (step,
+/// absorption) has no data and takes the value of the nearest node that has (Euclidean in
+/// node units, ties to the smallest index, as the table's [`super::EmptyCells::Nearest`]);
+/// a quantity without data anywhere is 0. Then, with `y = clamp(x + d̂(x, a))` in the box
+/// and `V₀ = 0`:
+///
+/// ```text
+/// Q_k(x, a) = R̂(x, a) + γ (1 − Ω(y)) V_{k−1}(y),   V_k(x) = maxₐ Q_k(x, a),
+/// ```
+///
+/// `V` and `Ω` interpolated multilinearly at `y`, for [`FqiConfig::iterations`] iterations
+/// (iteration 1 is `R̂`, as FQI's first). A decision at a state `s` interpolates the node
+/// Q-values of `s`'s cell (or, with [`ModelSweep::with_lookahead`], takes `R̂`, `d̂` at
+/// `s` and looks one step ahead). Reward weights enter `R̂` only, transition weights `d̂`
+/// and `Ω`, as in IWFQI.
+///
+/// **Memory.** One [`SweepEntry`] per node and action (`1 + D` scalars: 12 bytes for `f32`,
+/// `D = 2`) and one [`SweepNode`] per node (3 scalars). A 21 × 21 node grid (20 cells per
+/// axis) with 4 actions: 21 168 + 5 292 bytes. No randomness.
+///
 /// The settings of a model sweep: the grid and the model's options. What a caller chooses
 /// before storage exists.
 #[derive(Debug, Clone, Copy, PartialEq)]

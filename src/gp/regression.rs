@@ -678,7 +678,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     }
 
     /// Searches the box `bounds` for the hyperparameters that maximise the log marginal
-    /// likelihood (spec §4.2; see [`search`](super::search) for the method), leaves the GP
+    /// likelihood (spec §4.2; see [`SearchOptions`](super::SearchOptions) for the method), leaves the GP
     /// fitted with the best ones and returns their log marginal likelihood.
     ///
     /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the
