@@ -30,7 +30,7 @@
 //! **Set-up.** [`AwfqiBuilder`] performs the whole set-up once — source reward GPs, their
 //! stored posteriors, the score table over the caller's candidate set, the sampler, the
 //! source data, the FQI table — in one [`AwfqiStorage`] (or any [`AwfqiBuffers`]); the
-//! example below shows it on a plant of its own.
+//! [`AwfqiBuilder`] shows it on a plant of its own.
 //!
 //! **Dimensions.** `D` is the state dimension, `I = D + 1` the GP input dimension (the state
 //! followed by the action; stable Rust cannot write `D + 1` in a type, so both are

@@ -100,15 +100,17 @@ impl<T: Real> Zones<T> {
     pub fn mean_unchecked(&self, s: [T; ZONES], action: usize) -> ([T; ZONES], T) {
         let c = T::from_f64;
         let mut next = s;
+        let at = |k: usize| s.get(k).copied().unwrap_or(T::ZERO);
         for (i, t) in next.iter_mut().enumerate() {
-            let left = if i > 0 { s[i - 1] - s[i] } else { T::ZERO };
+            let here = at(i);
+            let left = if i > 0 { at(i - 1) - here } else { T::ZERO };
             let right = if i + 1 < ZONES {
-                s[i + 1] - s[i]
+                at(i + 1) - here
             } else {
                 T::ZERO
             };
             let heat = if action == i + 1 { c(GAIN) } else { T::ZERO };
-            *t = s[i] + c(LOSS) * (c(OUTSIDE) - s[i]) + c(COUPLING) * (left + right) + heat;
+            *t = here + c(LOSS) * (c(OUTSIDE) - here) + c(COUPLING) * (left + right) + heat;
         }
         let (mut third, mut energy) = (c(ZONES_SETPOINT), c(0.05));
         match self.building {

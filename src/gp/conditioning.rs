@@ -1,6 +1,3 @@
-//! The conditioning policy of a [`Gp`](super::Gp): how much diagonal jitter it may add to
-//! factorise an ill-conditioned Gram matrix, and which condition it still trusts (spec §4.2).
-
 use crate::error::{Error, Result};
 
 use crate::float::Real;
@@ -20,8 +17,8 @@ const OWN_RATIO: u8 = 1;
 const OWN_CONDITION: u8 = 2;
 const NO_BASE_JITTER: u8 = 4;
 
-/// How a GP may condition its Gram matrix: base jitter, largest escalated jitter relative to
-/// the noise variance, largest trusted condition estimate.
+/// The conditioning policy of a [`Gp`](super::Gp): how much diagonal jitter it may add to
+/// factorise an ill-conditioned Gram matrix, and which condition it still trusts (spec §4.2).
 ///
 /// A jitter `j` on the diagonal turns the model with noise variance `σ²ₙ` into one with
 /// `σ²ₙ + j`. In the eigenbasis of the Gram matrix each term of the predictive mean is scaled
@@ -43,6 +40,9 @@ const NO_BASE_JITTER: u8 = 4;
 /// `4.5·10¹³` in `f64`) the GP refuses with [`Error::IllConditioned`]
 /// (after trying the jitters the policy allows). Together with the Cholesky pivot guard this is
 /// what keeps a wrong `f32` answer from being returned as a success.
+///
+/// How a GP may condition its Gram matrix: base jitter, largest escalated jitter relative to
+/// the noise variance, largest trusted condition estimate. See above.
 ///
 /// The default (every bit zero, so a GP in a zero-initialised `static` carries it): base
 /// jitter [`BASE_JITTER`], jitter ratio `√ε`, condition limit `10⁻²/ε`.

@@ -678,12 +678,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     }
 
     /// Searches the box `bounds` for the hyperparameters that maximise the log marginal
-    /// likelihood (spec §4.2), leaves the GP fitted with the best ones and returns their log
-    /// marginal likelihood. The method: a gradient-free Nelder–Mead simplex in the log space of
-    /// the hyperparameters, every trial point clamped into the box, started from spec §4.2's
-    /// initial values and from `options.restarts` points drawn uniformly in the log box, each
-    /// start with an equal share of the evaluations left (spec §4.2's L-BFGS-B would need
-    /// `K⁻¹`, a second `N × N` matrix).
+    /// likelihood (spec §4.2; see [`SearchOptions`](super::SearchOptions) for the method), leaves the GP
+    /// fitted with the best ones and returns their log marginal likelihood.
     ///
     /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the
     /// search's own arrays (a simplex of at most 9 points and the box) take under 1 KiB of

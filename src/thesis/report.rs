@@ -1,15 +1,15 @@
-//! What one step did, and the warnings a step's numbers call for.
-//!
-//! A kernel that runs on numbers it should not trust still runs: weights that collapsed onto
-//! a handful of source records, sources discarded wholesale by the variance rule of §7.3, a
-//! GP whose best fit the conditioning policy refused. [`StepReport`] carries the numbers
-//! and [`StepReport::warnings`] names what is wrong with them, without allocating, so
-//! firmware can log it with `defmt` or `core::fmt` and a host can print it.
-
 use crate::float::Real;
 use crate::gp::Hyperparameters;
 use core::fmt;
 
+/// What one step did, and the warnings a step's numbers call for.
+///
+/// A kernel that runs on numbers it should not trust still runs: weights that collapsed onto
+/// a handful of source records, sources discarded wholesale by the variance rule of §7.3, a
+/// GP whose best fit the conditioning policy refused. [`StepReport`] carries the numbers
+/// and [`StepReport::warnings`] names what is wrong with them, without allocating, so
+/// firmware can log it with `defmt` or `core::fmt` and a host can print it.
+///
 /// What one step did: the diagnostics of §7.2 step 6 and §12 step 6, and what a user needs
 /// to trust them ([`StepReport::warnings`]).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -30,7 +30,8 @@ use awfqi::planning::{
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 use awfqi::prelude::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, Approximator, Awfqi, AwfqiBuffers,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, AnchorEntry,
+    AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Approximator, Awfqi, AwfqiBuffers,
     AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, ExtraTrees, FqiConfig,
     FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi, HyperparameterBounds,
     Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, ModelSweep,
