@@ -4,7 +4,7 @@
 
 use clap::{Args, ValueEnum};
 
-use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
+use crate::transfer::algorithms::embedded::adaptive::{AdaptiveOptions, GpCapacity};
 use crate::transfer::algorithms::embedded::{
     ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
     EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
@@ -191,7 +191,7 @@ pub struct AdaptiveArgs {
     pub adaptive_refit_restarts: usize,
     /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
     #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
-    pub adaptive_gp_points: usize,
+    pub adaptive_gp_points: GpCapacity,
 }
 
 impl AdaptiveArgs {
@@ -389,6 +389,27 @@ mod tests {
             iterations(tiles),
             60,
             "other approximators run FQI's iterations"
+        );
+    }
+
+    fn gp_points(words: &[&str]) -> Result<GpCapacity, clap::Error> {
+        let cli = Cli::try_parse_from([&["cli"], words].concat())?;
+        Ok(cli.adaptive.options().gp_points)
+    }
+
+    #[test]
+    fn the_gp_capacity_is_parsed_once_into_its_variant() {
+        assert_eq!(gp_points(&[]).unwrap(), GpCapacity::P32);
+        for capacity in GpCapacity::ALL {
+            let n = capacity.points().to_string();
+            assert_eq!(gp_points(&["--adaptive-gp-points", &n]).unwrap(), capacity);
+        }
+        let err = gp_points(&["--adaptive-gp-points", "20"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("--adaptive-gp-points") && err.contains("16, 24, 32, 48, 64"),
+            "{err}"
         );
     }
 

@@ -7,15 +7,12 @@ use std::time::Instant;
 
 use awfqi::env::Dynamics;
 use awfqi::weights::NoiseSubtraction;
-use awfqi::{Dims, StatePlusAction};
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::Domain;
 use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
-use crate::transfer::algorithms::embedded::{
-    EmbeddedConfig, EmbeddedDomain, EmbeddedSetup, GP_POINTS, SharedSetup,
-};
-use crate::transfer::algorithms::{Algorithm, Experiment, ScopedLearner, TransferOptions};
+use crate::transfer::algorithms::embedded::{EmbeddedConfig, EmbeddedDomain, SharedSetup};
+use crate::transfer::algorithms::{Algorithm, Experiment, TransferOptions};
 use crate::transfer::domain_data::DomainData;
 use crate::transfer::protocol::Protocol;
 use crate::transfer::score_tables::{self, ScoreTableData};
@@ -25,19 +22,17 @@ use crate::transfer::{IDEAL_WEIGHTS, SCORE_TABLE, stream};
 use super::Config;
 use super::args::NoiseArg;
 
-/// The core's algorithms on a domain: their set-up, their learners and the configuration
-/// the command line chose.
+/// The core's algorithms on a domain: their set-up on the domain's plant and the
+/// configuration the command line chose.
 #[derive(Debug, Clone, Copy)]
 pub struct EmbeddedPath<const D: usize> {
-    /// Builds the shared set-up from the sources, the configuration (its score table's
-    /// mode and spacing set from the experiment's), the domain and a stream.
+    /// Builds the shared set-up on the domain's plant from the sources, the configuration
+    /// (its score table's mode and spacing set from the experiment's), the domain and a
+    /// stream: [`OnPlant::shared`](crate::transfer::algorithms::embedded::OnPlant::shared)
+    /// of the plant and its dimensions.
     pub setup: SetupFn<D>,
     /// What the core's algorithms need to know of the domain.
     pub domain: EmbeddedDomain<D>,
-    /// Hands one run's `awfqi-embedded` learner to the protocol.
-    pub learner: ScopedLearner<D>,
-    /// Hands one run's `awfqi-adaptive` learner to the protocol.
-    pub adaptive_learner: ScopedLearner<D>,
     /// The approximators.
     pub config: EmbeddedConfig,
     /// `awfqi-adaptive`'s loop.
@@ -50,21 +45,7 @@ pub type SetupFn<const D: usize> = fn(
     EmbeddedConfig,
     EmbeddedDomain<D>,
     &mut ChaCha8Rng,
-) -> anyhow::Result<Arc<dyn SharedSetup>>;
-
-/// [`SetupFn`] of the set-up of state dimension `D` and GP input dimension `I`.
-pub fn setup_of<const D: usize, const I: usize>(
-    sources: &SourceSet<D>,
-    config: EmbeddedConfig,
-    domain: EmbeddedDomain<D>,
-    rng: &mut ChaCha8Rng,
-) -> anyhow::Result<Arc<dyn SharedSetup>>
-where
-    Dims<D, I>: StatePlusAction,
-{
-    let setup = EmbeddedSetup::<GP_POINTS, D, I>::for_domain(sources, config, domain, rng)?;
-    Ok(Arc::new(setup))
-}
+) -> anyhow::Result<Arc<dyn SharedSetup<D>>>;
 
 /// The source datasets `--sources` names.
 fn load_sources<const D: usize>(
@@ -204,8 +185,6 @@ pub fn build_experiment<const D: usize>(
         realistic_table,
         ideal_weights: None,
         embedded: setup,
-        embedded_learner: embedded.as_ref().map(|e| e.learner),
-        adaptive_learner: embedded.as_ref().map(|e| e.adaptive_learner),
         adaptive_options: embedded.map_or_else(AdaptiveOptions::default, |e| e.adaptive),
     };
     experiment.variances()?;

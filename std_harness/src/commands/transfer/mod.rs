@@ -27,6 +27,6 @@ pub use config::{
 pub use embedded::{
     AdaptiveArgs, AdaptiveQArg, EmbeddedArgs, EmbeddedQArg, SweepDefaults, embedded_config,
 };
-pub use experiment::{EmbeddedPath, SetupFn, build_experiment, setup_of};
+pub use experiment::{EmbeddedPath, SetupFn, build_experiment};
 pub use report::TIMING_HEADER;
 pub use run::{ensure_writable, run, run_one};
