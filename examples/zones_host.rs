@@ -58,7 +58,7 @@ fn main() -> awfqi::Result<()> {
         rows.push((seed, r));
         if std::env::var_os("ZONES_VERBOSE").is_some() {
             let logs: [&[_]; 2] = [&memory.sources[0], &memory.sources[1]];
-            let scales = awfqi::SourceScales::measure(&logs)?;
+            let scales = awfqi::thesis::SourceScales::measure(&logs)?;
             eprintln!(
                 "seed {seed}: reward mean {:.3}, variance {:.4}, local noise {:.5}, v_r {:.5}",
                 scales.reward_mean,

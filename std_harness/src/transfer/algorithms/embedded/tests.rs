@@ -1,6 +1,7 @@
 use std::sync::Arc;
 
-use awfqi::env::{Dynamics, GenerativeModel, PuddleWorld};
+use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::model::GenerativeModel;
 use awfqi::weights::Posterior;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
