@@ -39,6 +39,7 @@ pub mod result_dir;
 pub mod results;
 pub mod score_tables;
 pub mod sources;
+pub mod summary;
 
 /// Stream purpose: one run of one algorithm.
 pub const RUN: u64 = 1;
