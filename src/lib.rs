@@ -35,9 +35,10 @@
 //! them, the block's `new()` is `const` and all-zero, so a `static` of it lands in `.bss`.
 //! A capacity of 0 does not compile; a block too small for the run (steps × budget target
 //! records, one weight per source record, …) is refused by the builder with
-//! [`Error::BufferTooSmall`] before the first GP fit. The thesis's learner takes an
-//! [`AwfqiStorage`](thesis::AwfqiStorage) (const generics) or any
-//! [`AwfqiBuffers`](thesis::AwfqiBuffers). Measured footprints (flash, RAM, stack per
+//! [`Error::BufferTooSmall`] before the first GP fit. [`awfqi_storage!`] declares the
+//! thesis's learner's block the same way (its builder's `steps` refuses a target buffer too
+//! short for the run); code generic over the scalar uses
+//! [`AwfqiStorage`](thesis::AwfqiStorage) or any [`AwfqiBuffers`](thesis::AwfqiBuffers). Measured footprints (flash, RAM, stack per
 //! configuration on a Cortex-M4F) are in the repository's `docs/footprint.md`, written by
 //! `scripts/footprint`.
 //!
@@ -100,17 +101,8 @@
 //! // All the memory the learner and its set-up write (a `static` in `.bss` on a device).
 //! awfqi::adaptive_storage! {
 //!     struct HeaterMemory {
-//!         scalar: f32,
-//!         state_dim: 1,
-//!         actions: 2,
-//!         gp_points: 16,
-//!         steps: 2,
-//!         budget: 10,
-//!         sources: 2,
-//!         source_records: 40,
-//!         source_posteriors: 40,
-//!         candidates: 40,
-//!         sweep_cells: 10,
+//!         scalar: f32, state_dim: 1, actions: 2, gp_points: 16, steps: 2, budget: 10,
+//!         sources: 2, source_records: 40, source_posteriors: 40, candidates: 40, sweep_cells: 10,
 //!     }
 //! }
 //!
@@ -217,6 +209,7 @@ pub mod prelude {
     };
     pub use crate::adaptive_storage;
     pub use crate::alias::AliasEntry;
+    pub use crate::awfqi_storage;
     pub use crate::error::{Error, Result};
     pub use crate::evaluation::{
         Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
@@ -224,10 +217,11 @@ pub mod prelude {
     };
     pub use crate::float::Real;
     pub use crate::fqi::{
+        ANCHOR_LINKS, AnchorEntry, AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep,
         Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi,
-        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage,
-        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
-        Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelFqi, ModelSweep, Neighbours, QFunction,
+        QStorage, RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage,
+        TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
     };
     pub use crate::gp::{
         Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull,

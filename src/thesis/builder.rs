@@ -1,15 +1,3 @@
-//! Setting up AWFQI once: one storage block and a builder.
-//!
-//! The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
-//! records, the score table over a candidate set, its sampler, the source data, the FQI
-//! table — is the same for every plant, so it lives here once. The memory is one owned
-//! block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
-//! (all-zero: `.bss`, no flash image); anything that can lend the same slices
-//! ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
-//! optional stage (posteriors fitted on the device, score values) is lent to that stage.
-//!
-//! The [crate docs](crate) show the whole loop on a plant of their own.
-
 use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
 use crate::error::{Error, Result};
@@ -28,10 +16,11 @@ use rand_core::Rng;
 /// `W` reward weights (one per source record), `R` alias entries (one per candidate row)
 /// and `E` FQI entries (cells × actions).
 ///
-/// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
-/// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
-/// (39 096 bytes on a Cortex-M4F, see [`crate::thesis`]). The builder hands out its parts as
-/// slices, so the learner's code does not depend on the capacities.
+/// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`.
+/// The builder hands out its parts as slices, so the learner's code does not depend on the
+/// capacities. For a plant of a fixed scalar, [`awfqi_storage!`](crate::awfqi_storage)
+/// declares the same block by named capacities; this generic form is for code generic over
+/// the scalar or the dimension.
 #[derive(Debug, Clone)]
 pub struct AwfqiStorage<
     T,
@@ -106,6 +95,104 @@ where
     }
 }
 
+/// Declares the block of all the memory the thesis's AWFQI writes, sized by named
+/// capacities: a `struct` with a `const fn new()` (all-zero: a `static` lands in `.bss`) and
+/// `buffers()` (also `(&mut block).into()`) for [`AwfqiBuilder::build`].
+///
+/// ```rust
+/// awfqi::awfqi_storage! {
+///     /// Puddle World, 11 × 11 cells, the 324 rows of the spacing-1.25 grid.
+///     pub struct PuddleStorage {
+///         scalar: f32,
+///         state_dim: 2,
+///         gp_points: 24,
+///         steps: 6,
+///         budget: 50,
+///         source_records: 1033,
+///         candidate_rows: awfqi::score::PointGrid::<f32, 2>::rows(9, 4),
+///         table_entries: 11 * 11 * 4,
+///     }
+/// }
+/// static mut STORAGE: PuddleStorage = PuddleStorage::new();
+/// ```
+///
+/// The target samples are `steps × budget`, the GP input dimension `state_dim + 1`; a
+/// capacity of 0 does not compile.
+#[macro_export]
+macro_rules! awfqi_storage {
+    (
+        $(#[$attr:meta])*
+        $vis:vis struct $name:ident {
+            scalar: $t:ty,
+            state_dim: $d:expr,
+            gp_points: $n:expr,
+            steps: $steps:expr,
+            budget: $budget:expr,
+            source_records: $w:expr,
+            candidate_rows: $r:expr,
+            table_entries: $e:expr $(,)?
+        }
+    ) => {
+        $(#[$attr])*
+        #[derive(Debug, Clone)]
+        $vis struct $name {
+            gp: $crate::gp::Gp<$t, { $n }, { $d + 1 }>,
+            samples: [$crate::model::Transition<[$t; $d], $t>; $steps * $budget],
+            weights: [$t; $w],
+            alias: [$crate::alias::AliasEntry<$t>; $r],
+            fqi: [$crate::fqi::FqiEntry<$t>; $e],
+        }
+
+        const _: () = {
+            assert!($d > 0, "state_dim: a plant has at least one state coordinate");
+            assert!($n > 0, "gp_points: a GP holds at least one point");
+            assert!($steps > 0, "steps: at least one");
+            assert!($budget > 0, "budget: at least one query a step");
+            assert!($r > 0, "candidate_rows: at least one");
+        };
+
+        impl $name {
+            /// Empty, all-zero storage.
+            pub const fn new() -> Self {
+                Self {
+                    gp: $crate::gp::Gp::zeroed(),
+                    samples: [$crate::model::Transition::EMPTY; $steps * $budget],
+                    weights: [<$t as $crate::float::Real>::ZERO; $w],
+                    alias: [$crate::alias::AliasEntry::EMPTY; $r],
+                    fqi: [$crate::fqi::FqiEntry::EMPTY; $e],
+                }
+            }
+
+            /// The block as the slices a learner borrows.
+            pub fn buffers(
+                &mut self,
+            ) -> $crate::thesis::AwfqiBuffers<'_, $t, { $d }, { $d + 1 }, { $n }> {
+                $crate::thesis::AwfqiBuffers {
+                    gp: &mut self.gp,
+                    samples: &mut self.samples,
+                    weights: &mut self.weights,
+                    alias: &mut self.alias,
+                    fqi: &mut self.fqi,
+                }
+            }
+        }
+
+        impl ::core::default::Default for $name {
+            fn default() -> Self {
+                Self::new()
+            }
+        }
+
+        impl<'a> ::core::convert::From<&'a mut $name>
+            for $crate::thesis::AwfqiBuffers<'a, $t, { $d }, { $d + 1 }, { $n }>
+        {
+            fn from(storage: &'a mut $name) -> Self {
+                storage.buffers()
+            }
+        }
+    };
+}
+
 /// The memory of a learner as borrowed slices, whatever owns it: an [`AwfqiStorage`]
 /// (`(&mut storage).into()`, or [`AwfqiStorage::buffers`]) or buffers sized at run time
 /// (a host's vectors).
@@ -163,6 +250,18 @@ enum ScoreValues<'a, T, const D: usize> {
     Realistic(&'a mut [Scores<T, D>]),
 }
 
+/// Setting up AWFQI once: one storage block and a builder.
+///
+/// The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
+/// records, the score table over a candidate set, its sampler, the source data, the FQI
+/// table — is the same for every plant, so it lives here once. The memory is one owned
+/// block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
+/// (all-zero: `.bss`, no flash image); anything that can lend the same slices
+/// ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
+/// optional stage (posteriors fitted on the device, score values) is lent to that stage.
+///
+/// The [crate docs](crate) show the whole loop on a plant of their own.
+///
 /// The set-up of an AWFQI learner, performed once by [`AwfqiBuilder::build`] (the
 /// [crate docs](crate) show it on a plant of their own).
 ///
@@ -193,7 +292,7 @@ where
     Dims<D, I>: StatePlusAction,
 {
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
-    /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
+    /// Q-function approximator over the state space (a [`crate::fqi::CellGrid`] for the table,
     /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.
     pub fn new(
         config: ValidAwfqiConfig<T, I>,
@@ -518,15 +617,16 @@ pub(crate) fn room_for(len: usize, more: usize, capacity: usize) -> Result<()> {
 /// The names of the lent buffers in errors ([`Error::BufferTooSmall`]), with the const
 /// parameter of [`AwfqiStorage`] and [`crate::AdaptiveStorage`] that sizes each.
 pub(crate) mod buffer {
-    pub(crate) const SAMPLES: &str = "samples (`Q`: steps × budget target records)";
-    pub(crate) const WEIGHTS: &str = "weights (`W`: one per source record)";
-    pub(crate) const ALIAS: &str = "alias (`R`: one entry per candidate row)";
-    pub(crate) const FQI: &str = "fqi (`E`: the approximator's entries, cells × actions)";
+    pub(crate) const SAMPLES: &str = "samples (`steps` × `budget` target records)";
+    pub(crate) const WEIGHTS: &str = "weights (`source_records`: one per source record)";
+    pub(crate) const ALIAS: &str = "alias (`candidate_rows`: one entry per candidate row)";
+    pub(crate) const FQI: &str =
+        "fqi (`table_entries` or the approximator's memory: cells × actions)";
     pub(crate) const POSTERIORS: &str = "posteriors (one per source record)";
     pub(crate) const MEANS: &str = "means (one mean function per source)";
     pub(crate) const SCORES: &str = "scores (one per candidate row)";
     pub(crate) const TRANSITION_WEIGHTS: &str = "transition weights (one per source record)";
-    pub(crate) const CANDIDATES: &str = "candidates (`C`: min(candidates, rows))";
-    pub(crate) const PATH: &str = "path (`B`: the budget)";
-    pub(crate) const BELIEFS: &str = "beliefs (`M`: one per source)";
+    pub(crate) const CANDIDATES: &str = "candidates (`candidates`: min(candidates, rows))";
+    pub(crate) const PATH: &str = "path (`budget`: one step's verified states)";
+    pub(crate) const BELIEFS: &str = "beliefs (`sources`: one per source)";
 }

@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use crate::transfer::algorithms::embedded::adaptive::{AdaptiveOptions, GpCapacity};
 use crate::transfer::algorithms::embedded::{
     ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
-    EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
+    AnchorKnobs, EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
 };
 use crate::transfer::score_tables::Mode;
 
@@ -39,6 +39,10 @@ pub enum AdaptiveQArg {
     /// Value iteration on a grid model of the weighted records (the core's `SweepFqi`):
     /// `--adaptive-sweep-cells` cells per axis, nodes at their corners.
     Sweep,
+    /// The same model at representative states placed from the records (the core's
+    /// `AnchorFqi`): at most `--adaptive-anchors` nodes, a point read from its
+    /// `--adaptive-anchor-neighbours` nearest; the other `--adaptive-sweep-*` options apply.
+    Anchors,
 }
 
 /// Which records a model-sweep node's reward averages (the core's `RewardModel`).
@@ -108,6 +112,12 @@ pub struct AdaptiveArgs {
     /// `--iterations`), 400 on the Dam (chosen on the tuning runs).
     #[arg(long)]
     pub adaptive_sweeps: Option<usize>,
+    /// The node budget of `--adaptive-q anchors`.
+    #[arg(long, default_value_t = 256)]
+    pub adaptive_anchors: usize,
+    /// `--adaptive-q anchors`: the nodes a point is read from (1 to 4).
+    #[arg(long, default_value_t = 4)]
+    pub adaptive_anchor_neighbours: usize,
     /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
     #[arg(long, default_value_t = ADAPTIVE_TILES)]
     pub adaptive_tiles: usize,
@@ -192,6 +202,11 @@ pub struct AdaptiveArgs {
     /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
     #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
     pub adaptive_gp_points: GpCapacity,
+    /// Also fit the same approximator on each run's target samples alone after every
+    /// step and evaluate it on the same rollouts' noise (`fqi_same_samples` in the step
+    /// records): FQI paired with the learner, on the very samples it queried.
+    #[arg(long)]
+    pub adaptive_same_samples_fqi: bool,
 }
 
 impl AdaptiveArgs {
@@ -212,6 +227,7 @@ impl AdaptiveArgs {
                 self.adaptive_refit_restarts,
             )),
             gp_points: self.adaptive_gp_points,
+            same_samples_fqi: self.adaptive_same_samples_fqi,
         }
     }
 
@@ -247,7 +263,7 @@ impl AdaptiveArgs {
                 max_depth: self.adaptive_tree_max_depth,
                 streamed: self.adaptive_tree_streamed,
             })?,
-            AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
+            AdaptiveQArg::Sweep | AdaptiveQArg::Anchors => EmbeddedQ::sweep(SweepKnobs {
                 cells: self.adaptive_sweep_cells.unwrap_or(sweep.cells),
                 rewards: self
                     .adaptive_sweep_rewards
@@ -255,6 +271,10 @@ impl AdaptiveArgs {
                 min_mass: self.adaptive_sweep_min_mass,
                 lookahead: self.adaptive_sweep_lookahead,
                 sweeps: self.adaptive_sweeps.or(sweep.sweeps),
+                anchors: (self.adaptive_q == AdaptiveQArg::Anchors).then_some(AnchorKnobs {
+                    nodes: self.adaptive_anchors,
+                    neighbours: self.adaptive_anchor_neighbours,
+                }),
             })?,
         })
     }
@@ -295,6 +315,14 @@ impl SweepDefaults {
     pub const ACROBOT: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
         rewards: awfqi::fqi::RewardModel::Pooled,
+        sweeps: None,
+    };
+    /// The plant suite's unit-box plants' (the zones, the thermal room, the tanks): the
+    /// zones firmware example's recommended sweep, 6 cells per axis of `[0, 1]^D`,
+    /// backfilled rewards (their energy costs depend on the action).
+    pub const UNIT_BOX: Self = Self {
+        cells: 6,
+        rewards: awfqi::fqi::RewardModel::Backfilled,
         sweeps: None,
     };
 }
@@ -413,6 +441,44 @@ mod tests {
             err.contains("--adaptive-gp-points") && err.contains("16, 24, 32, 48, 64"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn anchors_are_the_sweep_on_a_node_budget() {
+        let words = [
+            "--adaptive-q",
+            "anchors",
+            "--adaptive-anchors",
+            "64",
+            "--adaptive-anchor-neighbours",
+            "2",
+            "--adaptive-sweeps",
+            "7",
+        ];
+        let anchors = q(&words, SweepDefaults::ACROBOT).unwrap();
+        assert!(matches!(
+            anchors,
+            EmbeddedQ::Sweep(SweepKnobs {
+                anchors: Some(AnchorKnobs {
+                    nodes: 64,
+                    neighbours: 2
+                }),
+                sweeps: Some(7),
+                ..
+            })
+        ));
+        assert_eq!(iterations(anchors), 7);
+        assert!(matches!(
+            q(&[], SweepDefaults::ACROBOT).unwrap(),
+            EmbeddedQ::Sweep(SweepKnobs { anchors: None, .. })
+        ));
+        for bad in [
+            ["--adaptive-anchors", "0"],
+            ["--adaptive-anchor-neighbours", "5"],
+        ] {
+            let words = [&["--adaptive-q", "anchors"][..], &bad[..]].concat();
+            assert!(q(&words, SweepDefaults::ACROBOT).is_err(), "{bad:?}");
+        }
     }
 
     #[test]

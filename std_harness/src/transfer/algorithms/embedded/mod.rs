@@ -24,7 +24,7 @@ use std::marker::PhantomData;
 use std::sync::Arc;
 use std::time::Instant;
 
-use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld, Tanks, Thermal, Zones};
 use awfqi::model::GenerativeModel;
 use awfqi::prelude::{
     AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp,
@@ -71,6 +71,7 @@ pub const ADAPTIVE_Q: EmbeddedQ = EmbeddedQ::Sweep(SweepKnobs {
     min_mass: 0.0,
     lookahead: false,
     sweeps: None,
+    anchors: None,
 });
 /// Tiles per axis of `awfqi-adaptive`'s tile coding by default: chosen on the tuning runs
 /// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
@@ -113,6 +114,18 @@ pub struct SweepKnobs {
     /// Value-iteration sweeps of its own (`None`: FQI's iterations): at a discount near 1
     /// the protocol's iterations value too short a horizon.
     pub sweeps: Option<usize>,
+    /// Nodes at representative states placed from the records instead of the grid
+    /// (`cells` then unused).
+    pub anchors: Option<AnchorKnobs>,
+}
+
+/// The knobs of a model sweep on anchors ([`SweepKnobs::anchors`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AnchorKnobs {
+    /// The node budget.
+    pub nodes: usize,
+    /// The nodes a point is read from.
+    pub neighbours: usize,
 }
 
 /// The knobs of [`EmbeddedQ::Trees`].
@@ -235,13 +248,19 @@ impl EmbeddedQ {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
-            Self::Sweep(k) => {
-                awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
+            Self::Sweep(k) => match k.anchors {
+                Some(a) => awfqi::fqi::AnchorSweep::new(lower, upper, a.nodes)?
+                    .with_neighbours(a.neighbours)?
                     .with_rewards(k.rewards)
                     .with_min_mass(k.min_mass as T)?
                     .with_lookahead(k.lookahead)
-                    .into()
-            }
+                    .into(),
+                None => awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
+                    .with_rewards(k.rewards)
+                    .with_min_mass(k.min_mass as T)?
+                    .with_lookahead(k.lookahead)
+                    .into(),
+            },
         })
     }
 }
@@ -410,8 +429,9 @@ fn middle_start<const D: usize>(domain: &Domain<D>) -> [f64; D] {
     starts.get(starts.len() / 2).copied().unwrap_or([0.0; D])
 }
 
-/// The target plant of a domain as the core queries it, in `f32`.
-pub trait Plant<const D: usize>: GenerativeModel<T, State = [T; D]> + Sized {
+/// The target plant of a domain as the core queries it, in `f32` (a `'static` type: the
+/// experiment holds the set-up on its plant for every run).
+pub trait Plant<const D: usize>: GenerativeModel<T, State = [T; D]> + Sized + 'static {
     /// The target of `experiment`.
     ///
     /// Errors: an experiment this plant does not run (Puddle World without its dynamics).
@@ -437,6 +457,24 @@ impl Plant<2> for Dam<T> {
 impl Plant<4> for Acrobot<T> {
     fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
         Ok(Acrobot::target())
+    }
+}
+
+impl Plant<3> for Zones<T> {
+    fn target(_: &Experiment<3>) -> anyhow::Result<Self> {
+        Ok(Zones::target())
+    }
+}
+
+impl Plant<3> for Thermal<T> {
+    fn target(_: &Experiment<3>) -> anyhow::Result<Self> {
+        Ok(Thermal::target())
+    }
+}
+
+impl Plant<4> for Tanks<T> {
+    fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
+        Ok(Tanks::target())
     }
 }
 
@@ -518,10 +556,7 @@ where
         config: EmbeddedConfig,
         domain: EmbeddedDomain<D>,
         rng: &mut ChaCha8Rng,
-    ) -> anyhow::Result<Arc<dyn SharedSetup<D>>>
-    where
-        P: 'static,
-    {
+    ) -> anyhow::Result<Arc<dyn SharedSetup<D>>> {
         Ok(Arc::new(Self::new(sources, config, domain, rng)?))
     }
 
