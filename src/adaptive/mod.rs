@@ -44,13 +44,19 @@
 //! the Q-function keeps its last fit, the step counter does not advance.
 
 pub mod candidates;
+pub mod fading;
 pub mod mean_function;
 pub mod plausibility;
+pub mod safeguard;
+pub mod schedule;
 pub mod storage;
 
 pub use candidates::Candidate;
+pub use fading::{FadeCell, Fading};
 pub use mean_function::MeanFunction;
 pub use plausibility::SourceBelief;
+pub use safeguard::PlanCheck;
+pub use schedule::Schedule;
 pub use storage::{AdaptiveBuffers, AdaptiveStorage};
 
 use crate::awfqi::builder::{buffer, short};
@@ -110,6 +116,9 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     pub bounds: [(T, T); D],
     /// How the target GPs' hyperparameters are searched after their first fit of a run.
     pub refit: Refit,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short
+    /// of its promise ([`safeguard`]).
+    pub safeguard: bool,
 }
 
 /// How a re-plan searches the hyperparameters of the weights' reward GP and of the residual
@@ -128,7 +137,9 @@ pub enum Refit {
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The recommended configuration (`docs/embedded-adaptive.md`, the harness's
-    /// `awfqi-adaptive`): 3 sub-batches, 70 % verification, surprise, uncertainty
+    /// `awfqi-adaptive`): sub-batches and verification share by the budget schedule's rule
+    /// ([`Schedule::rule`]: 3 sub-batches and 70 % verification at 50 queries a step; rollouts
+    /// from several start states by [`AdaptiveAwfqi::with_starts`]), surprise, uncertainty
     /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
     /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
     /// each GP's first fit), on the thesis's AWFQI settings for `budget`
@@ -151,10 +162,11 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     where
         Dims<D, I>: StatePlusAction,
     {
+        let schedule = Schedule::<T>::rule(budget, horizon, 1);
         Self {
             awfqi: AwfqiConfig::thesis(budget),
-            sub_batches: 3,
-            verify: T::from_f64(0.7),
+            sub_batches: schedule.sub_batches,
+            verify: schedule.verify,
             surprise: true,
             uncertainty: true,
             decision: true,
@@ -171,6 +183,7 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
                 restarts: 0,
                 isotropic: true,
             }),
+            safeguard: false,
         }
     }
 
@@ -336,8 +349,20 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     /// run (the warm starts of [`Refit::Warm`]).
     last_hyper: [Option<Hyperparameters<T, I>>; 2],
     slots: &'a mut [Candidate<T>],
+    /// The verification rollouts' start states ([`AdaptiveAwfqi::with_starts`]; empty:
+    /// [`AdaptiveConfig::start`] alone).
+    starts: &'a [[T; D]],
+    /// The start of the next verification rollout, an index into `starts` (cycles over
+    /// the run).
+    next_start: usize,
     path: &'a mut [[T; D]],
     path_len: usize,
+    /// The greedy verification rollouts of the current sub-batch.
+    check: PlanCheck<T>,
+    /// Source weights that fade where the target has records ([`AdaptiveAwfqi::with_fading`]).
+    fading: Option<Fading<T>>,
+    /// The fading's cell sums.
+    fade_table: &'a mut [FadeCell<T>],
     /// The Q-function has been fitted in this run.
     planned: bool,
     /// GP fits of the current step whose optimum the conditioning policy refused.
@@ -430,8 +455,13 @@ where
             relabelled: false,
             last_hyper: [None; 2],
             slots: candidates,
+            starts: &[],
+            next_start: 0,
             path,
             path_len: 0,
+            check: PlanCheck::empty(),
+            fading: None,
+            fade_table: &mut [],
             planned: false,
             refused_fits: 0,
             last: None,
@@ -441,11 +471,63 @@ where
         Ok(learner)
     }
 
+    /// Verifies from every state of `starts` (the start states the plant declares) instead
+    /// of [`AdaptiveConfig::start`] alone: the rollouts of a sub-batch start from successive
+    /// states of `starts` (cycling over the run), the first from each greedy, and each runs
+    /// at most [`schedule::rollout_length`] steps, so a step verifies every start state for
+    /// an equal share of its verification queries.
+    ///
+    /// Errors: `starts` empty ([`Error::EmptyData`]) or with a non-finite coordinate
+    /// ([`Error::NonFinite`] `start`); the learner is unchanged then.
+    pub fn with_starts(mut self, starts: &'a [[T; D]]) -> Result<Self> {
+        if starts.is_empty() {
+            return Err(Error::EmptyData);
+        }
+        for s in starts {
+            crate::error::ensure_all_finite(s, "start")?;
+        }
+        self.starts = starts;
+        self.next_start = 0;
+        Ok(self)
+    }
+
+    /// Fades the sources' reward weights where the target has records ([`fading`]): after
+    /// each re-plan's reward weights, the source records of a region where the target has
+    /// answered weigh at most `fading.pseudo_records` in all; `table` holds the regions'
+    /// sums (`fading.cells^D × actions` entries make them exact). Without relabelling only
+    /// ([`AdaptiveConfig::relabel`] keeps every weight 1).
+    ///
+    /// Errors: those of [`Fading::validate`]; `table` empty ([`Error::BufferTooSmall`]
+    /// `fading`); the learner is unchanged then.
+    pub fn with_fading(mut self, fading: Fading<T>, table: &'a mut [FadeCell<T>]) -> Result<Self> {
+        let fading = fading.validate()?;
+        if table.is_empty() {
+            return Err(Error::BufferTooSmall {
+                buffer: "fading (the regions' sums)",
+                capacity: 0,
+                needed: 1,
+            });
+        }
+        self.fading = Some(fading);
+        self.fade_table = table;
+        Ok(self)
+    }
+
+    /// The verification rollouts' start states.
+    pub fn starts(&self) -> &[[T; D]] {
+        if self.starts.is_empty() {
+            core::slice::from_ref(&self.config.config.start)
+        } else {
+            self.starts
+        }
+    }
+
     /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
     /// step count.
     pub fn reset(&mut self) {
         self.run.reset();
         self.path_len = 0;
+        self.next_start = 0;
         self.planned = false;
         self.residual = false;
         self.relabelled = false;
@@ -553,9 +635,20 @@ where
                 .floor()
                 .to_f64() as usize;
             let verify = verify.min(quota);
+            self.check = PlanCheck::empty();
             self.verify(verify, rng)?;
-            self.draw(quota - verify, rng)?;
-            report = Some(self.replan(rng)?);
+            let (verify, draw) = if self.config.safeguard && self.verified_short() {
+                (quota - verify, 0)
+            } else {
+                (0, quota - verify)
+            };
+            self.verify(verify, rng)?;
+            self.draw(draw, rng)?;
+            let check = self.check;
+            let mut r = self.replan(rng)?;
+            r.plan_shortfall = check.shortfall();
+            r.reward_std = self.reward_std();
+            report = Some(r);
         }
         self.run.steps += 1;
         let mut report = report.ok_or(Error::InvalidParameter {
@@ -565,6 +658,16 @@ where
         report.queries = n;
         self.last = Some(report);
         Ok(report)
+    }
+
+    /// The standard deviation of the target's rewards in `D₀`.
+    fn reward_std(&self) -> T {
+        safeguard::reward_std(self.run.target_samples().iter().map(|r| r.reward))
+    }
+
+    /// Whether the current sub-batch's plan verified short of its promise.
+    fn verified_short(&self) -> bool {
+        self.check.is_short(self.reward_std())
     }
 
     /// Appends a queried record to `D₀` and adds its clipped errors to the beliefs.
@@ -577,15 +680,33 @@ where
         evidence.append(&mut self.run, record)
     }
 
-    /// `n` queries along greedy rollouts from the start state (ε-greedy after the first
-    /// rollout of the call), each state kept in the path.
+    /// `n` queries along greedy rollouts from the start states (ε-greedy after the first
+    /// rollout of the call from each start), each state kept in the path.
     fn verify<R: Rng + ?Sized>(&mut self, n: usize, rng: &mut R) -> Result<()> {
         let actions = self.run.target.num_actions();
+        let m = self.starts().len();
+        let length = schedule::rollout_length(
+            self.config.awfqi.budget,
+            self.config.verify,
+            self.config.horizon,
+            m,
+        );
+        let gamma = self.config.awfqi.fqi.discount();
         let mut left = n;
-        let mut first = true;
+        let mut rollouts = 0usize;
         while left > 0 {
-            let mut state = self.config.start;
-            for _ in 0..self.config.horizon {
+            let first = rollouts < m;
+            let starts = self.starts();
+            let mut state = starts
+                .get(self.next_start % m.max(1))
+                .copied()
+                .unwrap_or(self.config.start);
+            self.next_start = (self.next_start + 1) % m.max(1);
+            rollouts += 1;
+            // A greedy rollout of a fitted plan checks the plan's promise.
+            let mut checked: Option<safeguard::Rollout<T>> = None;
+            let mut absorbed = false;
+            for t in 0..length {
                 if left == 0 {
                     break;
                 }
@@ -595,19 +716,33 @@ where
                 } else {
                     self.run.fqi.greedy_action(state)?
                 };
+                if t == 0 && first && self.planned {
+                    checked = Some(safeguard::Rollout::new(self.run.fqi.value(state, action)?));
+                }
                 let record = self.run.target.query(state, action, rng)?;
                 self.record(record)?;
                 if let Some(slot) = self.path.get_mut(self.path_len) {
                     *slot = state;
                     self.path_len += 1;
                 }
+                if let Some(c) = checked.as_mut() {
+                    c.step(record.reward, gamma);
+                }
                 left -= 1;
                 if record.absorbing {
+                    absorbed = true;
                     break;
                 }
                 state = record.next_state;
             }
-            first = false;
+            if let Some(c) = checked {
+                let v = if absorbed {
+                    T::ZERO
+                } else {
+                    self.run.fqi.max_value(state)?
+                };
+                c.finish(v, &mut self.check);
+            }
         }
         Ok(())
     }
@@ -766,6 +901,16 @@ where
                 &mut tally,
                 true,
             )?;
+            if let Some(f) = &self.fading {
+                fading::fade(
+                    f,
+                    run.weights,
+                    run.sources.records().iter().copied(),
+                    run.samples.get(..run.len).unwrap_or(&[]),
+                    &self.config.bounds,
+                    self.fade_table,
+                )?;
+            }
             SourceValues::Weights
         };
         run.fit_q(values, None, &config.fqi, rng)?;

@@ -6,7 +6,7 @@
 //! engineer would start a plant of their own: implement `GenerativeModel`, measure the
 //! sources' scales, take the recommended adaptive kernel on the scaled settings.
 
-use awfqi::adaptive::MeanFunction;
+use awfqi::adaptive::{FadeCell, Fading, MeanFunction};
 use awfqi::rand_core::{Rng, SeedableRng};
 use awfqi::record_gp::predict_posteriors;
 use awfqi::{
@@ -263,14 +263,54 @@ fn log_sources<R: Rng>(
     Ok(())
 }
 
+/// How a run spends its target queries: `steps` steps of `budget` queries (at most
+/// [`BUDGET`] a step and [`QUERIES`] in all), verified from every start state of
+/// [`STARTS`] or from the first alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variant {
+    /// Queries per step.
+    pub budget: usize,
+    /// Steps.
+    pub steps: usize,
+    /// Verify from every start state (the recommended use) or from `STARTS[0]` alone.
+    pub all_starts: bool,
+}
+
+/// The run the firmware makes: [`STEPS`] steps of [`BUDGET`] queries, verified from every
+/// start state.
+pub const RECOMMENDED: Variant = Variant {
+    budget: BUDGET,
+    steps: STEPS,
+    all_starts: true,
+};
+
 /// One run: the sources' logs, the scaled settings, `STEPS` steps of the adaptive kernel on
 /// our building (`on_step` sees each report), FQI on the same target queries, and the three
 /// policies evaluated over the same episodes.
 pub fn learn_and_compare(
     memory: &mut Memory,
     seed: u64,
+    on_step: impl FnMut(&StepReport<f32, { ZONES + 1 }>),
+) -> awfqi::Result<Outcome> {
+    learn_and_compare_with(memory, seed, RECOMMENDED, |_| {}, None, on_step)
+}
+
+/// [`learn_and_compare`] for another [`Variant`], with the settings passed through
+/// `configure` before they are checked and optionally fading source weights with their
+/// table (the host's ablations).
+pub fn learn_and_compare_with(
+    memory: &mut Memory,
+    seed: u64,
+    variant: Variant,
+    configure: impl FnOnce(&mut AdaptiveConfig<f32, ZONES, { ZONES + 1 }>),
+    fading: Option<(Fading<f32>, &mut [FadeCell<f32>])>,
     mut on_step: impl FnMut(&StepReport<f32, { ZONES + 1 }>),
 ) -> awfqi::Result<Outcome> {
+    if variant.budget > BUDGET || variant.budget.saturating_mul(variant.steps) > QUERIES {
+        return Err(awfqi::Error::InvalidParameter {
+            parameter: "variant",
+        });
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let Memory {
         sources,
@@ -285,9 +325,10 @@ pub fn learn_and_compare(
 
     // Settings from the logs: nothing tuned by hand but the task's discount.
     let scales = SourceScales::measure(&logs)?;
-    let mut config = AdaptiveConfig::scaled(BUDGET, &scales, STARTS[0], HORIZON, 0.3)?;
+    let mut config = AdaptiveConfig::scaled(variant.budget, &scales, STARTS[0], HORIZON, 0.3)?;
     config.awfqi.fqi =
         FqiConfig::new(DISCOUNT, 60, EmptyCells::CappedNearest)?.with_min_weight(0.5)?;
+    configure(&mut config);
     let config = config.validate()?;
 
     // Each source's reward model and the posteriors stored with its records, fitted in the
@@ -312,7 +353,7 @@ pub fn learn_and_compare(
         PointGrid::spanning([0.0; ZONES], [1.0; ZONES], 0.1)?,
         ACTIONS,
     )?;
-    let mut kernel = AdaptiveAwfqi::new(
+    let kernel = AdaptiveAwfqi::new(
         config,
         approximator()?,
         SourceData::new(&logs, &posteriors[..])?,
@@ -321,7 +362,17 @@ pub fn learn_and_compare(
         &plant,
         buffers,
     )?;
-    for _ in 0..STEPS {
+    let starts = if variant.all_starts {
+        &STARTS[..]
+    } else {
+        &STARTS[..1]
+    };
+    let kernel = kernel.with_starts(starts)?;
+    let mut kernel = match fading {
+        Some((fading, table)) => kernel.with_fading(fading, table)?,
+        None => kernel,
+    };
+    for _ in 0..variant.steps {
         on_step(&kernel.step(&mut rng)?);
     }
 
