@@ -59,7 +59,7 @@ fn main() -> awfqi::Result<()> {
     for seed in first..end {
         let mut warnings = 0;
         let verbose = std::env::var_os("ZONES_VERBOSE").is_some();
-        let configure = |c: &mut awfqi::AdaptiveConfig<f32, 3, 4>| {
+        let configure = |c: &mut awfqi::prelude::AdaptiveConfig<f32, 3, 4>| {
             if let Some(s) = sub_batches {
                 c.sub_batches = s;
             }
@@ -68,14 +68,15 @@ fn main() -> awfqi::Result<()> {
             }
             if let Some(k) = k {
                 let w = c.awfqi.weights;
-                let v = w.noise_variance() * k / awfqi::awfqi::scaled::NOISE_MULTIPLIER as f32;
-                if let Ok(p) = awfqi::WeightParams::new(w.estimator(), v, w.max_weight()) {
+                // The scaled rule's multiplier is 4 (`SourceScales::reward_weights`).
+                let v = w.noise_variance() * k / 4.0;
+                if let Ok(p) = awfqi::prelude::WeightParams::new(w.estimator(), v, w.max_weight()) {
                     c.awfqi.weights = p;
                 }
             }
             c.safeguard = safeguard;
         };
-        let on_step = |report: &awfqi::StepReport<f32, 4>| {
+        let on_step = |report: &awfqi::prelude::StepReport<f32, 4>| {
             if verbose {
                 eprintln!(
                     "seed {seed}, step {}: source ESS {:.1}, discarded {}, capped {}, GP {:?}, jitter {:.2e}, condition {:.2e}",
@@ -115,15 +116,15 @@ fn main() -> awfqi::Result<()> {
             let plant = zones::Zones {
                 building: zones::Building::Target,
             };
-            let protocol = awfqi::MultiStartProtocol {
+            let protocol = awfqi::prelude::MultiStartProtocol {
                 starts: &zones::STARTS,
                 rollouts: zones::ROLLOUTS,
                 horizon: zones::HORIZON,
                 discount: zones::DISCOUNT,
             };
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-            let mut policy = awfqi::UniformPolicy::new(zones::ACTIONS)?;
-            awfqi::evaluate_multi_start(&plant, &mut policy, &protocol, &mut rng)?.mean_return
+            let mut policy = awfqi::prelude::UniformPolicy::new(zones::ACTIONS)?;
+            awfqi::prelude::evaluate_multi_start(&plant, &mut policy, &protocol, &mut rng)?.mean_return
         };
         println!("seed {seed}: random {random:.2}");
         let r = [
@@ -138,7 +139,7 @@ fn main() -> awfqi::Result<()> {
         rows.push((seed, r));
         if std::env::var_os("ZONES_VERBOSE").is_some() {
             let logs: [&[_]; 2] = [&memory.sources[0], &memory.sources[1]];
-            let scales = awfqi::SourceScales::measure(&logs)?;
+            let scales = awfqi::thesis::SourceScales::measure(&logs)?;
             eprintln!(
                 "seed {seed}: reward mean {:.3}, variance {:.4}, local noise {:.5}, v_r {:.5}",
                 scales.reward_mean,

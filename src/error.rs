@@ -9,6 +9,7 @@ use core::fmt;
 /// Everything that can go wrong in the core.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Error {
     /// A fixed capacity would be exceeded; `capacity` is the limit that was hit.
     CapacityExceeded {
@@ -41,6 +42,12 @@ pub enum Error {
     /// A state, action or index lies outside the space it must belong to.
     OutOfRange {
         /// Name of the offending parameter.
+        parameter: &'static str,
+    },
+    /// A finite input is too large for the working precision: computing with it overflows
+    /// (for example GP targets whose whitened values `L⁻¹y` exceed the largest `f32`).
+    Overflow {
+        /// Name of the offending parameter or data field.
         parameter: &'static str,
     },
     /// An operation needs at least one data point and got none.
@@ -97,7 +104,8 @@ impl core::hash::Hash for Number {
     }
 }
 
-/// Prints three significant digits in scientific notation (`1.5e-6`, `8e4`) with integer
+/// Prints three significant digits, as a plain number from 0.001 to 999 999 (`9.47`,
+/// `0.131`, `80000`) and in scientific notation beyond (`1.5e-6`, `2e9`), with integer
 /// formatting only: core's float formatting keeps bounds checks that the no-panic proof
 /// cannot see through.
 impl fmt::Display for Number {
@@ -111,7 +119,7 @@ impl fmt::Display for Number {
             return write!(f, "{sign}inf");
         }
         if v == 0.0 {
-            return write!(f, "{sign}0e0");
+            return write!(f, "{sign}0");
         }
         // The mantissa m in [1, 10) and the exponent e of |v| = m·10^e.
         let (mut m, mut e) = (v.abs(), 0i32);
@@ -129,13 +137,37 @@ impl fmt::Display for Number {
             digits = 100;
             e += 1;
         }
-        let (whole, fraction) = (digits / 100, digits % 100);
-        if fraction == 0 {
-            write!(f, "{sign}{whole}e{e}")
-        } else if fraction % 10 == 0 {
-            write!(f, "{sign}{whole}.{}e{e}", fraction / 10)
-        } else {
-            write!(f, "{sign}{whole}.{fraction:02}e{e}")
+        match e {
+            // Plain, whole: the digits followed by e − 2 zeros.
+            2..=5 => {
+                let scale = 10u32.pow(e.unsigned_abs() - 2);
+                write!(f, "{sign}{}", u64::from(digits) * u64::from(scale))
+            }
+            // Plain, with 2 − e decimal places, trailing zeros dropped.
+            -3..=1 => {
+                let mut places = (2 - e).unsigned_abs() as usize;
+                let scale = 10u32.pow(places as u32);
+                let (whole, mut fraction) = (digits / scale, digits % scale);
+                while places > 0 && fraction % 10 == 0 {
+                    fraction /= 10;
+                    places -= 1;
+                }
+                if places == 0 {
+                    write!(f, "{sign}{whole}")
+                } else {
+                    write!(f, "{sign}{whole}.{fraction:0places$}")
+                }
+            }
+            _ => {
+                let (whole, fraction) = (digits / 100, digits % 100);
+                if fraction == 0 {
+                    write!(f, "{sign}{whole}e{e}")
+                } else if fraction % 10 == 0 {
+                    write!(f, "{sign}{whole}.{}e{e}", fraction / 10)
+                } else {
+                    write!(f, "{sign}{whole}.{fraction:02}e{e}")
+                }
+            }
         }
     }
 }
@@ -164,6 +196,10 @@ impl fmt::Display for Error {
                 write!(f, "invalid value for parameter `{parameter}`")
             }
             Error::OutOfRange { parameter } => write!(f, "`{parameter}` is out of range"),
+            Error::Overflow { parameter } => write!(
+                f,
+                "`{parameter}` is too large for the working precision: computing with it overflows"
+            ),
             Error::EmptyData => f.write_str("empty data: at least one point is required"),
             Error::NotPositiveDefinite => f.write_str(
                 "matrix is not positive definite, even after the largest jitter was added",
@@ -258,13 +294,20 @@ mod tests {
             limit: Number(8e4),
         };
         let text = e.to_string();
-        assert!(text.contains("2e9") && text.contains("8e4"), "{text}");
+        assert!(text.contains("2e9") && text.contains("80000"), "{text}");
         let shown = |v: f64| Number(v).to_string();
-        assert_eq!(shown(0.13064821), "1.31e-1");
+        assert_eq!(shown(0.13064821), "0.131");
+        assert_eq!(shown(9.47), "9.47");
         assert_eq!(shown(-2.5e300), "-2.5e300");
-        assert_eq!(shown(9.996), "1e1");
+        assert_eq!(shown(9.996), "10");
+        assert_eq!(shown(999_999.0), "1e6");
+        assert_eq!(shown(123_456.0), "123000");
+        assert_eq!(shown(0.001_234_5), "0.00123");
+        assert_eq!(shown(0.000_999_9), "0.001");
+        assert_eq!(shown(0.000_123), "1.23e-4");
+        assert_eq!(shown(-40.0), "-40");
         assert_eq!(shown(5e-324), "4.94e-324");
-        assert_eq!(shown(0.0), "0e0");
+        assert_eq!(shown(0.0), "0");
         assert_eq!(shown(f64::NEG_INFINITY), "-inf");
         assert_eq!(shown(f64::NAN), "NaN");
         assert_eq!(Number(0.5), Number(0.5));

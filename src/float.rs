@@ -11,7 +11,7 @@
 //! on the device:
 //!
 //! ```
-//! use awfqi::Real; // sqrt, exp, ln, ln_1p, sin, cos, abs, floor, max, min, squared, clamp_to
+//! use awfqi::float::Real; // sqrt, exp, ln, ln_1p, sin, cos, abs, floor, max, min, squared, clamp_to
 //! let gain: f32 = 0.3;
 //! let settle = (-gain * 4.0).exp(); // e^(−1.2)
 //! let noise = Real::sqrt(0.02f32); // or `0.02f32.sqrt()`; in std code the inherent

@@ -8,82 +8,64 @@
 //!
 //! ## What to use
 //!
-//! - **Your plant** implements [`GenerativeModel`] (one sampled transition from any
-//!   state-action pair; states are `[T; D]` for any `D`) and, if you know them, its noise-free
-//!   means as [`SourceModel`]. Built-in plants: [`env`](mod@env) (Puddle World, Grid World,
-//!   the Dam, Acrobot).
-//! - **The kernel.** [`AdaptiveAwfqi`] is the recommended one: each step's queries in
-//!   sub-batches that verify the current greedy policy in the generative model, draw the rest
-//!   where the target surprised the sources, then re-plan ([`AdaptiveConfig::recommended`],
-//!   [`AdaptiveStorage`]; on Puddle World 39 KB of RAM and about 10⁸ Cortex-M4F instructions
-//!   a step, the repository's `docs/embedded-adaptive.md`). [`Awfqi`] is the thesis's algorithm as published: each step's
-//!   queries drawn from a score table, computed once, of where the sources disagree
-//!   ([`Awfqi::builder`], [`AwfqiConfig::thesis`], [`AwfqiStorage`]).
-//! - **The Q-function** is a value, [`Approximator`]: a model sweep ([`ModelSweep`]: value
-//!   iteration on the corners of a grid over a reward, step and absorption model of the
-//!   weighted records, so an iteration costs nodes × actions backups whatever the number of
-//!   records; the adaptive kernel's recommended one), a table over cells ([`CellGrid`]), tile
-//!   coding ([`Tilings`]), kernel averaging over the records ([`Kernel`]) or Extra-Trees
-//!   ([`ExtraTrees`]; [`ExtraTrees::streamed`] grows each tree in one scratch tree, so 50
-//!   trees take the memory of one, at the price of compute).
-//! - **Parts on their own:** [`gp`] (fixed-capacity Gaussian-process regression with a
-//!   conditioning policy), [`weights`] (importance weights), [`fqi`] (weighted FQI),
-//!   [`identify`] and [`planning`] (Bayesian identification among finite MDPs), [`evaluation`]
-//!   (greedy rollouts).
+//! - **Your plant** implements [`GenerativeModel`](model::GenerativeModel) (one sampled
+//!   transition from any state-action pair; states are `[T; D]` for any `D`). Built-in
+//!   plants: [`env`](mod@env) (Puddle World, Grid World, the Dam, Acrobot).
+//! - **The recommended learner**, [`AdaptiveAwfqi`](adaptive::AdaptiveAwfqi): each step's
+//!   queries in sub-batches that verify the current greedy policy in the generative model,
+//!   draw the rest where the target surprised the sources, then re-plan by value iteration
+//!   on a grid model of the records. [`AdaptiveAwfqi::builder`](adaptive::AdaptiveAwfqi::builder)
+//!   sets it up from the plant, the source records, the budget, the state ranges and the
+//!   start state; [`adaptive_storage!`] declares its memory by named capacities.
+//! - **The thesis's algorithm as published**, [`Awfqi`](thesis::Awfqi) (module
+//!   [`thesis`]): each step's queries drawn from a score table of where the sources
+//!   disagree ([`Awfqi::builder`](thesis::Awfqi::builder)).
+//! - **Parts on their own:** [`gp`] (fixed-capacity Gaussian-process regression), [`weights`]
+//!   (importance weights), [`fqi`] (weighted FQI: model sweep, table, tiles, kernel averaging,
+//!   Extra-Trees), [`identify`] and [`planning`] (identification among finite MDPs),
+//!   [`evaluation`] (greedy rollouts).
 //!
-//! ## Capacities
+//! Every item lives at one path, in its module; [`prelude`] brings what an embedder uses in
+//! one import (`use awfqi::prelude::*;`, or `use awfqi::*;` for the modules as well).
 //!
-//! Every buffer is a const generic of one storage block that fits in a `static` (its `new()`
-//! is `const` and all-zero, so it lands in `.bss` and costs no flash). For
-//! `AwfqiStorage<T, D, I, N, Q, W, R, E>`:
+//! ## Memory
 //!
-//! | parameter | what | how to size it |
-//! |---|---|---|
-//! | `T` | `f32` or `f64` | `f32` on an FPU-less or single-precision MCU |
-//! | `D`, `I` | state dimension, GP input dimension | `I = D + 1` (a wrong pair does not compile) |
-//! | `N` | points of the target reward GP | memory grows as `N²` (`N = 24`: 2.8 KB in `f32`, `N = 64`: 17.7 KB) |
-//! | `Q` | target samples | steps × queries per step |
-//! | `W` | reward weights | the number of source records |
-//! | `R` | alias entries | the number of candidate rows |
-//! | `E` | FQI entries | cells × actions for a table (other approximators: their own storage) |
-//!
-//! [`AdaptiveStorage`] adds candidate slots (rows scored per sub-batch), path states (the
-//! budget) and one belief per source; a model sweep's nodes and entries are a
-//! [`SweepStorage`] of their own. A buffer that is too short is
-//! [`Error::CapacityExceeded`] when the kernel is built, never a write past its end.
-//! Measured footprints (flash, RAM, stack per configuration on a Cortex-M4F) are in the
-//! repository's `docs/footprint.md`; the recommended Puddle World configuration of
-//! [`Awfqi`] fits in 32 KiB of RAM.
+//! [`adaptive_storage!`] declares one block with all the memory a learner and its set-up
+//! write, from named capacities (`gp_points: 32, sources: 3, …`); every size follows from
+//! them, the block's `new()` is `const` and all-zero, so a `static` of it lands in `.bss`.
+//! A capacity of 0 does not compile; a block too small for the run (steps × budget target
+//! records, one weight per source record, …) is refused by the builder with
+//! [`Error::BufferTooSmall`] before the first GP fit. The thesis's learner takes an
+//! [`AwfqiStorage`](thesis::AwfqiStorage) (const generics) or any
+//! [`AwfqiBuffers`](thesis::AwfqiBuffers). Measured footprints (flash, RAM, stack per
+//! configuration on a Cortex-M4F) are in the repository's `docs/footprint.md`, written by
+//! `scripts/footprint`.
 //!
 //! ## Errors, randomness, guarantees
 //!
 //! - Every fallible call returns [`Result`] with a typed [`Error`] naming the parameter or
-//!   capacity at fault, and leaves your data as it was. A kernel step that fails part-way
-//!   keeps the records already queried, the Q-function keeps its last fit and the step
-//!   counter does not advance, so the next step can continue.
+//!   capacity at fault, and leaves your data as it was. A step that fails part-way keeps the
+//!   records already queried, the Q-function keeps its last fit and the step counter does
+//!   not advance, so the next step can continue.
 //! - Randomness comes only from the generator you pass (`&mut impl rand_core::Rng`): the same
 //!   seed gives the same bytes, on the host and on the device.
 //! - No allocation (there is no `alloc`), no panics: `unwrap`, `expect`, `panic!` and
 //!   indexing are denied by lint, and the repository's `scripts/no-panic` links every public
 //!   entry point for a Cortex-M4F with a panic handler that does not exist.
+//! - Dependencies: `libm` (the float functions a `no_std` target lacks) and `rand_core` (the
+//!   generator trait every randomised call takes), nothing else.
 //! - Cargo features: `defmt` (`defmt::Format` for [`Error`] and the public data types);
 //!   `rand_core_06`, `rand_core_09` (generators of older `rand_core` versions, [`rng::compat`]).
-//! - Dependencies: `libm`, `nalgebra` (no default features), `heapless`, `rand_core`.
 //!
 //! ## Example: a room heater learned from two other heaters
 //!
-//! [`AdaptiveAwfqi`], the recommended kernel, on a plant of your own: each source's reward GP
-//! is fitted once and kept as a mean function and as stored posteriors; then every step
-//! verifies the current plan in the plant, queries where the plant surprised the sources, and
-//! re-plans by value iteration on a grid model of the records ([`ModelSweep`]).
+//! The recommended learner on a plant of your own: the memory declared by name, the set-up
+//! in one builder (settings scaled from the source records, each source's reward GP fitted
+//! once, a model sweep over the state range), then steps that verify the current plan,
+//! query where the plant surprised the sources and re-plan.
 //!
 //! ```rust
-//! use awfqi::record_gp::predict_posteriors;
-//! use awfqi::{
-//!     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, GenerativeModel, MeanFunction, ModelSweep,
-//!     NoiseSubtraction, PointGrid, Posterior, RewardModel, RowSet, SourceData, SourceMeans,
-//!     SourceModel, SweepStorage, Transition,
-//! };
+//! use awfqi::prelude::*;
 //! use rand_chacha::ChaCha8Rng;
 //! use rand_core::{Rng, SeedableRng};
 //!
@@ -94,16 +76,6 @@
 //!     gain: f32,
 //! }
 //!
-//! impl SourceModel<f32, 1> for Heater {
-//!     fn predict(&self, [s]: [f32; 1], action: usize) -> awfqi::Result<SourceMeans<f32, 1>> {
-//!         if !(0.0..=1.0).contains(&s) || action > 1 {
-//!             return Err(awfqi::Error::OutOfRange { parameter: "state" });
-//!         }
-//!         let next = s + self.gain * action as f32 - 0.1 * s;
-//!         Ok(SourceMeans { reward: -(s - 0.5).abs(), next_state: [next.clamp(0.0, 1.0)] })
-//!     }
-//! }
-//!
 //! impl GenerativeModel<f32> for Heater {
 //!     type State = [f32; 1];
 //!     fn num_actions(&self) -> usize {
@@ -111,184 +83,76 @@
 //!     }
 //!     fn query<R: Rng + ?Sized>(
 //!         &self,
-//!         state: [f32; 1],
+//!         [s]: [f32; 1],
 //!         action: usize,
 //!         rng: &mut R,
 //!     ) -> awfqi::Result<Transition<[f32; 1], f32>> {
-//!         let mean = self.predict(state, action)?;
-//!         let noise = (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.02; // all randomness from the caller
-//!         let next_state = [(mean.next_state[0] + noise).clamp(0.0, 1.0)];
-//!         Ok(Transition { state, action, reward: mean.reward, next_state, absorbing: false })
+//!         if !(0.0..=1.0).contains(&s) || action > 1 {
+//!             return Err(Error::OutOfRange { parameter: "state" });
+//!         }
+//!         let noise = (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.02; // the caller's randomness
+//!         let next = (s + self.gain * action as f32 - 0.1 * s + noise).clamp(0.0, 1.0);
+//!         let reward = -(s - 0.5).abs();
+//!         Ok(Transition { state: [s], action, reward, next_state: [next], absorbing: false })
+//!     }
+//! }
+//!
+//! // All the memory the learner and its set-up write (a `static` in `.bss` on a device).
+//! awfqi::adaptive_storage! {
+//!     struct HeaterMemory {
+//!         scalar: f32,
+//!         state_dim: 1,
+//!         actions: 2,
+//!         gp_points: 16,
+//!         steps: 2,
+//!         budget: 10,
+//!         sources: 2,
+//!         source_records: 40,
+//!         source_posteriors: 40,
+//!         candidates: 40,
+//!         sweep_cells: 10,
 //!     }
 //! }
 //!
 //! # fn main() -> awfqi::Result<()> {
 //! let mut rng = ChaCha8Rng::seed_from_u64(7);
-//! // Source data: 20 records from each of two other heaters (on a device: tables in flash).
-//! let sources = [Heater { gain: 0.15 }, Heater { gain: 0.3 }];
+//! // Source data: 20 records of each of two other heaters (on a device: tables in flash).
 //! let mut data = [[Transition::EMPTY; 20]; 2];
-//! for (heater, records) in sources.iter().zip(&mut data) {
+//! for (gain, records) in [0.15, 0.3].into_iter().zip(&mut data) {
 //!     for (i, r) in records.iter_mut().enumerate() {
-//!         *r = heater.query([i as f32 / 19.0], i % 2, &mut rng)?;
+//!         *r = Heater { gain }.query([i as f32 / 19.0], i % 2, &mut rng)?;
 //!     }
 //! }
 //! let records: [&[Transition<[f32; 1], f32>]; 2] = [&data[0], &data[1]];
 //!
-//! // 10 queries per step, verification rollouts of 20 steps from s = 0.2, the state box [0, 1].
-//! let mut config = AdaptiveConfig::recommended(10, [0.2], 20, 0.3, [(0.0, 1.0)]);
-//! config.awfqi.gp_training.search.restarts = 1;
-//! let config = config.validate()?;
-//!
-//! // All the memory the loop writes (`static`s in `.bss` on a device): a 16-point GP over
-//! // (s, a), 2 steps × 10 queries, 40 source records, 42 candidate slots, no table entries,
-//! // 10 verified states, 2 source beliefs; the FQI's 11 nodes × 2 actions; and the set-up's
-//! // reward mean function and stored posteriors of each source.
-//! let mut storage = AdaptiveStorage::<f32, 1, 2, 16, 20, 40, 42, 0, 10, 2>::new();
-//! let mut sweep = SweepStorage::<f32, 1, 22, 11>::new();
-//! let mut means = [MeanFunction::<f32, 16, 2>::EMPTY; 2];
-//! let mut posteriors = [Posterior::default(); 40];
-//!
-//! // Set-up: each source's reward GP, fitted in the kernel's GP, kept as its mean function
-//! // and as the posterior at each of its records.
-//! let mut buffers = storage.buffers();
-//! for ((mean, source), stored) in means.iter_mut().zip(records).zip(posteriors.chunks_mut(20)) {
-//!     mean.fit_rewards(buffers.gp, source, &config.awfqi.gp_training, config.awfqi.subset, &mut rng)?;
-//!     predict_posteriors(buffers.gp, source, NoiseSubtraction::Reference, stored)?;
-//! }
-//! buffers.fqi = sweep.storage();
-//! // FQI by value iteration on 11 nodes over [0, 1]; the reward depends on the state only.
-//! let q = ModelSweep::cube(0.0, 1.0, 10)?.with_rewards(RewardModel::Pooled);
-//! let candidates = RowSet::grid(PointGrid::spanning([0.0], [1.0], 0.05)?, 2)?;
-//! let data = SourceData::new(&records, &posteriors)?;
-//! let mut kernel =
-//!     AdaptiveAwfqi::new(config, q, data, &means, candidates, Heater { gain: 0.2 }, buffers)?;
+//! // 10 queries a step, temperatures in [0, 1], verification rollouts from s = 0.2.
+//! let mut memory = HeaterMemory::new();
+//! let mut kernel = AdaptiveAwfqi::builder(Heater { gain: 0.2 }, &records, 10, [(0.0, 1.0)], [0.2])
+//!     .rewards(RewardModel::Pooled) // the reward depends on the state only
+//!     .build(&mut memory, &mut rng)?;
 //! kernel.plan(&mut rng)?; // the plan on the sources alone: set-up, once
 //! for _ in 0..2 {
-//!     let report = kernel.step(&mut rng)?; // 10 queries in 3 sub-batches, each then re-planned
-//!     assert!(report.wr_eff > 0.0);
+//!     kernel.step(&mut rng)?; // 10 queries in 3 sub-batches, each then re-planned
 //! }
 //! // The greedy policy heats when cold and not when hot.
 //! assert_eq!(kernel.q().greedy_action([0.2])?, 1);
 //! assert_eq!(kernel.q().greedy_action([0.9])?, 0);
-//!
-//! // Bad input is a typed error, never a panic.
+//! // Every derived setting can be read back; bad input is a typed error, never a panic.
+//! assert_eq!((kernel.config().candidates(), kernel.config().horizon()), (40, 10));
 //! assert!(kernel.q().greedy_action([f32::NAN]).is_err());
 //! # Ok(())
 //! # }
 //! ```
 //!
-//! The thesis's AWFQI ([`Awfqi`]) on the same plant: the builder performs its whole set-up
-//! once (source reward GPs → stored posteriors → score table over your candidate pairs →
-//! sampler → source data → FQI table).
+//! The thesis's AWFQI on the same plant is an example of the [`thesis`] module; Extra-Trees
+//! as the Q-function on their own, one of [`fqi`]. `use awfqi::*;` brings every module,
+//! [`Error`] and [`Result`] (and `use awfqi::prelude::*;` the items):
 //!
 //! ```rust
-//! use awfqi::{
-//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
-//!     Scores, SourceMeans, SourceModel, Transition,
-//! };
-//! use rand_chacha::ChaCha8Rng;
-//! use rand_core::{Rng, SeedableRng};
-//! # #[derive(Clone, Copy)]
-//! # struct Heater {
-//! #     gain: f32,
-//! # }
-//! # impl SourceModel<f32, 1> for Heater {
-//! #     fn predict(&self, [s]: [f32; 1], action: usize) -> awfqi::Result<SourceMeans<f32, 1>> {
-//! #         if !(0.0..=1.0).contains(&s) || action > 1 {
-//! #             return Err(awfqi::Error::OutOfRange { parameter: "state" });
-//! #         }
-//! #         let next = s + self.gain * action as f32 - 0.1 * s;
-//! #         Ok(SourceMeans { reward: -(s - 0.5).abs(), next_state: [next.clamp(0.0, 1.0)] })
-//! #     }
-//! # }
-//! # impl GenerativeModel<f32> for Heater {
-//! #     type State = [f32; 1];
-//! #     fn num_actions(&self) -> usize {
-//! #         2
-//! #     }
-//! #     fn query<R: Rng + ?Sized>(
-//! #         &self,
-//! #         state: [f32; 1],
-//! #         action: usize,
-//! #         rng: &mut R,
-//! #     ) -> awfqi::Result<Transition<[f32; 1], f32>> {
-//! #         let mean = self.predict(state, action)?;
-//! #         let noise = (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.02;
-//! #         let next_state = [(mean.next_state[0] + noise).clamp(0.0, 1.0)];
-//! #         Ok(Transition { state, action, reward: mean.reward, next_state, absorbing: false })
-//! #     }
-//! # }
-//!
-//! # fn main() -> awfqi::Result<()> {
-//! let mut rng = ChaCha8Rng::seed_from_u64(7);
-//! let sources = [Heater { gain: 0.15 }, Heater { gain: 0.3 }];
-//! let mut data = [[Transition::EMPTY; 20]; 2];
-//! for (heater, records) in sources.iter().zip(&mut data) {
-//!     for (i, r) in records.iter_mut().enumerate() {
-//!         *r = heater.query([i as f32 / 19.0], i % 2, &mut rng)?;
-//!     }
-//! }
-//! let records: [&[Transition<[f32; 1], f32>]; 2] = [&data[0], &data[1]];
-//!
-//! // All the memory the loop writes: a 16-point GP over (s, a), 2 steps × 10 queries,
-//! // 40 source records, 42 candidate rows, 10 cells × 2 actions (`static` in `.bss` on a
-//! // device). Set-up memory: the fitted source posteriors and the score values.
-//! let mut storage = AwfqiStorage::<f32, 1, 2, 16, 20, 40, 42, 20>::new();
-//! let mut posteriors = [Posterior::default(); 40];
-//! let mut scores = [Scores::ZERO; 42];
-//!
-//! // The thesis's settings (Puddle World's scales; for a plant of your own derive them from
-//! // the logs: `AwfqiConfig::scaled`, docs/embedding.md), 10 queries per step.
-//! let mut config = AwfqiConfig::thesis(10);
-//! config.gp_training.search.restarts = 1;
-//! let candidates = RowSet::grid(PointGrid::spanning([0.0], [1.0], 0.05)?, 2)?;
-//! let mut kernel = Awfqi::builder(config.validate()?, CellGrid::cube(0.0, 1.0, 10)?, &records, candidates)
-//!     .fit_posteriors(&mut posteriors) // one reward GP per source, fitted here
-//!     .scores_from(&sources, &mut scores)? // oracle scores from the sources' means
-//!     .build(Heater { gain: 0.2 }, &mut storage, &mut rng)?;
-//! for _ in 0..2 {
-//!     let report = kernel.step(&mut rng)?; // 10 queries, target GP, weights, weighted FQI
-//!     assert!(report.wr_eff > 0.0);
-//! }
-//! // The greedy policy heats when cold and not when hot.
-//! assert_eq!(kernel.q().greedy_action([0.2])?, 1);
-//! assert_eq!(kernel.q().greedy_action([0.9])?, 0);
-//! # Ok(())
-//! # }
-//! ```
-//!
-//! Streamed Extra-Trees as the Q-function on their own (a corridor of four cells):
-//!
-//! ```rust
-//! use awfqi::{Approximator, EmptyCells, ExtraTrees, FqiConfig, SampleSet, Transition, TreeStorage};
-//! use rand_chacha::ChaCha8Rng;
-//! use rand_core::SeedableRng;
-//!
-//! # fn main() -> awfqi::Result<()> {
-//! // States at c + 0.5 for cells c = 0..4; action 0 moves right (leaving cell 3 ends the
-//! // episode at the goal), action 1 moves left; every move costs 1.
-//! let mut samples = [Transition::EMPTY; 8];
-//! for (i, sample) in samples.iter_mut().enumerate() {
-//!     let (cell, action) = (i / 2, i % 2);
-//!     let x = cell as f32 + 0.5;
-//!     let next = if action == 0 { x + 1.0 } else { (x - 1.0).max(0.5) };
-//!     let absorbing = action == 0 && cell == 3;
-//!     *sample = Transition { state: [x], action, reward: -1.0, next_state: [next], absorbing };
-//! }
-//! // 8 record slots and one 15-node scratch tree (a `static` in `.bss` on a device).
-//! let mut memory = TreeStorage::<f32, 1, 8, 15>::new();
-//! let forests = ExtraTrees::streamed(50, 15)?;
-//! let mut q = Approximator::Trees(forests).build(2, memory.storage())?;
-//! let config = FqiConfig::new(0.9, 60, EmptyCells::Nearest)?;
-//! q.fit(&[SampleSet::unweighted(&samples)], &config, &mut ChaCha8Rng::seed_from_u64(1))?;
-//! for cell in 0..4 {
-//!     assert_eq!(q.greedy_action([cell as f32 + 0.5])?, 0); // towards the goal
-//! }
-//! // Q(s, right) is the discounted cost to the goal: −(1 − 0.9^(4 − c)) / (1 − 0.9).
-//! assert!((q.value([0.5], 0)? + (1.0 - 0.9f32.powi(4)) / 0.1).abs() < 1e-4);
-//! assert!(q.greedy_action([f32::NAN]).is_err()); // bad input is an error
-//! # Ok(())
-//! # }
+//! use awfqi::*;
+//! let grid = fqi::CellGrid::<f32, 1>::cube(0.0, 1.0, 4)?;
+//! assert_eq!(grid.len(), 4);
+//! # Ok::<(), Error>(())
 //! ```
 //!
 //! The experiments, their results and the harness that runs them are described in the
@@ -296,7 +160,7 @@
 //! `docs/algorithms.md` for every formula).
 //!
 //! The embedding guide (the repository's `docs/embedding.md`) follows: depending on the crate,
-//! settings derived from your logs, the recommended kernel, the step reports' warnings.
+//! settings derived from your logs, the recommended learner, the step reports' warnings.
 //!
 #![doc = include_str!("../docs/embedding.md")]
 #![no_std]
@@ -314,9 +178,8 @@
 
 pub mod adaptive;
 pub mod alias;
-pub mod awfqi;
 pub mod env;
-pub mod error;
+mod error;
 pub mod evaluation;
 pub mod float;
 pub mod fqi;
@@ -328,6 +191,7 @@ pub mod policy;
 pub mod record_gp;
 pub mod rng;
 pub mod score;
+pub mod thesis;
 pub mod weights;
 
 /// The README's examples, compiled and run as doctests (the crate docs are the embedding
@@ -336,40 +200,47 @@ pub mod weights;
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
-pub use error::{Error, Result};
-pub use float::Real;
+pub use error::{Error, Number, Result};
 /// The `rand_core` (0.10) whose [`Rng`](rand_core::Rng) every randomised call takes:
 /// depend on this one (`awfqi::rand_core::Rng`, `awfqi::rand_core::SeedableRng`) and the
 /// versions cannot drift apart. Generators of `rand_core` 0.6 and 0.9 go through
 /// [`rng::compat`].
 pub use rand_core;
 
-// The types a user of the transfer path meets, at the crate root (as heapless does).
-pub use adaptive::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, MeanFunction,
-    ValidAdaptiveConfig,
-};
-pub use alias::AliasEntry;
-pub use awfqi::{
-    Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
-    StepReport, ValidAwfqiConfig, Warning, Warnings,
-};
-pub use evaluation::{
-    Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
-    evaluate_greedy_multi_start, evaluate_multi_start, rollout,
-};
-pub use fqi::{
-    Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi, Kernel,
-    KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage, RewardModel,
-    SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings,
-    TreeFqi, TreeNode, TreeRecord, TreeStorage,
-};
-pub use gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
-pub use model::{GenerativeModel, Transition};
-pub use policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-pub use record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
-pub use score::{
-    GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans,
-    SourceModel,
-};
-pub use weights::{Estimator, NoiseSubtraction, Posterior, WeightParams};
+/// What an embedder of the transfer path uses, in one import: `use awfqi::prelude::*;`.
+/// Every item here also lives at one path in its own module (the prelude is the only
+/// second path).
+pub mod prelude {
+    pub use crate::adaptive::{
+        AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, MeanFunction,
+        ValidAdaptiveConfig,
+    };
+    pub use crate::adaptive_storage;
+    pub use crate::alias::AliasEntry;
+    pub use crate::error::{Error, Result};
+    pub use crate::evaluation::{
+        Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,
+        evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+    };
+    pub use crate::float::Real;
+    pub use crate::fqi::{
+        Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi,
+        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage,
+        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
+        Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+    };
+    pub use crate::gp::{
+        Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull,
+    };
+    pub use crate::model::{GenerativeModel, SourceMeans, SourceModel, Transition};
+    pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
+    pub use crate::record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule};
+    pub use crate::score::{
+        GpSourceModel, PointGrid, RowSampler, RowSet, ScoreColumn, ScoreTable, Scores,
+    };
+    pub use crate::thesis::{
+        Awfqi, AwfqiBuffers, AwfqiBuilder, AwfqiConfig, AwfqiStorage, SourceData, SourceScales,
+        StepReport, ValidAwfqiConfig, Warning, Warnings,
+    };
+    pub use crate::weights::{Estimator, NoiseSubtraction, Posterior, WeightParams};
+}

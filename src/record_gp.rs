@@ -26,12 +26,12 @@ use rand_core::Rng;
 ///
 /// ```compile_fail,E0277
 /// // A 2-D plant's GP input is (s₀, s₁, a): I = 3, not 4.
-/// type Wrong = awfqi::AwfqiStorage<f32, 2, 4, 16, 20, 40, 42, 20>;
+/// type Wrong = awfqi::thesis::AwfqiStorage<f32, 2, 4, 16, 20, 40, 42, 20>;
 /// let storage = Wrong::new();
 /// ```
 ///
 /// ```
-/// type Right = awfqi::AwfqiStorage<f32, 2, 3, 16, 20, 40, 42, 20>;
+/// type Right = awfqi::thesis::AwfqiStorage<f32, 2, 3, 16, 20, 40, 42, 20>;
 /// let storage = Right::new();
 /// ```
 ///

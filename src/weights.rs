@@ -144,7 +144,7 @@ impl<T: Real> WeightParams<T> {
     /// `true` when the estimator discards a record whose source posterior is `source`
     /// whatever its observation (weight 0 by the variance rule of §7.3: the mean
     /// estimator with `σ_s² ≥ v`). A share of such records is a sign that `v` is small for
-    /// the sources' posterior uncertainty (see [`crate::awfqi::Warning`]).
+    /// the sources' posterior uncertainty (see [`crate::thesis::Warning`]).
     pub fn discards(&self, source: Posterior<T>) -> bool {
         self.estimator == Estimator::Mean && self.noise_variance - source.std.squared() <= T::ZERO
     }

@@ -2,17 +2,18 @@
 //! shown gone: arrays where slices are taken, a `const` empty value for every buffer element
 //! type, getters on validated configurations, the generator trait re-exported, and a path
 //! dependency from inside another workspace. (The `I = D + 1` check at `cargo check` is the
-//! compile-fail doctest of `awfqi::Dims`; named capacity errors are in `tests/bad_input.rs`
+//! compile-fail doctest of `awfqi::record_gp::Dims`; named capacity errors are in `tests/bad_input.rs`
 //! and the kernels' unit tests; `Real`'s methods are the doctest of `awfqi::float`.)
 
-use awfqi::adaptive::{Candidate, SourceBelief};
-use awfqi::rand_core::{Rng, SeedableRng};
-use awfqi::{
+use awfqi::adaptive::candidates::Candidate;
+use awfqi::adaptive::plausibility::SourceBelief;
+use awfqi::prelude::{
     AdaptiveConfig, AliasEntry, Approximator, AwfqiConfig, CellGrid, EmptyCells, ExtraTrees,
     FqiConfig, FqiEntry, Kernel, KnnRecord, KnnStorage, MeanFunction, ModelSweep, Neighbours,
     Posterior, SampleSet, Scores, SweepEntry, SweepNode, SweepStorage, Transition, TreeNode,
     TreeRecord, TreeStorage,
 };
+use awfqi::rand_core::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// Every element type of a buffer a kernel borrows has a `const` empty value, so every

@@ -5,26 +5,26 @@
 //! were. Run in `f32` (the microcontroller's precision) and `f64` where the code is generic.
 
 use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::env::{
-    Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld, Transition,
-};
+use awfqi::env::{Dynamics, EpisodeRecord, GridWorld, Puddle, PuddleWorld};
 use awfqi::evaluation::{EvaluationProtocol, evaluate};
 use awfqi::fqi::{
     Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi, TileFqi,
     Tilings,
 };
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
+use awfqi::model::{FiniteMdp, GenerativeModel, Transition};
+use awfqi::model::{SourceMeans, SourceModel};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi::prelude::{Awfqi, AwfqiBuffers, AwfqiConfig, SourceData};
 use awfqi::record_gp::{
     GpTraining, Output, SubsetRule, batch_transform, fit_gp, predict_posteriors,
 };
-use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans, SourceModel};
+use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
     effective_sample_size, ideal_weight, predictive_stds,
 };
-use awfqi::{Awfqi, AwfqiBuffers, AwfqiConfig, SourceData};
-use awfqi::{Error, Real, Result};
+use awfqi::{Error, Result, prelude::Real};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 

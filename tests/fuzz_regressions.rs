@@ -48,8 +48,8 @@ fn gp_hyperparameters_whose_sum_overflows_are_rejected() {
 /// leaving the table as it was.
 #[test]
 fn fqi_refuses_rewards_whose_values_would_overflow() {
-    use awfqi::env::Transition;
     use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+    use awfqi::model::Transition;
     let step = |i: usize| {
         let (x, y) = ((i % 10) as f64, (i / 3) as f64 * 2.5);
         let up = i % 2 == 0;
@@ -96,7 +96,7 @@ fn fqi_refuses_rewards_whose_values_would_overflow() {
 /// whose last point overflows (`InvalidParameter { spacing }`), which made `+∞` states.
 #[test]
 fn score_rows_are_always_finite_query_points() {
-    use awfqi::env::Transition;
+    use awfqi::model::Transition;
     use awfqi::score::{PointGrid, RowSet};
     let record = |x: f64| Transition {
         state: [x, 0.0],
@@ -142,7 +142,8 @@ fn score_rows_are_always_finite_query_points() {
 /// (`InvalidParameter { source value }`).
 #[test]
 fn score_variance_overflow_is_an_error() {
-    use awfqi::score::{PointGrid, RowSet, ScoreTable, Scores, SourceMeans, SourceModel};
+    use awfqi::model::{SourceMeans, SourceModel};
+    use awfqi::score::{PointGrid, RowSet, ScoreTable, Scores};
     struct Constant([f64; 3]);
     impl SourceModel<f64, 2> for Constant {
         fn predict(&self, _: [f64; 2], _: usize) -> awfqi::Result<SourceMeans<f64, 2>> {

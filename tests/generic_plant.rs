@@ -24,7 +24,7 @@
 //! recover π* in every checked cell and three miss one or two cells, all at `|Σ s| = 1`
 //! (measured while writing the test; a 48-point GP instead of 64 missed 10–50 cells).
 
-use awfqi::{
+use awfqi::prelude::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, FqiConfig,
     GenerativeModel, PointGrid, Policy, Posterior, Real, RowSet, Scores, SourceMeans, SourceModel,
     Transition, evaluate,
@@ -251,7 +251,7 @@ fn awfqi_recovers_the_closed_form_policy_at_four_dimensions() {
 
 /// The greedy policy of a Q-function as a [`Policy`].
 fn greedy<'q, T: Real, const D: usize>(
-    q: &'q awfqi::QFunction<'_, T, D>,
+    q: &'q awfqi::fqi::QFunction<'_, T, D>,
 ) -> impl Policy<[T; D]> + 'q {
     move |s: &[T; D]| q.greedy_action(*s)
 }
@@ -263,7 +263,7 @@ fn greedy<'q, T: Real, const D: usize>(
 /// every run, measured while writing the test.)
 #[test]
 fn awfqi_with_tile_coding_recovers_the_closed_form_policy_at_four_dimensions() {
-    use awfqi::{AwfqiBuffers, FqiEntry, Gp, Tilings};
+    use awfqi::prelude::{AwfqiBuffers, FqiEntry, Gp, Tilings};
     let mut rng = ChaCha8Rng::seed_from_u64(2026);
     let sources = [SumPlant { c: 0.0 }, SumPlant { c: 1.0 }];
     let data: Vec<Vec<Record>> = sources.iter().map(|p| records(p, &mut rng)).collect();
@@ -281,7 +281,7 @@ fn awfqi_with_tile_coding_recovers_the_closed_form_policy_at_four_dimensions() {
     let mut gp = Box::new(Gp::<T, GP_POINTS, 5>::empty());
     let mut samples = vec![Transition::EMPTY; STEPS * BUDGET];
     let mut weights = vec![0.0; 2 * PER_SOURCE];
-    let mut alias = vec![awfqi::AliasEntry::EMPTY; ROWS];
+    let mut alias = vec![awfqi::alias::AliasEntry::EMPTY; ROWS];
     let mut fqi = vec![FqiEntry::EMPTY; 4 * 256 * 2];
     let buffers = AwfqiBuffers {
         gp: &mut gp,
@@ -328,7 +328,7 @@ fn awfqi_with_tile_coding_recovers_the_closed_form_policy_at_four_dimensions() {
 /// while writing the test).
 #[test]
 fn knn_fqi_recovers_the_closed_form_policy_at_four_dimensions() {
-    use awfqi::{Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet};
+    use awfqi::prelude::{Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet};
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let twin = records(&SumPlant { c: 0.0 }, &mut rng);
     let shifted = records(&SumPlant { c: 3.0 }, &mut rng);

@@ -7,12 +7,12 @@
 //! * the same seed gives the same bytes (GP hyperparameter search, mutual-information
 //!   score).
 
-use awfqi::Transition;
-use awfqi::env::FiniteMdp;
 use awfqi::env::GridWorld;
 use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions};
 use awfqi::identify::{Belief, Criterion, MiConfig, compute_score};
+use awfqi::model::FiniteMdp;
+use awfqi::model::Transition;
 use awfqi::weights::{Estimator, Posterior, WeightParams};
 use proptest::prelude::*;
 use rand_chacha::ChaCha8Rng;

@@ -7,8 +7,9 @@
 use awfqi::Error;
 use awfqi::env::{
     ACROBOT_DISCOUNT, ACROBOT_HORIZON, Acrobot, AcrobotTask, DAM_ACTIONS, DAM_DISCOUNT,
-    DAM_HORIZON, DAM_INFLOW_STD, Dam, GenerativeModel, InflowProfile,
+    DAM_HORIZON, DAM_INFLOW_STD, Dam, InflowProfile,
 };
+use awfqi::model::GenerativeModel;
 use awfqi::rng::standard_normal;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -27,7 +28,7 @@ fn dam(k: usize) -> Dam<f64> {
     }
 }
 
-fn acrobot<T: awfqi::Real>(k: usize) -> Acrobot<T> {
+fn acrobot<T: awfqi::float::Real>(k: usize) -> Acrobot<T> {
     if k == 0 {
         Acrobot::target()
     } else {

@@ -2,11 +2,12 @@
 //! dynamics variants, episodes into fixed storage, and the §3.3 evaluation protocol.
 
 use awfqi::env::{
-    ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics, EpisodeRecord, EpsilonGreedyPolicy,
-    GenerativeModel, PUDDLE_ACTIONS, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld, Transition,
-    UniformPolicy,
+    ACTION_LEFT, ACTION_RIGHT, ACTION_UP, Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PUDDLE_DISCOUNT,
+    PUDDLE_HORIZON, PuddleWorld,
 };
-use awfqi::{Real, Result};
+use awfqi::model::{GenerativeModel, Transition};
+use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
+use awfqi::{Result, prelude::Real};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -40,14 +41,16 @@ fn every_instance_is_solvable_and_episodic_rewards_have_base_minus_one() {
     for (name, world) in all_instances::<f64>() {
         let mut policy = homing(world.goal());
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let mut records: heapless::Vec<EpisodeRecord<f64>, PUDDLE_HORIZON> = heapless::Vec::new();
+        let mut records: Vec<EpisodeRecord<f64>> = Vec::with_capacity(PUDDLE_HORIZON);
         for _ in 0..10 {
             records.clear();
             let n = world
                 .run_episode_with(&mut policy, PUDDLE_HORIZON, &mut rng, |r| {
-                    records
-                        .push(r)
-                        .map_err(|_| awfqi::Error::CapacityExceeded { capacity: 50 })
+                    if records.len() == PUDDLE_HORIZON {
+                        return Err(awfqi::Error::CapacityExceeded { capacity: 50 });
+                    }
+                    records.push(r);
+                    Ok(())
                 })
                 .unwrap();
             assert_eq!(n, records.len());

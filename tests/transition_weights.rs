@@ -10,9 +10,12 @@
 //! estimator with a target GP that has learnt the target's dynamics.
 
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, Error, FqiConfig, FqiEntry, GenerativeModel, PointGrid,
-    Posterior, QFunction, RowSet, SampleSet, Scores, SourceMeans, SourceModel, TabularFqi, TileFqi,
-    Tilings, Transition, WeightParams,
+    Error,
+    prelude::{
+        Awfqi, AwfqiConfig, AwfqiStorage, FqiConfig, FqiEntry, GenerativeModel, PointGrid,
+        Posterior, QFunction, RowSet, SampleSet, Scores, SourceMeans, SourceModel, TabularFqi,
+        TileFqi, Tilings, Transition, WeightParams,
+    },
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -134,7 +137,7 @@ fn transition_weights_keep_the_twin_and_drop_the_other_dynamics() {
     let mut ws = vec![0.0; 2 * PER_SOURCE];
     let mut kernel = Awfqi::builder(
         config().validate().unwrap(),
-        awfqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
+        awfqi::fqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
         &slices,
         RowSet::grid(lattice(), 2).unwrap(),
     )
@@ -181,7 +184,7 @@ fn transition_weights_keep_the_twin_and_drop_the_other_dynamics() {
     ];
     let mut entries = vec![FqiEntry::EMPTY; 20];
     let mut table = TabularFqi::new(
-        awfqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
+        awfqi::fqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
         2,
         &mut entries,
     )
@@ -208,7 +211,7 @@ fn without_transition_weights_every_weight_is_one() {
     let mut scores = vec![Scores::ZERO; ROWS];
     let mut kernel = Awfqi::builder(
         config().validate().unwrap(),
-        awfqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
+        awfqi::fqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
         &slices,
         RowSet::grid(lattice(), 2).unwrap(),
     )
@@ -247,7 +250,7 @@ fn the_report_counts_discarded_and_capped_records() {
     let mut ws = vec![0.0; 2 * PER_SOURCE];
     let mut kernel = Awfqi::builder(
         config().validate().unwrap(),
-        awfqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
+        awfqi::fqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
         &slices,
         RowSet::grid(lattice(), 2).unwrap(),
     )
@@ -281,7 +284,7 @@ fn the_report_counts_discarded_and_capped_records() {
     // 32 of 160 discarded (20 %) and 23 of 160 (14 %): both above the 10 % that warns.
     let discarded: Vec<_> = report
         .warnings()
-        .filter(|w| matches!(w, awfqi::Warning::RecordsDiscarded { .. }))
+        .filter(|w| matches!(w, awfqi::thesis::Warning::RecordsDiscarded { .. }))
         .collect();
     assert_eq!(discarded.len(), 2, "{discarded:?}");
 }
@@ -337,7 +340,7 @@ fn bad_transition_set_ups_are_refused() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         Awfqi::builder(
             config().validate().unwrap(),
-            awfqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
+            awfqi::fqi::CellGrid::cube(0.0, 10.0, 10).unwrap(),
             &slices,
             RowSet::grid(lattice(), 2).unwrap(),
         )

@@ -15,14 +15,18 @@
 //! Q-values and beliefs that sum to 1; a failed step leaves the step count as it was.
 #![no_main]
 
-use awfqi::adaptive::{Candidate, SourceBelief};
+use awfqi::adaptive::candidates::Candidate;
+use awfqi::adaptive::plausibility::SourceBelief;
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::record_gp::GpTraining;
 use awfqi::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, CellGrid, EmptyCells, Error, ExtraTrees,
-    FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, ModelSweep, Neighbours, PointGrid,
-    Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition, TreeNode,
-    TreeRecord,
+    Error,
+    prelude::{
+        AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, CellGrid, EmptyCells, ExtraTrees,
+        FqiConfig, FqiEntry, Gp, Kernel, KnnRecord, MeanFunction, ModelSweep, Neighbours,
+        PointGrid, Posterior, QStorage, Real, RowSet, SourceData, SubsetRule, Tilings, Transition,
+        TreeNode, TreeRecord,
+    },
 };
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
@@ -87,7 +91,7 @@ fn run<T: Real>(b: &mut Bytes) {
         bounds,
     );
     config.awfqi.gp_training = GpTraining {
-        search: awfqi::SearchOptions {
+        search: awfqi::gp::SearchOptions {
             max_evaluations: b.index(20),
             restarts: b.index(2),
             isotropic: true,
@@ -120,7 +124,7 @@ fn run<T: Real>(b: &mut Bytes) {
     config.decision = b.bool();
     config.relabel = b.bool();
     config.refit = if b.bool() {
-        awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
+        awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
             max_evaluations: b.index(12),
             restarts: b.index(2),
             isotropic: true,
@@ -214,12 +218,12 @@ fn run<T: Real>(b: &mut Bytes) {
             return;
         }
     };
-    let approximator: awfqi::Approximator<T, 2> = match b.u8() % 6 {
+    let approximator: awfqi::fqi::Approximator<T, 2> = match b.u8() % 6 {
         5 => {
             let rewards = [
-                awfqi::RewardModel::PerAction,
-                awfqi::RewardModel::Pooled,
-                awfqi::RewardModel::Backfilled,
+                awfqi::fqi::RewardModel::PerAction,
+                awfqi::fqi::RewardModel::Pooled,
+                awfqi::fqi::RewardModel::Backfilled,
             ][usize::from(b.u8() % 3)];
             let min_mass = if b.bool() { real(b) } else { T::ZERO };
             let lookahead = b.bool();
@@ -275,7 +279,7 @@ fn run<T: Real>(b: &mut Bytes) {
                 .then(|| Tilings::cube(T::ZERO, T::from_f64(10.0), 1 + b.index(3), 1 + b.index(3)));
             match (nb, tilings) {
                 (Ok(n), None) => n.into(),
-                (Ok(n), Some(Ok(t))) => awfqi::Approximator::Hybrid(t, n),
+                (Ok(n), Some(Ok(t))) => awfqi::fqi::Approximator::Hybrid(t, n),
                 (Ok(_), Some(Err(e))) => {
                     expect_kind("Tilings::cube", &e, &[Kind::Invalid]);
                     return;
@@ -303,7 +307,7 @@ fn run<T: Real>(b: &mut Bytes) {
     // Kernel averaging: one record slot per target and source record, and their links;
     // trees: as many record slots, and their nodes.
     let (records_needed, links_needed, nodes_needed) = match approximator {
-        awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
+        awfqi::fqi::Approximator::Knn(nb) | awfqi::fqi::Approximator::Hybrid(_, nb) => {
             let r = samples.len() + total;
             (
                 r,
@@ -311,20 +315,20 @@ fn run<T: Real>(b: &mut Bytes) {
                 0,
             )
         }
-        awfqi::Approximator::Trees(f) => (
+        awfqi::fqi::Approximator::Trees(f) => (
             samples.len() + total,
             0,
             f.required_nodes(4).unwrap_or(usize::MAX).min(1 << 14),
         ),
         _ => (0, 0, 0),
     };
-    let trees = matches!(approximator, awfqi::Approximator::Trees(_));
+    let trees = matches!(approximator, awfqi::fqi::Approximator::Trees(_));
     let (sweep_entries, sweep_nodes) = match approximator {
-        awfqi::Approximator::Sweep(s) => (s.required_entries(4).unwrap_or(0), s.nodes()),
+        awfqi::fqi::Approximator::Sweep(s) => (s.required_entries(4).unwrap_or(0), s.nodes()),
         _ => (0, 0),
     };
-    let mut sweep_entries = vec![awfqi::SweepEntry::EMPTY; size(b, sweep_entries)];
-    let mut sweep_nodes = vec![awfqi::SweepNode::EMPTY; size(b, sweep_nodes)];
+    let mut sweep_entries = vec![awfqi::fqi::SweepEntry::EMPTY; size(b, sweep_entries)];
+    let mut sweep_nodes = vec![awfqi::fqi::SweepNode::EMPTY; size(b, sweep_nodes)];
     let record_slots = size(b, records_needed);
     let mut records = vec![KnnRecord::EMPTY; if trees { 0 } else { record_slots }];
     let mut links = vec![0u16; size(b, links_needed)];

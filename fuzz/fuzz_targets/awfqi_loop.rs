@@ -14,9 +14,13 @@
 
 use awfqi::env::{Dynamics, PuddleWorld};
 use awfqi::{
-    AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells, Error,
-    FqiConfig, FqiEntry, GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real, RowSet,
-    ScoreColumn, Scores, SourceMeans, SourceModel, SubsetRule, Tilings, Transition, WeightParams,
+    Error,
+    prelude::{
+        AliasEntry, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig, CellGrid, EmptyCells,
+        FqiConfig, FqiEntry, GenerativeModel, Gp, NoiseSubtraction, PointGrid, Posterior, Real,
+        RowSet, ScoreColumn, Scores, SourceMeans, SourceModel, SubsetRule, Tilings, Transition,
+        WeightParams,
+    },
 };
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, kind, trace};
 use libfuzzer_sys::fuzz_target;
@@ -133,7 +137,7 @@ fn run<T: Real, G, const D: usize, const I: usize>(
     options: Options,
 ) where
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy + core::fmt::Debug,
-    awfqi::Dims<D, I>: awfqi::StatePlusAction,
+    awfqi::record_gp::Dims<D, I>: awfqi::record_gp::StatePlusAction,
 {
     // Configuration.
     let mut config = AwfqiConfig::<T, I>::thesis(b.index(9));

@@ -10,12 +10,13 @@
 //! is in range; errors are only the documented kinds.
 #![no_main]
 
-use awfqi::env::{FiniteMdp, GridWorld, Transition};
+use awfqi::env::GridWorld;
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, compute_score, draw_pair, draw_pairs,
     log_likelihood,
 };
-use awfqi::{Error, Real, Result};
+use awfqi::model::{FiniteMdp, Transition};
+use awfqi::{Error, Result, prelude::Real};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

@@ -8,11 +8,10 @@
 //! [0, 10]² (outside the grid); errors are only the documented kinds.
 #![no_main]
 
-use awfqi::env::{
-    Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, Puddle, PuddleWorld,
-};
+use awfqi::env::{Dynamics, EpisodeRecord, GridWorld, Puddle, PuddleWorld};
+use awfqi::model::{FiniteMdp, GenerativeModel};
 use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
-use awfqi::{Error, Real};
+use awfqi::{Error, prelude::Real};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

@@ -9,7 +9,7 @@
 //! unchanged and the data either unchanged or (documented last resort) cleared.
 #![no_main]
 
-use awfqi::Real;
+use awfqi::float::Real;
 use awfqi::gp::{Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;

@@ -11,12 +11,12 @@
 //! return finite values or typed errors.
 #![no_main]
 
-use awfqi::Real;
-use awfqi::env::Transition;
+use awfqi::float::Real;
 use awfqi::fqi::{
     Approximator, CellGrid, EmptyCells, FqiConfig, ModelSweep, QStorage, RewardModel, SampleSet,
     SweepEntry, SweepFqi, SweepNode,
 };
+use awfqi::model::Transition;
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 

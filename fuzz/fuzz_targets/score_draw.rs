@@ -12,9 +12,11 @@
 #![no_main]
 
 use awfqi::alias::{AliasEntry, AliasTable};
-use awfqi::env::{Dynamics, PuddleWorld, Transition};
-use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores, SourceMeans, SourceModel};
-use awfqi::{Real, Result};
+use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::model::Transition;
+use awfqi::model::{SourceMeans, SourceModel};
+use awfqi::score::{PointGrid, RowSet, ScoreColumn, ScoreTable, Scores};
+use awfqi::{Result, prelude::Real};
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, kind, trace};
 use libfuzzer_sys::fuzz_target;
 use rand_chacha::ChaCha8Rng;

@@ -10,9 +10,9 @@
 //! checked before the table changes); queries return finite values or typed errors.
 #![no_main]
 
-use awfqi::Real;
-use awfqi::env::Transition;
+use awfqi::float::Real;
 use awfqi::fqi::{Approximator, CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, Tilings};
+use awfqi::model::Transition;
 use awfqi_fuzz::{Bytes, Kind, expect_kind, finite, trace};
 use libfuzzer_sys::fuzz_target;
 

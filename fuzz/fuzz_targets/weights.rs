@@ -7,7 +7,7 @@
 //! documented kinds.
 #![no_main]
 
-use awfqi::Real;
+use awfqi::float::Real;
 use awfqi::weights::{
     Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
     effective_sample_size, ideal_weight, predictive_stds,

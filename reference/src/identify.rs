@@ -6,7 +6,7 @@
 // Index loops mirror the subscripts of the spec's formulas; that is the point here.
 #![allow(clippy::needless_range_loop)]
 
-use awfqi::env::FiniteMdp;
+use awfqi::model::FiniteMdp;
 
 /// A finite MDP copied into dense tables: `p[s][a][s′]`, `r[s][a]`, `v[s][a]`.
 #[derive(Debug, Clone, PartialEq)]

@@ -43,42 +43,53 @@
 //! **Errors part-way** are those of [`crate::Awfqi`]: records already queried stay in `D₀`,
 //! the Q-function keeps its last fit, the step counter does not advance.
 
+mod builder;
 pub mod candidates;
+mod draw;
+mod evidence;
 pub mod fading;
-pub mod mean_function;
+mod mean_function;
 pub mod plausibility;
+mod replan;
 pub mod safeguard;
 pub mod schedule;
-pub mod storage;
+mod storage;
+mod verify;
 
-pub use candidates::Candidate;
+pub use builder::{AdaptiveBuilder, ROWS_PER_AXIS, ROWS_PER_CELL};
 pub use fading::{FadeCell, Fading};
-pub use mean_function::MeanFunction;
-pub use plausibility::SourceBelief;
 pub use safeguard::PlanCheck;
 pub use schedule::Schedule;
-pub use storage::{AdaptiveBuffers, AdaptiveStorage};
+pub use mean_function::MeanFunction;
+pub use replan::relabelled_reward;
+pub use storage::{AdaptiveBuffers, AdaptiveCapacities, AdaptiveParts, AdaptiveStorage};
 
-use crate::awfqi::builder::{buffer, short};
-use crate::awfqi::transfer::{ReplanGp, SourceValues, Transfer, for_each_source};
-use crate::awfqi::{AwfqiConfig, SourceData, SourceScales, StepReport};
+use draw::Draw;
+use evidence::Evidence;
+use plausibility::SourceBelief;
+use replan::Replan;
+use verify::Verification;
+
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, QFunction};
-use crate::gp::{Gp, Hyperparameters, SearchOptions};
+use crate::gp::{Gp, SearchOptions};
 use crate::model::{GenerativeModel, Transition};
-use crate::record_gp::{
-    Dims, GpTraining, InputDim, StatePlusAction, fit_gp_searched, input, visit_posteriors,
-};
+use crate::record_gp::{Dims, InputDim, StatePlusAction};
 use crate::score::RowSet;
-use crate::weights::{NoiseSubtraction, StdTransform, WeightSummary, WeightTally};
+use crate::thesis::builder::{buffer, short};
+use crate::thesis::transfer::Transfer;
+use crate::thesis::{AwfqiConfig, SourceData, SourceScales, StepReport};
 use rand_core::Rng;
+#[cfg(test)]
+use replan::median;
 
 /// Settings of adaptive AWFQI for a `D`-dimensional plant (`I = D + 1`): the AWFQI
 /// settings it shares (budget, weights, GP training, subset rule, FQI; its `sampling`
 /// column is unused) and its own. [`AdaptiveConfig::validate`] checks them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     /// The AWFQI settings: per-step budget `n`, the reward weights' estimator (`v_r` is
     /// also the plausibilities' scale), noise subtraction, subset rule, GP training, FQI.
@@ -138,8 +149,9 @@ pub enum Refit {
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The recommended configuration (`docs/embedded-adaptive.md`, the harness's
     /// `awfqi-adaptive`): sub-batches and verification share by the budget schedule's rule
-    /// ([`Schedule::rule`]: 3 sub-batches and 70 % verification at 50 queries a step; rollouts
-    /// from several start states by [`AdaptiveAwfqi::with_starts`]), surprise, uncertainty
+    /// ([`Schedule::rule`]: 3 sub-batches and 70 % verification at 50 queries a step;
+    /// rollouts from several start states with [`AdaptiveAwfqi::with_starts`]), surprise,
+    /// uncertainty
     /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
     /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
     /// each GP's first fit), on the thesis's AWFQI settings for `budget`
@@ -149,8 +161,10 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     ///
     /// With it, on Puddle World: 32-point GPs (`N = 32`) and FQI by a model sweep on 12
     /// cells per axis with pooled rewards
-    /// (`ModelSweep::cube(0.0, 10.0, 12)?.with_rewards(RewardModel::Pooled)`), in 47 KB of
-    /// RAM and about 10⁸ Cortex-M4F instructions per step. `RewardModel::Pooled` assumes a
+    /// (`ModelSweep::cube(0.0, 10.0, 12)?.with_rewards(RewardModel::Pooled)`): RAM and
+    /// instructions per step measured in `docs/embedded-adaptive.md` (footprint image
+    /// `adaptive_puddle`: 39 884 B; `m4_adaptive`: 1.058·10⁸ instructions for the largest
+    /// step). `RewardModel::Pooled` assumes a
     /// reward that depends on the state only; otherwise `RewardModel::Backfilled`.
     pub fn recommended(
         budget: usize,
@@ -334,40 +348,21 @@ impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig
 ///
 /// Generic like [`crate::Awfqi`]: scalar `T`, target model `G`, state dimension `D`, GP
 /// input dimension `I = D + 1`, GP capacity `N` (the target GP's and the sources' mean
-/// functions'); every buffer's capacity is its slice's length.
+/// functions'); every buffer's capacity is its slice's length. Each phase of a sub-batch
+/// keeps its own state in its own module: the verified path (`verify`), the candidate
+/// slots (`draw`), what the re-plans leave for the next (`replan`); the sources' beliefs
+/// are the evidence every query updates (`evidence`).
 #[derive(Debug)]
 pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usize> {
     config: ValidAdaptiveConfig<T, D, I>,
     rows: RowSet<'a, T, D>,
-    means: &'a [MeanFunction<T, N, I>],
-    beliefs: &'a mut [SourceBelief<T>],
-    /// `run.gp` holds the residual GP of the last re-plan.
-    residual: bool,
-    /// `run.weights` holds the relabelled rewards the Q-function was last fitted on.
-    relabelled: bool,
-    /// The last hyperparameters of the weights' reward GP and of the residual GP in this
-    /// run (the warm starts of [`Refit::Warm`]).
-    last_hyper: [Option<Hyperparameters<T, I>>; 2],
-    slots: &'a mut [Candidate<T>],
-    /// The verification rollouts' start states ([`AdaptiveAwfqi::with_starts`]; empty:
-    /// [`AdaptiveConfig::start`] alone).
-    starts: &'a [[T; D]],
-    /// The start of the next verification rollout, an index into `starts` (cycles over
-    /// the run).
-    next_start: usize,
-    path: &'a mut [[T; D]],
-    path_len: usize,
-    /// The greedy verification rollouts of the current sub-batch.
-    check: PlanCheck<T>,
-    /// Source weights that fade where the target has records ([`AdaptiveAwfqi::with_fading`]).
-    fading: Option<Fading<T>>,
-    /// The fading's cell sums.
-    fade_table: &'a mut [FadeCell<T>],
-    /// The Q-function has been fitted in this run.
-    planned: bool,
-    /// GP fits of the current step whose optimum the conditioning policy refused.
-    refused_fits: usize,
-    last: Option<StepReport<T, I>>,
+    evidence: Evidence<'a, T, N, I>,
+    verification: Verification<'a, T, D>,
+    draw: Draw<'a, T>,
+    replan: Replan<T, I>,
+    /// Source weights that fade where the target has records ([`AdaptiveAwfqi::with_fading`])
+    /// and the regions' sums.
+    fading: Option<(Fading<T>, &'a mut [FadeCell<T>])>,
     /// `D₀`, the sources, the weights, the GP, the Q-function, the step count.
     run: Transfer<'a, T, G, D, I, N>,
 }
@@ -404,71 +399,17 @@ where
         Dims<D, I>: StatePlusAction,
     {
         let () = InputDim::<D, I>::CHECK;
-        let AdaptiveBuffers {
-            gp,
-            samples,
-            weights,
-            candidates,
-            fqi,
-            path,
-            beliefs,
-        } = buffers.into();
-        let actions = target.num_actions();
-        if actions == 0 {
-            return Err(Error::InvalidParameter {
-                parameter: "actions",
-            });
-        }
-        if rows.iter().any(|(_, a)| a >= actions) {
-            return Err(Error::OutOfRange {
-                parameter: "actions",
-            });
-        }
-        let m = sources.records().len();
-        if m == 0 {
-            return Err(Error::EmptyData);
-        }
-        if means.len() != m {
-            return Err(Error::InvalidParameter { parameter: "means" });
-        }
-        let slots = config.candidates.min(rows.len());
-        let budget = config.awfqi.budget;
-        short(samples.len(), budget, buffer::SAMPLES)?;
-        short(weights.len(), sources.len(), buffer::WEIGHTS)?;
-        short(candidates.len(), slots, buffer::CANDIDATES)?;
-        short(path.len(), budget, buffer::PATH)?;
-        short(beliefs.len(), m, buffer::BELIEFS)?;
-        let approximator = approximator.into();
-        if let Some(entries) = approximator.required_entries(actions) {
-            short(fqi.entries.len(), entries, buffer::FQI)?;
-        }
-        let fqi = approximator.build(actions, fqi)?;
-        let beliefs = beliefs
-            .get_mut(..m)
-            .ok_or(Error::CapacityExceeded { capacity: m })?;
-        let mut learner = Self {
-            config,
-            rows,
-            means,
-            beliefs,
-            residual: false,
-            relabelled: false,
-            last_hyper: [None; 2],
-            slots: candidates,
-            starts: &[],
-            next_start: 0,
-            path,
-            path_len: 0,
-            check: PlanCheck::empty(),
-            fading: None,
-            fade_table: &mut [],
-            planned: false,
-            refused_fits: 0,
-            last: None,
-            run: Transfer::new(target, sources, samples, weights, gp, fqi),
-        };
-        learner.reset();
-        Ok(learner)
+        let records = sources.records();
+        let mut lent = Lent::check(
+            &config,
+            approximator.into(),
+            records,
+            &rows,
+            &target,
+            buffers.into(),
+        )?;
+        let evidence = Evidence::new(means, lent.beliefs(), records.len())?;
+        Ok(lent.assemble(config, sources, rows, target, evidence))
     }
 
     /// Verifies from every state of `starts` (the start states the plant declares) instead
@@ -480,15 +421,13 @@ where
     /// Errors: `starts` empty ([`Error::EmptyData`]) or with a non-finite coordinate
     /// ([`Error::NonFinite`] `start`); the learner is unchanged then.
     pub fn with_starts(mut self, starts: &'a [[T; D]]) -> Result<Self> {
-        if starts.is_empty() {
-            return Err(Error::EmptyData);
-        }
-        for s in starts {
-            crate::error::ensure_all_finite(s, "start")?;
-        }
-        self.starts = starts;
-        self.next_start = 0;
+        self.verification.set_starts(starts)?;
         Ok(self)
+    }
+
+    /// The verification rollouts' start states.
+    pub fn starts(&self) -> &[[T; D]] {
+        self.verification.starts(&self.config.config.start)
     }
 
     /// Fades the sources' reward weights where the target has records ([`fading`]): after
@@ -508,32 +447,17 @@ where
                 needed: 1,
             });
         }
-        self.fading = Some(fading);
-        self.fade_table = table;
+        self.fading = Some((fading, table));
         Ok(self)
-    }
-
-    /// The verification rollouts' start states.
-    pub fn starts(&self) -> &[[T; D]] {
-        if self.starts.is_empty() {
-            core::slice::from_ref(&self.config.config.start)
-        } else {
-            self.starts
-        }
     }
 
     /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
     /// step count.
     pub fn reset(&mut self) {
         self.run.reset();
-        self.path_len = 0;
-        self.next_start = 0;
-        self.planned = false;
-        self.residual = false;
-        self.relabelled = false;
-        self.last_hyper = [None; 2];
-        self.last = None;
-        plausibility::reset(self.beliefs);
+        self.verification.reset();
+        self.replan = Replan::new();
+        self.evidence.reset();
     }
 
     /// The configuration.
@@ -564,7 +488,7 @@ where
     /// record ([`AdaptiveConfig::relabel`]; empty without relabelling or before a re-plan
     /// with target data, when the records' own rewards are used).
     pub fn relabelled_rewards(&self) -> &[T] {
-        if !self.relabelled {
+        if !self.replan.relabelled() {
             return &[];
         }
         self.run.source_values()
@@ -572,12 +496,12 @@ where
 
     /// The sources' beliefs (plausibilities as of the last re-plan).
     pub fn beliefs(&self) -> &[SourceBelief<T>] {
-        self.beliefs
+        self.evidence.beliefs()
     }
 
     /// The states verified in the current step.
     pub fn path(&self) -> &[[T; D]] {
-        self.path.get(..self.path_len).unwrap_or(&[])
+        self.verification.states()
     }
 
     /// The Q-function of the last re-plan (0 before the first).
@@ -597,7 +521,17 @@ where
 
     /// The sources' reward mean functions.
     pub fn means(&self) -> &'a [MeanFunction<T, N, I>] {
-        self.means
+        self.evidence.means()
+    }
+
+    /// The candidate rows the drawn queries come from.
+    pub fn rows(&self) -> &RowSet<'a, T, D> {
+        &self.rows
+    }
+
+    /// The source records and their stored reward posteriors.
+    pub fn sources(&self) -> &SourceData<'a, T, D> {
+        &self.run.sources
     }
 
     /// Plans on the sources alone (the plan the first step starts from), if no plan exists
@@ -606,8 +540,10 @@ where
     ///
     /// Errors: those of FQI; the learner is unchanged then.
     pub fn plan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<()> {
-        if !self.planned {
-            self.replan(rng)?;
+        if !self.replan.planned() {
+            let fading = self.fading.as_mut().map(|(f, t)| (&*f, &mut **t));
+            self.replan
+                .run(&self.config, &mut self.run, &mut self.evidence, fading, rng)?;
         }
         Ok(())
     }
@@ -622,8 +558,8 @@ where
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
         let n = self.config.awfqi.budget;
         self.run.ensure_room(n)?;
-        self.path_len = 0;
-        self.refused_fits = 0;
+        self.verification.clear();
+        self.replan.start_step();
         self.plan(rng)?;
         let s = self.config.sub_batches;
         let mut report = None;
@@ -635,19 +571,36 @@ where
                 .floor()
                 .to_f64() as usize;
             let verify = verify.min(quota);
-            self.check = PlanCheck::empty();
-            self.verify(verify, rng)?;
-            let (verify, draw) = if self.config.safeguard && self.verified_short() {
+            let (config, run, evidence) = (&self.config, &mut self.run, &mut self.evidence);
+            self.verification.start_check();
+            let planned = self.replan.planned();
+            self.verification
+                .run(verify, planned, config, run, evidence, rng)?;
+            // The safeguard: a plan that verified short of its promise gets the sub-batch's
+            // drawn queries as more verification.
+            let short = config.safeguard && self.verification.check().is_short(reward_std(run));
+            let (more, drawn) = if short {
                 (quota - verify, 0)
             } else {
                 (0, quota - verify)
             };
-            self.verify(verify, rng)?;
-            self.draw(draw, rng)?;
-            let check = self.check;
-            let mut r = self.replan(rng)?;
+            self.verification
+                .run(more, planned, config, run, evidence, rng)?;
+            self.draw.run(
+                drawn,
+                config,
+                &self.rows,
+                self.verification.states(),
+                self.replan.residual(),
+                run,
+                evidence,
+                rng,
+            )?;
+            let check = *self.verification.check();
+            let fading = self.fading.as_mut().map(|(f, t)| (&*f, &mut **t));
+            let mut r = self.replan.run(config, run, evidence, fading, rng)?;
             r.plan_shortfall = check.shortfall();
-            r.reward_std = self.reward_std();
+            r.reward_std = reward_std(run);
             report = Some(r);
         }
         self.run.steps += 1;
@@ -656,446 +609,126 @@ where
         })?;
         report.step = self.run.steps;
         report.queries = n;
-        self.last = Some(report);
         Ok(report)
     }
-
-    /// The standard deviation of the target's rewards in `D₀`.
-    fn reward_std(&self) -> T {
-        safeguard::reward_std(self.run.target_samples().iter().map(|r| r.reward))
-    }
-
-    /// Whether the current sub-batch's plan verified short of its promise.
-    fn verified_short(&self) -> bool {
-        self.check.is_short(self.reward_std())
-    }
-
-    /// Appends a queried record to `D₀` and adds its clipped errors to the beliefs.
-    fn record(&mut self, record: Transition<[T; D], T>) -> Result<()> {
-        let mut evidence = Evidence {
-            config: &self.config,
-            means: self.means,
-            beliefs: self.beliefs,
-        };
-        evidence.append(&mut self.run, record)
-    }
-
-    /// `n` queries along greedy rollouts from the start states (ε-greedy after the first
-    /// rollout of the call from each start), each state kept in the path.
-    fn verify<R: Rng + ?Sized>(&mut self, n: usize, rng: &mut R) -> Result<()> {
-        let actions = self.run.target.num_actions();
-        let m = self.starts().len();
-        let length = schedule::rollout_length(
-            self.config.awfqi.budget,
-            self.config.verify,
-            self.config.horizon,
-            m,
-        );
-        let gamma = self.config.awfqi.fqi.discount();
-        let mut left = n;
-        let mut rollouts = 0usize;
-        while left > 0 {
-            let first = rollouts < m;
-            let starts = self.starts();
-            let mut state = starts
-                .get(self.next_start % m.max(1))
-                .copied()
-                .unwrap_or(self.config.start);
-            self.next_start = (self.next_start + 1) % m.max(1);
-            rollouts += 1;
-            // A greedy rollout of a fitted plan checks the plan's promise.
-            let mut checked: Option<safeguard::Rollout<T>> = None;
-            let mut absorbed = false;
-            for t in 0..length {
-                if left == 0 {
-                    break;
-                }
-                let explore = !first && crate::rng::uniform::<T, R>(rng) < self.config.epsilon;
-                let action = if explore {
-                    crate::rng::uniform_index(rng, actions)
-                } else {
-                    self.run.fqi.greedy_action(state)?
-                };
-                if t == 0 && first && self.planned {
-                    checked = Some(safeguard::Rollout::new(self.run.fqi.value(state, action)?));
-                }
-                let record = self.run.target.query(state, action, rng)?;
-                self.record(record)?;
-                if let Some(slot) = self.path.get_mut(self.path_len) {
-                    *slot = state;
-                    self.path_len += 1;
-                }
-                if let Some(c) = checked.as_mut() {
-                    c.step(record.reward, gamma);
-                }
-                left -= 1;
-                if record.absorbing {
-                    absorbed = true;
-                    break;
-                }
-                state = record.next_state;
-            }
-            if let Some(c) = checked {
-                let v = if absorbed {
-                    T::ZERO
-                } else {
-                    self.run.fqi.max_value(state)?
-                };
-                c.finish(v, &mut self.check);
-            }
-        }
-        Ok(())
-    }
-
-    /// `n` queries drawn from a fresh candidate subset by the adaptive score.
-    fn draw<R: Rng + ?Sized>(&mut self, n: usize, rng: &mut R) -> Result<()> {
-        if n == 0 {
-            return Ok(());
-        }
-        let rows = self.rows.len();
-        let c = self.config.candidates.min(rows);
-        let capacity = self.slots.len();
-        let slots = self
-            .slots
-            .get_mut(..c)
-            .ok_or(Error::CapacityExceeded { capacity })?;
-        let path = self.path.get(..self.path_len).unwrap_or(&[]);
-        let config = &self.config;
-        let residual = self.residual.then_some(&*self.run.gp);
-        let mut smallest = T::INFINITY;
-        // Pass 1: rows and the factors that do not depend on the batch.
-        for slot in slots.iter_mut() {
-            let row = crate::rng::uniform_index(rng, rows);
-            let (state, action) = self
-                .rows
-                .row(row)
-                .ok_or(Error::OutOfRange { parameter: "row" })?;
-            let z = input(state, action);
-            let relevance = if config.decision {
-                candidates::relevance(&state, path, &config.bounds, config.relevance_width)
-            } else {
-                T::ONE
-            };
-            let (_, disagreement) = spread(self.means, self.beliefs, &z)?;
-            let (surprise, variance) = match residual {
-                Some(gp) => {
-                    let p = gp.predict(&z)?;
-                    smallest = smallest.min(p.noisy_variance);
-                    let s = if config.surprise {
-                        p.mean.squared()
-                    } else {
-                        T::ZERO
-                    };
-                    (s, p.noisy_variance)
-                }
-                None => (T::ZERO, T::ZERO),
-            };
-            *slot = Candidate {
-                row,
-                relevance,
-                score: surprise + disagreement,
-                variance,
-            };
-        }
-        // Pass 2: the uncertainty factor needs the batch's smallest variance.
-        let totals = match residual {
-            Some(gp) if config.uncertainty => {
-                let hyper: &Hyperparameters<T, I> = gp.hyperparameters();
-                let signal = hyper.signal_variance.max(T::MIN_POSITIVE);
-                let transform =
-                    StdTransform::new(NoiseSubtraction::Reference, hyper.noise_variance, smallest)?;
-                let share = move |v: T| transform.apply(v).squared() / signal;
-                let u = move |v: T| share(v).min(T::ONE);
-                candidates::finish_scores(slots, Some(&u))
-            }
-            _ => candidates::finish_scores(slots, None),
-        };
-        // Pass 3: the queries, each drawn by a scan of the slots' probabilities (a few
-        // queries per sub-batch: cheaper in memory than a table, and as fast).
-        let floor = config.floor;
-        let probability = |s: &Candidate<T>| candidates::probability(s, totals, floor, c);
-        let total = slots.iter().map(probability).fold(T::ZERO, |a, p| a + p);
-        let mut evidence = Evidence {
-            config: &self.config,
-            means: self.means,
-            beliefs: self.beliefs,
-        };
-        for _ in 0..n {
-            let u = crate::rng::uniform::<T, R>(rng) * total;
-            let mut row = slots.last().map_or(0, |s| s.row);
-            let mut sum = T::ZERO;
-            for s in slots.iter() {
-                sum += probability(s);
-                if u < sum {
-                    row = s.row;
-                    break;
-                }
-            }
-            let (state, action) = self
-                .rows
-                .row(row)
-                .ok_or(Error::OutOfRange { parameter: "row" })?;
-            let record = self.run.target.query(state, action, rng)?;
-            evidence.append(&mut self.run, record)?;
-        }
-        Ok(())
-    }
-
-    /// Re-plans: reward GP, reward weights and weighted FQI on `D₀` and the sources (the
-    /// sources unweighted before any target data), then the plausibilities and the
-    /// residual GP.
-    fn replan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<StepReport<T, I>> {
-        let (reward_training, residual_training) =
-            (self.training(REWARD_GP), self.training(RESIDUAL_GP));
-        let config = &self.config.awfqi;
-        let run = &mut self.run;
-        let mut wr = WeightSummary::new();
-        wr.add_ones(run.len);
-        let mut tally = WeightTally::new();
-        if run.len == 0 {
-            run.fit_q(SourceValues::Unused, None, &config.fqi, rng)?;
-            wr.add_ones(run.sources.len());
-            tally.sources.add_ones(run.sources.len());
-            self.planned = true;
-            self.residual = false;
-            self.relabelled = false;
-            let gp = ReplanGp::none(run.gp);
-            return Ok(run.report(&wr, &tally, gp, self.refused_fits));
-        }
-        let target = run.samples.get(..run.len).unwrap_or(&[]);
-        let relabel = self.config.relabel;
-        // Relabelling reads the GP far from the target data too, so its prior mean is the
-        // target rewards' median there (a zero prior would relabel towards an optimistic 0).
-        let centre = if relabel { median(target) } else { T::ZERO };
-        // `r − 0` is `r` exactly: without relabelling this is the thesis's zero-mean GP.
-        let fit = fit_gp_searched(
-            run.gp,
-            target,
-            |r| Ok(r.reward - centre),
-            config.subset,
-            &reward_training,
-            rng,
-        )?;
-        self.refused_fits += usize::from(fit.refused);
-        self.last_hyper[REWARD_GP] = Some(*run.gp.hyperparameters());
-        let gp = ReplanGp::of(run.gp, fit.lml);
-        self.relabelled = false;
-        let values = if relabel {
-            // The per-record values are the relabelled rewards; every weight is 1.
-            relabel_rewards(
-                run.gp,
-                &run.sources,
-                centre,
-                config.weights.noise_variance(),
-                config.noise_subtraction,
-                run.weights,
-            )?;
-            wr.add_ones(run.sources.len());
-            tally.sources.add_ones(run.sources.len());
-            SourceValues::Rewards
-        } else {
-            run.fit_reward_weights(
-                &config.weights,
-                config.noise_subtraction,
-                &mut wr,
-                &mut tally,
-                true,
-            )?;
-            if let Some(f) = &self.fading {
-                fading::fade(
-                    f,
-                    run.weights,
-                    run.sources.records().iter().copied(),
-                    run.samples.get(..run.len).unwrap_or(&[]),
-                    &self.config.bounds,
-                    self.fade_table,
-                )?;
-            }
-            SourceValues::Weights
-        };
-        run.fit_q(values, None, &config.fqi, rng)?;
-        self.relabelled = relabel;
-        self.planned = true;
-        // The residual model for the next sub-batch's scores.
-        self.residual = false;
-        plausibility::update(self.beliefs, config.weights.noise_variance())?;
-        let (means, beliefs) = (self.means, &*self.beliefs);
-        let target = run.samples.get(..run.len).unwrap_or(&[]);
-        let residual = fit_gp_searched(
-            run.gp,
-            target,
-            |r| {
-                let (prior, _) = spread(means, beliefs, &input(r.state, r.action))?;
-                Ok(r.reward - prior)
-            },
-            config.subset,
-            &residual_training,
-            rng,
-        )?;
-        self.refused_fits += usize::from(residual.refused);
-        self.last_hyper[RESIDUAL_GP] = Some(*run.gp.hyperparameters());
-        self.residual = true;
-        Ok(run.report(&wr, &tally, gp, self.refused_fits))
-    }
-
-    /// The training of GP `which` ([`REWARD_GP`], [`RESIDUAL_GP`]) by [`Refit`].
-    fn training(&self, which: usize) -> GpTraining<T, I> {
-        let thesis = self.config.awfqi.gp_training;
-        match (
-            self.config.refit,
-            self.last_hyper.get(which).copied().flatten(),
-        ) {
-            (Refit::Warm(search), Some(initial)) => GpTraining {
-                initial,
-                search,
-                ..thesis
-            },
-            _ => thesis,
-        }
-    }
 }
 
-/// Index of the weights' reward GP in [`AdaptiveAwfqi`]'s warm starts.
-const REWARD_GP: usize = 0;
-/// Index of the residual GP.
-const RESIDUAL_GP: usize = 1;
-
-/// What a query changes besides `D₀`: the sources' running errors.
-struct Evidence<'k, 'a, T, const D: usize, const I: usize, const N: usize> {
-    config: &'k ValidAdaptiveConfig<T, D, I>,
-    means: &'a [MeanFunction<T, N, I>],
-    beliefs: &'k mut [SourceBelief<T>],
+/// The standard deviation of the target's rewards in `run`'s `D₀`.
+fn reward_std<T: Real, G: GenerativeModel<T, State = [T; D]>, const D: usize, const I: usize, const N: usize>(
+    run: &Transfer<'_, T, G, D, I, N>,
+) -> T {
+    safeguard::reward_std(run.target_samples().iter().map(|r| r.reward))
 }
 
-impl<T: Real, const D: usize, const I: usize, const N: usize> Evidence<'_, '_, T, D, I, N>
+/// The learner's buffers, checked against the set-up before anything is fitted: each
+/// phase's own buffer already in its phase.
+struct Lent<'a, T, const D: usize, const I: usize, const N: usize> {
+    gp: &'a mut Gp<T, N, I>,
+    samples: &'a mut [Transition<[T; D], T>],
+    weights: &'a mut [T],
+    beliefs: Option<&'a mut [SourceBelief<T>]>,
+    fqi: QFunction<'a, T, D>,
+    verification: Verification<'a, T, D>,
+    draw: Draw<'a, T>,
+}
+
+impl<'a, T: Real, const D: usize, const I: usize, const N: usize> Lent<'a, T, D, I, N>
 where
     Dims<D, I>: StatePlusAction,
 {
-    /// Adds `record`'s clipped errors to the beliefs and appends it to `run`'s `D₀`.
-    ///
-    /// Errors: `D₀` full ([`Error::CapacityExceeded`], checked first), those of a mean
-    /// function; either way nothing changes.
-    fn append<G: GenerativeModel<T, State = [T; D]>>(
-        &mut self,
-        run: &mut Transfer<'_, T, G, D, I, N>,
-        record: Transition<[T; D], T>,
-    ) -> Result<()> {
-        run.ensure_room(1)?;
-        let z = input(record.state, record.action);
-        let v = self.config.awfqi.weights.noise_variance();
-        for ((belief, mean), source) in self
-            .beliefs
-            .iter_mut()
-            .zip(self.means)
-            .zip(run.sources.records())
-        {
-            let ends = plausibility::nearest_ends(
-                source,
-                &record.state,
-                record.action,
-                &self.config.bounds,
-            );
-            let e2 = plausibility::clipped_error(
-                record.reward,
-                mean.mean(&z)?,
-                ends == record.absorbing,
-                v,
-            );
-            belief.squared_errors += e2;
+    /// The errors of [`AdaptiveAwfqi::new`] but the mean functions' (checked by the
+    /// evidence), in its order.
+    fn check<G: GenerativeModel<T, State = [T; D]>>(
+        config: &ValidAdaptiveConfig<T, D, I>,
+        approximator: Approximator<T, D>,
+        records: &[&[Transition<[T; D], T>]],
+        rows: &RowSet<'_, T, D>,
+        target: &G,
+        buffers: AdaptiveBuffers<'a, T, D, I, N>,
+    ) -> Result<Self> {
+        let AdaptiveBuffers {
+            gp,
+            samples,
+            weights,
+            candidates,
+            fqi,
+            path,
+            beliefs,
+        } = buffers;
+        let actions = target.num_actions();
+        if actions == 0 {
+            return Err(Error::InvalidParameter {
+                parameter: "actions",
+            });
         }
-        run.push(record);
-        Ok(())
-    }
-}
-
-/// The sources' rewards as the target sees them ([`AdaptiveConfig::relabel`]), source after
-/// source into `out`: each record's posterior under `gp` (fitted on the target rewards
-/// minus `centre`; one noise-subtraction batch per source, as the reward weights do), then
-/// [`relabelled_reward`].
-///
-/// Errors: `out` shorter than the source records ([`Error::CapacityExceeded`]), those of
-/// [`crate::Gp::predict`] and a non-finite result ([`Error::NonFinite`] `reward`).
-fn relabel_rewards<T: Real, const N: usize, const D: usize, const I: usize>(
-    gp: &Gp<T, N, I>,
-    sources: &SourceData<'_, T, D>,
-    centre: T,
-    v: T,
-    noise: NoiseSubtraction,
-    out: &mut [T],
-) -> Result<()>
-where
-    Dims<D, I>: StatePlusAction,
-{
-    for_each_source(sources, out, |records, _, mine| {
+        if rows.iter().any(|(_, a)| a >= actions) {
+            return Err(Error::OutOfRange {
+                parameter: "actions",
+            });
+        }
         if records.is_empty() {
-            return Ok(());
+            return Err(Error::EmptyData);
         }
-        let mut slots = mine.iter_mut();
-        visit_posteriors(gp, records, noise, |r, p| {
-            if let Some(slot) = slots.next() {
-                let y = relabelled_reward(r.reward, centre + p.mean, p.std, v);
-                crate::error::ensure_finite(y, "reward")?;
-                *slot = y;
-            }
-            Ok(())
+        let total = records
+            .iter()
+            .try_fold(0usize, |n, r| n.checked_add(r.len()))
+            .ok_or(Error::CapacityExceeded {
+                capacity: usize::MAX,
+            })?;
+        let budget = config.awfqi.budget;
+        short(samples.len(), budget, buffer::SAMPLES)?;
+        short(weights.len(), total, buffer::WEIGHTS)?;
+        let draw = Draw::new(candidates, config.candidates.min(rows.len()))?;
+        let verification = Verification::new(path, budget)?;
+        if let Some(entries) = approximator.required_entries(actions) {
+            short(fqi.entries.len(), entries, buffer::FQI)?;
+        }
+        let fqi = approximator.build(actions, fqi)?;
+        Ok(Self {
+            gp,
+            samples,
+            weights,
+            beliefs: Some(beliefs),
+            fqi,
+            verification,
+            draw,
         })
-    })
-}
-
-/// A source reward `r` as the target sees it: `λ r + (1 − λ) μ` with `λ = exp(−u²/2)` and
-/// `u = (r − μ)/√(σ² + v)`, the reward's z-score under the target's posterior `(μ, σ)` and
-/// the reward variance `v`. A reward the target does not contradict (`u ≈ 0`, also
-/// wherever the target GP is unsure) stays; one it confidently contradicts becomes `μ`.
-pub fn relabelled_reward<T: Real>(r: T, mean: T, std: T, v: T) -> T {
-    let u = (r - mean) / (std * std + v).sqrt();
-    let lambda = (-(u * u) / T::from_f64(2.0)).exp();
-    lambda * r + (T::ONE - lambda) * mean
-}
-
-/// The median of the records' rewards (the mean of the middle two for an even count, 0 for
-/// none), without a buffer: the order of `D₀` is kept, at `O(n²)` comparisons (n ≤ the
-/// target buffer, a few hundred records).
-fn median<T: Real, const D: usize>(records: &[Transition<[T; D], T>]) -> T {
-    let n = records.len();
-    if n == 0 {
-        return T::ZERO;
     }
-    // The k-th smallest reward (0-based), counting ties.
-    let kth = |k: usize| {
-        records
-            .iter()
-            .map(|r| r.reward)
-            .find(|&x| {
-                let (below, at) = records.iter().fold((0, 0), |(b, a), r| {
-                    (
-                        b + usize::from(r.reward < x),
-                        a + usize::from(r.reward == x),
-                    )
-                });
-                below <= k && k < below + at
-            })
-            .unwrap_or(T::ZERO)
-    };
-    if n % 2 == 1 {
-        kth(n / 2)
-    } else {
-        (kth(n / 2 - 1) + kth(n / 2)) / T::from_f64(2.0)
-    }
-}
 
-/// The plausibility-weighted mean `m(z) = Σₖ πₖ μₖ(z)` of the sources' means at `z` and
-/// their weighted variance.
-fn spread<T: Real, const N: usize, const I: usize>(
-    means: &[MeanFunction<T, N, I>],
-    beliefs: &[SourceBelief<T>],
-    z: &[T; I],
-) -> Result<(T, T)> {
-    candidates::weighted_spread(
-        means
-            .iter()
-            .zip(beliefs)
-            .map(|(f, b)| Ok((f.mean(z)?, b.plausibility))),
-    )
+    /// The beliefs buffer, for the evidence (once).
+    fn beliefs(&mut self) -> &'a mut [SourceBelief<T>] {
+        self.beliefs.take().unwrap_or(&mut [])
+    }
+
+    /// The learner for a fresh run.
+    fn assemble<G: GenerativeModel<T, State = [T; D]>>(
+        self,
+        config: ValidAdaptiveConfig<T, D, I>,
+        sources: SourceData<'a, T, D>,
+        rows: RowSet<'a, T, D>,
+        target: G,
+        evidence: Evidence<'a, T, N, I>,
+    ) -> AdaptiveAwfqi<'a, T, G, D, I, N> {
+        let mut learner = AdaptiveAwfqi {
+            config,
+            rows,
+            evidence,
+            verification: self.verification,
+            draw: self.draw,
+            replan: Replan::new(),
+            fading: None,
+            run: Transfer::new(
+                target,
+                sources,
+                self.samples,
+                self.weights,
+                self.gp,
+                self.fqi,
+            ),
+        };
+        learner.reset();
+        learner
+    }
 }
 
 #[cfg(test)]

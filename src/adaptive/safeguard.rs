@@ -2,7 +2,7 @@
 //! a return (its Q-function's value along the rollout) and the target answers with the
 //! return it delivers. A plan whose rollouts fall well short of its promise learned its
 //! values where it went from records the target contradicts; a step whose last plan
-//! verified so warns ([`crate::awfqi::Warning::PlanVerifiedShort`]), and with
+//! verified so warns ([`crate::thesis::Warning::PlanVerifiedShort`]), and with
 //! [`crate::AdaptiveConfig::safeguard`] the step spends the drawn queries of a sub-batch
 //! whose plan verified short on more verification of it, so the next re-plan sees more
 //! of the path the plan actually takes.

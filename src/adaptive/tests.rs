@@ -1,10 +1,13 @@
 extern crate std;
+use super::replan::relabel_rewards;
 use super::*;
 use crate::env::{Dynamics, Puddle, PuddleWorld};
-use crate::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry};
-use crate::gp::SearchOptions;
-use crate::record_gp::{GpTraining, SubsetRule};
+use crate::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, RewardModel};
+use crate::gp::{Hyperparameters, SearchOptions};
+use crate::record_gp::{GpTraining, SubsetRule, input};
 use crate::score::PointGrid;
+use crate::thesis::SourceScales;
+use crate::weights::NoiseSubtraction;
 use crate::weights::Posterior;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -93,8 +96,86 @@ impl Fixture {
     }
 }
 
-/// Storage for budget 12 × 3 steps, 120 source records, 40 slots, 6 × 6 cells, 3 sources.
-type Storage = AdaptiveStorage<f64, 2, 3, GP, 36, 120, 40, 144, 12, 3>;
+// Storage for budget 12 × 3 steps, 120 source records, 40 slots, 6 × 6 cells, 3 sources.
+crate::adaptive_storage! {
+    struct Storage {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 3,
+        budget: 12,
+        sources: 3,
+        source_records: 120,
+        source_posteriors: 120,
+        candidates: 40,
+        table_entries: 144,
+    }
+}
+
+crate::adaptive_storage! {
+    struct ShortWeights {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 3,
+        budget: 12,
+        sources: 3,
+        source_records: 119,
+        source_posteriors: 119,
+        candidates: 40,
+        table_entries: 144,
+    }
+}
+
+crate::adaptive_storage! {
+    struct OneStep {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 1,
+        budget: 12,
+        sources: 3,
+        source_records: 120,
+        source_posteriors: 120,
+        candidates: 40,
+        table_entries: 144,
+    }
+}
+
+crate::adaptive_storage! {
+    struct TwoSources {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 2,
+        budget: 12,
+        sources: 2,
+        source_records: 80,
+        source_posteriors: 80,
+        candidates: 40,
+        table_entries: 144,
+    }
+}
+
+crate::adaptive_storage! {
+    struct NoTable {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 3,
+        budget: 12,
+        sources: 3,
+        source_records: 120,
+        source_posteriors: 120,
+        candidates: 40,
+        table_entries: 0,
+    }
+}
 
 fn rows() -> RowSet<'static, f64, 2> {
     RowSet::grid(PointGrid::spanning([0.0; 2], [10.0; 2], 2.0).unwrap(), 4).unwrap()
@@ -235,8 +316,7 @@ fn construction_checks_the_parts_before_anything_changes() {
         e.err(),
         Some(Error::InvalidParameter { parameter: "means" })
     );
-    let mut small =
-        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 36, 119, 40, 144, 12, 3>::new());
+    let mut small = std::boxed::Box::new(ShortWeights::new());
     let e = AdaptiveAwfqi::new(
         valid,
         grid(),
@@ -351,8 +431,7 @@ fn a_full_buffer_refuses_the_step_before_any_query() {
     let slices = fx.slices();
     let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
     let valid = config(12).validate().unwrap();
-    let mut storage =
-        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 12, 120, 40, 144, 12, 3>::new());
+    let mut storage = std::boxed::Box::new(OneStep::new());
     let mut kernel = AdaptiveAwfqi::new(
         valid,
         grid(),
@@ -395,8 +474,7 @@ fn the_source_that_answers_like_the_target_becomes_plausible() {
     let slices = fx.slices();
     let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
     let valid = config(12).validate().unwrap();
-    let mut storage =
-        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 24, 80, 40, 144, 12, 2>::new());
+    let mut storage = std::boxed::Box::new(TwoSources::new());
     let mut kernel = AdaptiveAwfqi::new(
         valid,
         grid(),
@@ -444,8 +522,7 @@ fn kernel_averaging_plans_on_d0_and_the_relabelled_sources() {
     c.relabel = true;
     let valid = c.validate().unwrap();
     let nb = Neighbours::cube(3, 0.0, 10.0, Kernel::Gaussian(0.1)).unwrap();
-    let mut storage =
-        std::boxed::Box::new(AdaptiveStorage::<f64, 2, 3, GP, 36, 120, 40, 0, 12, 3>::new());
+    let mut storage = std::boxed::Box::new(NoTable::new());
     let mut knn = std::boxed::Box::new(KnnStorage::<f64, 2, 156, { 156 * 4 * 3 }>::new());
     let mut buffers = storage.buffers();
     buffers.fqi = knn.storage();
@@ -638,4 +715,122 @@ fn relabelled_source_rewards_follow_the_target_gp_in_closed_form() {
         ),
         Err(Error::CapacityExceeded { capacity: 2 })
     );
+}
+
+crate::adaptive_storage! {
+    struct Built {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 2,
+        budget: 12,
+        sources: 3,
+        source_records: 120,
+        source_posteriors: 120,
+        candidates: 40,
+        sweep_cells: 6,
+    }
+}
+
+// Room for 99 target samples.
+crate::adaptive_storage! {
+    struct NinetyNine {
+        scalar: f64,
+        state_dim: 2,
+        actions: 4,
+        gp_points: GP,
+        steps: 1,
+        budget: 99,
+        sources: 3,
+        source_records: 120,
+        source_posteriors: 120,
+        candidates: 40,
+        sweep_cells: 6,
+    }
+}
+
+#[test]
+fn the_builder_derives_the_settings_fits_the_sources_once_and_runs_its_steps() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let mut memory = std::boxed::Box::new(Built::new());
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let mut kernel = AdaptiveAwfqi::builder(target, &slices, 12, [(0.0, 10.0); 2], [0.0, 0.0])
+        .rewards(RewardModel::Pooled)
+        .configure(|c| c.awfqi.gp_training = training())
+        .build(&mut *memory, &mut rng)
+        .unwrap();
+    // Settings: the scaled ones for these records, the builder's inputs, the rules.
+    let scales = SourceScales::measure(&slices).unwrap();
+    let scaled = AwfqiConfig::<f64, 3>::scaled(12, &scales).unwrap();
+    let c = kernel.config();
+    assert_eq!(c.awfqi.weights, scaled.weights);
+    assert_eq!(c.awfqi.gp_training, training());
+    assert_eq!((c.budget(), c.horizon(), c.epsilon()), (12, 12, 0.3));
+    assert_eq!((c.start(), c.bounds()), ([0.0; 2], [(0.0, 10.0); 2]));
+    assert_eq!(c.candidates(), 40); // the block's slots
+    // Rows: 4 per sweep cell and axis, both borders, every action.
+    assert_eq!(kernel.rows().len(), 25 * 25 * 4);
+    assert_eq!(kernel.rows().row(1), Some(([0.0, 0.0], 1)));
+    let (next, action) = kernel.rows().row(4).unwrap();
+    assert!((next[0] - 10.0 / 24.0).abs() < 1e-12 && next[1] == 0.0 && action == 0);
+    // Each source fitted once, in order, from the caller's generator: the same fits by
+    // hand give the same mean functions and stored posteriors.
+    let mut by_hand = ChaCha8Rng::seed_from_u64(3);
+    let mut gp = std::boxed::Box::new(Gp::<f64, GP, 3>::empty());
+    let mut posteriors = vec![Posterior::EMPTY; 120];
+    for ((source, mean), stored) in slices
+        .iter()
+        .zip(kernel.means())
+        .zip(posteriors.chunks_mut(40))
+    {
+        let mut f = MeanFunction::EMPTY;
+        f.fit_rewards(&mut gp, source, &training(), c.awfqi.subset, &mut by_hand)
+            .unwrap();
+        crate::record_gp::predict_posteriors(&gp, source, NoiseSubtraction::Reference, stored)
+            .unwrap();
+        assert_eq!(f.mean(&[3.0, 4.0, 1.0]), mean.mean(&[3.0, 4.0, 1.0]));
+    }
+    assert_eq!(kernel.sources().reward_posteriors(), &posteriors[..]);
+    assert_eq!(rng, by_hand);
+    // Two steps fit the block; a third has no room and says so before querying.
+    kernel.step(&mut rng).unwrap();
+    kernel.step(&mut rng).unwrap();
+    assert_eq!(kernel.target_samples().len(), 24);
+    assert!(matches!(
+        kernel.step(&mut rng),
+        Err(Error::BufferTooSmall { needed: 36, .. })
+    ));
+    assert_eq!(kernel.target_samples().len(), 24);
+}
+
+#[test]
+fn a_target_buffer_with_room_for_99_of_100_samples_is_refused_before_the_first_step() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let mut memory = std::boxed::Box::new(NinetyNine::new());
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let built = AdaptiveAwfqi::builder(target, &slices, 50, [(0.0, 10.0); 2], [0.0, 0.0])
+        .steps(2)
+        .build(&mut *memory, &mut rng);
+    assert_eq!(
+        built.err(),
+        Some(Error::BufferTooSmall {
+            buffer: crate::thesis::builder::buffer::SAMPLES,
+            capacity: 99,
+            needed: 100,
+        })
+    );
+    // Refused before any source GP was fitted.
+    assert_eq!(rng, ChaCha8Rng::seed_from_u64(3));
+    // One step fits.
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let built = AdaptiveAwfqi::builder(target, &slices, 50, [(0.0, 10.0); 2], [0.0, 0.0])
+        .steps(1)
+        .configure(|c| c.awfqi.gp_training = training())
+        .build(&mut *memory, &mut rng);
+    assert_eq!(built.map(|k| k.steps()), Ok(0));
 }

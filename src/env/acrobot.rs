@@ -20,9 +20,9 @@
 //! θ₁ ~ U[−2, 2) ([`Acrobot::initial_state`]) and lasts at most [`ACROBOT_HORIZON`] = 100
 //! steps, discounted by γ = 0.95.
 
-use super::{GenerativeModel, Transition};
 use crate::error::{Error, Result};
 use crate::float::Real;
+use crate::model::{GenerativeModel, Transition};
 use crate::rng;
 use rand_core::Rng;
 

@@ -23,9 +23,9 @@
 //! The memory of an instance is three scalars and a byte; the inflow means are computed on
 //! demand (in `f64`, as the reference does, then rounded to `T`).
 
-use super::{GenerativeModel, Transition};
 use crate::error::{Error, Result};
 use crate::float::Real;
+use crate::model::{GenerativeModel, Transition};
 use crate::rng;
 use rand_core::Rng;
 

@@ -1,9 +1,9 @@
 //! The finite Grid World of spec §10.4: candidate MDPs that share deterministic moves and
 //! differ only in where their single rewarding goal cell is.
 
-use super::{FiniteMdp, GenerativeModel, Transition};
 use crate::error::{Error, Result};
 use crate::float::Real;
+use crate::model::{FiniteMdp, GenerativeModel, Transition};
 use crate::rng;
 use rand_core::Rng;
 

@@ -25,5 +25,3 @@ pub use dam::*;
 pub use grid_world::GridWorld;
 pub use grid_world::{GRID_WORLD_ACTIONS, THESIS_GOALS};
 pub use puddle::*;
-
-pub use crate::model::{FiniteMdp, GenerativeModel, Transition};

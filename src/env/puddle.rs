@@ -17,13 +17,11 @@
 
 mod episode;
 
-pub use crate::evaluation::Rollout;
-pub use crate::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 pub use episode::EpisodeRecord;
 
-use super::{GenerativeModel, Transition};
 use crate::error::{Error, Result};
 use crate::float::Real;
+use crate::model::{GenerativeModel, Transition};
 use crate::model::{SourceMeans, SourceModel};
 use crate::rng;
 use crate::score::PointGrid;

@@ -48,6 +48,41 @@
 //!   (the `each!` macro in `q_function.rs` lists the variants once for all its methods,
 //!   `entries` and `as_tabular` aside), and its name in the `Greedy` macro there;
 //! - its public entry points in the no-panic image (`tests/on_target/src/bin/no_panic/`).
+//!
+//! **Example**: streamed Extra-Trees as the Q-function on their own (a corridor of four cells):
+//!
+//! ```rust
+//! use awfqi::prelude::{Approximator, EmptyCells, ExtraTrees, FqiConfig, SampleSet, Transition, TreeStorage};
+//! use rand_chacha::ChaCha8Rng;
+//! use rand_core::SeedableRng;
+//!
+//! # fn main() -> awfqi::Result<()> {
+//! // States at c + 0.5 for cells c = 0..4; action 0 moves right (leaving cell 3 ends the
+//! // episode at the goal), action 1 moves left; every move costs 1.
+//! let mut samples = [Transition::EMPTY; 8];
+//! for (i, sample) in samples.iter_mut().enumerate() {
+//!     let (cell, action) = (i / 2, i % 2);
+//!     let x = cell as f32 + 0.5;
+//!     let next = if action == 0 { x + 1.0 } else { (x - 1.0).max(0.5) };
+//!     let absorbing = action == 0 && cell == 3;
+//!     *sample = Transition { state: [x], action, reward: -1.0, next_state: [next], absorbing };
+//! }
+//! // 8 record slots and one 15-node scratch tree (a `static` in `.bss` on a device).
+//! let mut memory = TreeStorage::<f32, 1, 8, 15>::new();
+//! let forests = ExtraTrees::streamed(50, 15)?;
+//! let mut q = Approximator::Trees(forests).build(2, memory.storage())?;
+//! let config = FqiConfig::new(0.9, 60, EmptyCells::Nearest)?;
+//! q.fit(&[SampleSet::unweighted(&samples)], &config, &mut ChaCha8Rng::seed_from_u64(1))?;
+//! for cell in 0..4 {
+//!     assert_eq!(q.greedy_action([cell as f32 + 0.5])?, 0); // towards the goal
+//! }
+//! // Q(s, right) is the discounted cost to the goal: −(1 − 0.9^(4 − c)) / (1 − 0.9).
+//! assert!((q.value([0.5], 0)? + (1.0 - 0.9f32.powi(4)) / 0.1).abs() < 1e-4);
+//! assert!(q.greedy_action([f32::NAN]).is_err()); // bad input is an error
+//! # Ok(())
+//! # }
+//! ```
+//!
 
 mod argmax;
 mod config;
@@ -56,22 +91,28 @@ mod fill;
 mod grid;
 mod hybrid;
 mod iteration;
-pub mod knn;
+mod knn;
 mod q_function;
 mod samples;
-pub mod sweep;
+mod sweep;
 mod table;
 mod tiles;
-pub mod trees;
+mod trees;
 
 pub use config::{EmptyCells, FqiConfig};
 pub use entry::FqiEntry;
 pub use grid::CellGrid;
 pub use hybrid::HybridFqi;
-pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, Neighbours};
+pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, MAX_NEIGHBOURS, NO_LINK, Neighbours};
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
-pub use sweep::{ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage};
-pub use table::TabularFqi;
+pub use sweep::{
+    ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage, sweep_entries,
+    sweep_nodes,
+};
+pub use table::{TableStorage, TabularFqi};
 pub use tiles::{TileFqi, Tilings};
-pub use trees::{ExtraTrees, TreeFqi, TreeNode, TreeRecord, TreeStorage};
+pub use trees::{
+    CONSTANT_FEATURE_TOLERANCE, ExtraTrees, MIN_IMPURITY, TreeFqi, TreeNode, TreeRecord,
+    TreeStorage,
+};

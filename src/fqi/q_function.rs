@@ -169,7 +169,7 @@ impl<T: Real, const D: usize> Approximator<T, D> {
     /// its `storage()`); any [`QStorage`].
     ///
     /// ```
-    /// use awfqi::{Approximator, CellGrid, FqiEntry};
+    /// use awfqi::prelude::{Approximator, CellGrid, FqiEntry};
     /// # fn main() -> awfqi::Result<()> {
     /// let mut entries = [FqiEntry::<f32>::EMPTY; 4 * 4 * 2]; // 4 × 4 cells, 2 actions
     /// let grid = CellGrid::cube(0.0, 1.0, 4)?;

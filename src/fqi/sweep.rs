@@ -887,6 +887,22 @@ impl<T: Real, const D: usize> Regressor<T, D> for SweepFqi<'_, T, D> {
     }
 }
 
+/// The nodes of a model sweep with `cells` cells on each of `dims` axes, `(cells + 1)^dims`
+/// (the capacity `K` of a [`SweepStorage`]; `usize::MAX` on overflow, which no storage
+/// can hold).
+pub const fn sweep_nodes(dims: usize, cells: usize) -> usize {
+    match (cells.saturating_add(1)).checked_pow(dims as u32) {
+        Some(nodes) => nodes,
+        None => usize::MAX,
+    }
+}
+
+/// The entries of a model sweep with `cells` cells on each of `dims` axes and `actions`
+/// actions, nodes × actions (the capacity `E` of a [`SweepStorage`]).
+pub const fn sweep_entries(dims: usize, cells: usize, actions: usize) -> usize {
+    sweep_nodes(dims, cells).saturating_mul(actions)
+}
+
 /// The memory of a model sweep as one block with const-generic capacities (`E` entries,
 /// `K` nodes), all-zero so it can be a `static` in `.bss`.
 #[derive(Debug, Clone)]

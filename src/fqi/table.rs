@@ -286,5 +286,32 @@ impl<T: Real, const D: usize> Regressor<T, D> for TabularFqi<'_, T, D> {
     }
 }
 
+/// The entries of a table or of tile coding as one block of `E` entries (cells × actions),
+/// all-zero so it can be a `static` in `.bss`.
+#[derive(Debug, Clone)]
+pub struct TableStorage<T, const E: usize> {
+    entries: [FqiEntry<T>; E],
+}
+
+impl<T: Real, const E: usize> TableStorage<T, E> {
+    /// Empty storage.
+    pub const fn new() -> Self {
+        Self {
+            entries: [FqiEntry::EMPTY; E],
+        }
+    }
+
+    /// The block as the [`QStorage`](super::QStorage) a Q-function is built in.
+    pub fn storage<const D: usize>(&mut self) -> super::QStorage<'_, T, D> {
+        super::QStorage::from(&mut self.entries[..])
+    }
+}
+
+impl<T: Real, const E: usize> Default for TableStorage<T, E> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 #[cfg(test)]
 mod tests;

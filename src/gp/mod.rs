@@ -60,10 +60,10 @@
 //! ```
 
 mod cholesky;
-pub mod conditioning;
+mod conditioning;
 mod covariance;
 mod regression;
-pub mod search;
+mod search;
 
 pub use conditioning::{BASE_JITTER, Conditioning};
 pub use covariance::Hyperparameters;

@@ -54,8 +54,25 @@ struct Start {
     solve: usize,
 }
 
+/// What one factorisation attempt gave.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Attempt {
+    /// The factor and `z = L⁻¹y` are finite.
+    Solved,
+    /// The kernel matrix did not factorise with this jitter.
+    Breakdown,
+    /// The factor is finite but `z = L⁻¹y` is not: the targets are too large for `T`.
+    Overflow,
+}
+
+impl Attempt {
+    fn solved(self) -> bool {
+        self == Attempt::Solved
+    }
+}
+
 /// One attempt: writes the kernel rows `start.row..n`, factorises them and solves for
-/// `z[start.solve..n]`, with the given jitter. `false` on any breakdown.
+/// `z[start.solve..n]`, with the given jitter.
 #[allow(clippy::too_many_arguments)]
 fn attempt<T: Real, const D: usize>(
     hyper: &Hyperparameters<T, D>,
@@ -67,25 +84,29 @@ fn attempt<T: Real, const D: usize>(
     jitter: T,
     row: usize,
     solve: usize,
-) -> bool {
+) -> Attempt {
     let n = xs.len();
     if !jitter.is_finite() || ys.len() != n {
-        return false;
+        return Attempt::Breakdown;
     }
     if !(covariance::fill_rows(hyper, xs, jitter, factor, stride, row, n)
         && cholesky::factor_rows(factor, stride, row, n))
     {
-        return false;
+        return Attempt::Breakdown;
     }
     let (Some(src), Some(dst)) = (ys.get(solve..n), z.get_mut(solve..n)) else {
-        return false;
+        return Attempt::Breakdown;
     };
     // Element-wise: the lengths are equal, but `copy_from_slice` keeps a length-mismatch
     // panic path where the optimiser cannot prove it.
     for (d, &s) in dst.iter_mut().zip(src) {
         *d = s;
     }
-    cholesky::forward_solve(factor, stride, solve, n, z)
+    if cholesky::forward_solve(factor, stride, solve, n, z) {
+        Attempt::Solved
+    } else {
+        Attempt::Overflow
+    }
 }
 
 /// Factorises `K(xs) + (σ²ₙ + jitter) I` into `factor` and solves `z = L⁻¹ ys`, escalating
@@ -95,7 +116,9 @@ fn attempt<T: Real, const D: usize>(
 ///
 /// Errors: [`Error::JitterLimit`] when only a jitter beyond the policy's limit factorises
 /// (the ladder is climbed on to name it), [`Error::IllConditioned`] when every allowed factor
-/// was beyond the condition limit, [`Error::NotPositiveDefinite`] otherwise.
+/// was beyond the condition limit, [`Error::Overflow`] naming `y` when the matrix factorised
+/// but `L⁻¹y` overflowed at every jitter (the targets are too large for `T`; the kernel
+/// matrix does not depend on them), [`Error::NotPositiveDefinite`] otherwise.
 #[allow(clippy::too_many_arguments)]
 fn factorize<T: Real, const D: usize>(
     hyper: &Hyperparameters<T, D>,
@@ -112,6 +135,14 @@ fn factorize<T: Real, const D: usize>(
     let limit = policy.max_condition();
     let n = xs.len();
     let mut ill_conditioned: Option<T> = None;
+    let mut overflow = false;
+    let breakdown = |overflow: bool| {
+        if overflow {
+            Error::Overflow { parameter: "y" }
+        } else {
+            Error::NotPositiveDefinite
+        }
+    };
     for level in start.level..=JITTER_ESCALATIONS {
         let jitter = jitter_at(level, c, policy);
         let (row, solve) = if level == start.level {
@@ -128,8 +159,9 @@ fn factorize<T: Real, const D: usize>(
                 } else {
                     (0, 0)
                 };
-                (attempt(hyper, xs, ys, factor, stride, z, j, row, solve)
-                    && conditioning::diagonal_condition(factor, stride, n) <= limit)
+                let outcome = attempt(hyper, xs, ys, factor, stride, z, j, row, solve);
+                overflow |= outcome == Attempt::Overflow;
+                (outcome.solved() && conditioning::diagonal_condition(factor, stride, n) <= limit)
                     .then_some(j)
             });
             return Err(match (needed, ill_conditioned) {
@@ -138,20 +170,24 @@ fn factorize<T: Real, const D: usize>(
                     allowed: crate::error::Number(allowed.to_f64()),
                 },
                 (None, Some(condition)) => ill(condition, limit),
-                (None, None) => Error::NotPositiveDefinite,
+                (None, None) => breakdown(overflow),
             });
         }
-        if attempt(hyper, xs, ys, factor, stride, z, jitter, row, solve) {
-            let condition = conditioning::diagonal_condition(factor, stride, n);
-            if condition <= limit {
-                return Ok(level);
+        match attempt(hyper, xs, ys, factor, stride, z, jitter, row, solve) {
+            Attempt::Solved => {
+                let condition = conditioning::diagonal_condition(factor, stride, n);
+                if condition <= limit {
+                    return Ok(level);
+                }
+                ill_conditioned = Some(condition);
             }
-            ill_conditioned = Some(condition);
+            Attempt::Overflow => overflow = true,
+            Attempt::Breakdown => {}
         }
     }
     Err(match ill_conditioned {
         Some(condition) => ill(condition, limit),
-        None => Error::NotPositiveDefinite,
+        None => breakdown(overflow),
     })
 }
 
@@ -247,8 +283,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
 
     /// An empty GP whose every bit is zero, hyperparameters included, so storage holding
     /// it can be a zero-initialised `static` (`.bss`); it must get hyperparameters
-    /// ([`Gp::set_hyperparameters`]) before use, as `crate::awfqi::AwfqiStorage` does.
-    pub(crate) const fn zeroed() -> Self {
+    /// ([`Gp::set_hyperparameters`]) before use; the learners set them when they are built.
+    pub const fn zeroed() -> Self {
         Self::with(Hyperparameters::isotropic(T::ZERO, T::ZERO, T::ZERO))
     }
 
@@ -395,7 +431,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     ///
     /// Errors: `x` and `y` of different lengths ([`Error::InvalidParameter`] naming `y`),
     /// no points ([`Error::EmptyData`]), more than `N` ([`Error::CapacityExceeded`]), a
-    /// non-finite value ([`Error::NonFinite`] naming `x` or `y`), and
+    /// non-finite value ([`Error::NonFinite`] naming `x` or `y`), targets too large for
+    /// `T` ([`Error::Overflow`] naming `y`: `L⁻¹y` overflows), and
     /// [`Error::NotPositiveDefinite`]. On error the GP keeps its previous data.
     pub fn fit(&mut self, x: &[[T; D]], y: &[T]) -> Result<()> {
         if x.len() != y.len() {
@@ -473,8 +510,9 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// O(n³/6): when the extension fails and the jitter must be escalated, and when dropping
     /// a point while the jitter is escalated (so a refit may return to the base jitter).
     ///
-    /// Errors: [`Error::NonFinite`] naming `x` or `y`, [`Error::CapacityExceeded`] and
-    /// [`Error::NotPositiveDefinite`]; on error the GP keeps its previous data.
+    /// Errors: [`Error::NonFinite`] naming `x` or `y`, [`Error::CapacityExceeded`],
+    /// [`Error::Overflow`] naming `y` and [`Error::NotPositiveDefinite`]; on error the GP
+    /// keeps its previous data.
     pub fn add_point(&mut self, x: [T; D], y: T, when_full: WhenFull) -> Result<()> {
         if !x.iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite { parameter: "x" });
@@ -532,6 +570,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
                 N - 1,
                 0,
             )
+            .solved()
             && self.condition_estimate() <= self.conditioning.max_condition();
         if updated {
             self.jitter_level = 0;
@@ -565,7 +604,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     ///
     /// Errors: [`Error::NonFinite`] naming `x`; [`Error::NotPositiveDefinite`] when the
     /// stored factor is too ill-conditioned to give a finite prediction in this precision
-    /// (possible only with data near the overflow limit of `T`).
+    /// (possible only with data near the overflow limit of `T`); [`Error::Overflow`] naming
+    /// `y` when the mean overflows `T` (targets too large for the precision).
     pub fn predict(&self, x: &[T; D]) -> Result<Prediction<T>> {
         if !x.iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite { parameter: "x" });
@@ -584,8 +624,11 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
         };
         let mean = cholesky::dot(v, z);
         let explained = cholesky::dot(v, v);
-        if !(mean.is_finite() && explained.is_finite()) {
+        if !explained.is_finite() {
             return Err(Error::NotPositiveDefinite);
+        }
+        if !mean.is_finite() {
+            return Err(Error::Overflow { parameter: "y" });
         }
         let latent_variance = (c - explained).max(T::ZERO);
         Ok(Prediction {
@@ -617,19 +660,20 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     }
 
     /// The log marginal likelihood `−½ yᵀK⁻¹y − Σ ln L_ii − (n/2) ln 2π` of the data held,
-    /// with `K` including noise and jitter; O(n). It is `−∞` when `yᵀK⁻¹y` overflows `T`.
+    /// with `K` including noise and jitter; O(n).
     ///
-    /// Errors: [`Error::EmptyData`] when the GP holds no points.
+    /// Errors: [`Error::EmptyData`] when the GP holds no points; [`Error::Overflow`] naming
+    /// `y` when `yᵀK⁻¹y` overflows `T` (targets too large for the precision).
     pub fn log_marginal_likelihood(&self) -> Result<T> {
         if self.len == 0 {
             return Err(Error::EmptyData);
         }
-        Ok(log_marginal_likelihood(
-            self.factor.as_flattened(),
-            N,
-            &self.whitened,
-            self.len,
-        ))
+        let lml = log_marginal_likelihood(self.factor.as_flattened(), N, &self.whitened, self.len);
+        if lml.is_finite() {
+            Ok(lml)
+        } else {
+            Err(Error::Overflow { parameter: "y" })
+        }
     }
 
     /// Searches the box `bounds` for the hyperparameters that maximise the log marginal

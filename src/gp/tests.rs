@@ -572,6 +572,33 @@ fn an_impossible_factorisation_is_an_error_and_keeps_the_previous_state() {
 
 // ---------------------------------------------------------------- errors
 
+/// Targets too large for the precision are the targets' error, never a success with a
+/// non-finite number and never "not positive definite" (the kernel matrix does not depend
+/// on them).
+#[test]
+fn overflowing_targets_are_refused_by_name() {
+    // c = 0.01: L₁₁ ≈ 0.1, so L⁻¹y overflows f64 with a target of 1e308.
+    let hyper = Hyperparameters::isotropic(0.01f64, 1.0, 1e-4);
+    let mut gp = Gp::<f64, 4, 1>::new(hyper).unwrap();
+    gp.fit(&[[0.0], [1.0]], &[0.5, -0.5]).unwrap();
+    let before = gp.clone();
+    let overflow = Err(Error::Overflow { parameter: "y" });
+    assert_eq!(gp.fit(&[[0.0], [1.0]], &[1e308, 0.5]), overflow);
+    assert_unchanged(&gp, &before);
+    assert_eq!(gp.add_point([2.0], 1e308, WhenFull::Refuse), overflow);
+    assert_unchanged(&gp, &before);
+    assert!(std::format!("{}", Error::Overflow { parameter: "y" }).contains("`y` is too large"));
+    // Targets of 1e200 whiten to finite values, but yᵀK⁻¹y overflows: the likelihood is
+    // the targets' error, not −∞ (which JSON would write as null).
+    gp.fit(&[[0.0], [1.0]], &[1e200, 1e200]).unwrap();
+    assert_eq!(
+        gp.log_marginal_likelihood(),
+        Err(Error::Overflow { parameter: "y" })
+    );
+    let mean = gp.predict(&[0.5]).unwrap().mean;
+    assert!(mean.is_finite() && mean > 1e199, "{mean}");
+}
+
 #[test]
 fn every_error_the_gp_returns_is_reachable_and_leaves_it_unchanged() {
     let hyper = Hyperparameters::isotropic(1.0f64, 1.0, 0.1);

@@ -312,7 +312,8 @@ impl<T: Real, const K: usize> Belief<T, K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::{GenerativeModel, GridWorld};
+    use crate::env::GridWorld;
+    use crate::model::GenerativeModel;
     use rand_chacha::ChaCha8Rng;
     use rand_core::SeedableRng;
 

@@ -18,7 +18,8 @@
 //! All candidates must share |𝒮| and |𝒜|.
 //!
 //! ```
-//! use awfqi::env::{FiniteMdp, GridWorld};
+//! use awfqi::env::GridWorld;
+//! use awfqi::model::FiniteMdp;
 //! use awfqi::identify::{Belief, Criterion, Scoring, compute_score, run_queries};
 //! use awfqi::planning::{StoppingRule, greedy_policy, value_iteration};
 //! use rand_chacha::ChaCha8Rng;
@@ -49,13 +50,16 @@ mod belief;
 mod draw;
 mod policy;
 mod procedure;
-pub mod query_score;
+mod query_score;
 
 pub use belief::{Belief, log_likelihood};
 pub use draw::{StateAction, draw_pair, draw_pairs};
 pub use policy::{belief_weighted_policy, belief_weighted_q};
 pub use procedure::{Scoring, run_queries};
-pub use query_score::{Criterion, MAX_BINS, MiConfig, RewardEntropy, compute_score};
+pub use query_score::{
+    Criterion, MAX_BINS, MiConfig, RewardEntropy, compute_score, mutual_information_score,
+    uniform_score, variance_score,
+};
 
 use crate::error::{Error, Result};
 use crate::float::Real;

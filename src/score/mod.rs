@@ -36,7 +36,6 @@ mod sampler;
 mod source_model;
 mod table;
 
-pub use crate::model::{SourceMeans, SourceModel};
 pub use points::PointGrid;
 pub use rows::RowSet;
 pub use sampler::RowSampler;

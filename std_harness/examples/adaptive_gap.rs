@@ -17,7 +17,7 @@
 
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::evaluation::{EvaluationProtocol, evaluate};
-use awfqi::{
+use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, FqiEntry, Gp, GpTraining, MeanFunction,
     Posterior, RowSet, SourceData, SubsetRule, Tilings, Transition,
 };
@@ -84,7 +84,7 @@ fn main() -> anyhow::Result<()> {
         discount: 0.99,
     };
     let approximator = Tilings::cube(0.0f32, 10.0, 12, 8)?;
-    let entries = awfqi::Approximator::from(approximator)
+    let entries = awfqi::fqi::Approximator::from(approximator)
         .required_entries(PUDDLE_ACTIONS)
         .unwrap_or(0);
     let (mut tiles_sum, mut trees_sum) = (Vec::new(), Vec::new());
@@ -94,10 +94,10 @@ fn main() -> anyhow::Result<()> {
         let config = AdaptiveConfig::recommended(50, [0.0, 0.0], 50, 0.3, [(0.0, 10.0); 2]);
         let mut samples = vec![Transition::EMPTY; 300];
         let mut weights = vec![0.0; posteriors.len()];
-        let mut candidates = vec![awfqi::adaptive::Candidate::EMPTY; 4000];
+        let mut candidates = vec![awfqi::adaptive::candidates::Candidate::EMPTY; 4000];
         let mut fqi_entries = vec![FqiEntry::EMPTY; entries];
         let mut path = vec![[0.0; 2]; 50];
-        let mut beliefs = vec![awfqi::adaptive::SourceBelief::EMPTY; slices.len()];
+        let mut beliefs = vec![awfqi::adaptive::plausibility::SourceBelief::EMPTY; slices.len()];
         let mut kernel = AdaptiveAwfqi::new(
             config.validate()?,
             approximator,

@@ -1,4 +1,4 @@
-//! Host timing of the core's Extra-Trees Q-function (`awfqi::TreeFqi`, f32) at the size of
+//! Host timing of the core's Extra-Trees Q-function (`awfqi::fqi::TreeFqi`, f32) at the size of
 //! `awfqi-adaptive`'s last re-plan on Puddle World: the 1 033 published source records
 //! and 300 target records (uniform states and actions, queried from the target), 60 FQI
 //! iterations; then greedy decisions at 1 000 uniform states. One thread, one repetition
@@ -8,8 +8,9 @@
 
 use std::time::Instant;
 
-use awfqi::env::{Dynamics, GenerativeModel, PuddleWorld};
-use awfqi::{ExtraTrees, FqiConfig, SampleSet, Transition, TreeFqi, TreeNode, TreeRecord};
+use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::model::GenerativeModel;
+use awfqi::prelude::{ExtraTrees, FqiConfig, SampleSet, Transition, TreeFqi, TreeNode, TreeRecord};
 use awfqi_harness::transfer::sources::SourceSet;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;

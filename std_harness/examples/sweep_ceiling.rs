@@ -32,7 +32,7 @@ use awfqi::env::{
     DAM_EVALUATION_STATE, DAM_HORIZON, DAM_MAX_STORAGE, Dam,
 };
 use awfqi::evaluation::{MultiStartProtocol, evaluate_greedy_multi_start};
-use awfqi::{
+use awfqi::prelude::{
     CellGrid, EmptyCells, FqiConfig, GenerativeModel, ModelSweep, RewardModel, SampleSet,
     SweepEntry, SweepFqi, SweepNode, Transition,
 };

@@ -18,7 +18,7 @@
 
 use crate::frozen_trees::FrozenActionForests;
 use crate::trees::{ActionForests, DEFAULT_TREES, TreeParams};
-use awfqi::env::Transition;
+use awfqi::model::Transition;
 use awfqi::{Error, Result};
 use rand_core::Rng;
 

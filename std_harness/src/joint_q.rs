@@ -285,7 +285,7 @@ pub fn fqi_joint<const D: usize, R: Rng + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use awfqi::env::Transition;
+    use awfqi::model::Transition;
     use rand_chacha::ChaCha8Rng;
     use rand_core::SeedableRng;
 

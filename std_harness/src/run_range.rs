@@ -3,6 +3,10 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The most runs one range holds: every run of an invocation is planned up front, so a
+/// mistyped count (`0..100000000`) would fill the memory before the first run is saved.
+pub const MAX_RUNS: usize = 100_000;
+
 /// A half-open range of run indices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RunRange {
@@ -22,6 +26,13 @@ impl std::str::FromStr for RunRange {
         };
         if end <= start {
             return Err(format!("empty run range {start}..{end}"));
+        }
+        if end - start > MAX_RUNS {
+            return Err(format!(
+                "{} runs, more than the {MAX_RUNS} one invocation takes: split them into \
+                 ranges A..B (each its own invocation or shard) and merge the results",
+                end - start
+            ));
         }
         Ok(Self { start, end })
     }

@@ -278,8 +278,8 @@ fn a_malformed_gp_case_file_names_file_line_and_field() {
     assert!(!ok && stderr.contains("absent.json"), "{stderr}");
 }
 
-/// The IWFQI paper's published Dam and Acrobot source files (gzip copies of
-/// `shared/data/iwfqi-paper-sources/`).
+/// The IWFQI paper's published Dam and Acrobot source files (gzip-compressed CSV, see
+/// `data/iwfqi-sources/README.md`).
 const IWFQI_PUBLISHED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/iwfqi-sources");
 
 /// Copies of `prefix`'s `count` published source files in `dir`, with line `line` of source
@@ -440,4 +440,166 @@ fn the_published_dam_and_acrobot_sources_pass_the_same_checks() {
     assert!(max_storage > 500.0, "{max_storage}");
     let acrobot = SourceSet::<4>::read_layout(&dir, &acrobot::layout(), 2, 2).unwrap();
     assert_eq!(acrobot.total_records(), 3_400 + 5_000);
+}
+
+#[test]
+fn run_counts_and_threads_have_upper_bounds() {
+    let dir = scratch("bounds");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let base = ["puddle", "--algorithms", "fqi", "--quiet", "--out", out_s];
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let too_many = (4 * cores + 1).to_string();
+    for (extra, named) in [
+        (
+            &["--runs", "0..100000000"][..],
+            "100000000 runs, more than the 100000",
+        ),
+        (&["--runs", "100001"], "100001 runs"),
+        (&["--threads", "100000"], "--threads 100000 is out of range"),
+        (&["--threads", &too_many], "4 per core"),
+    ] {
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        refused(harness(&args), &[named], &out);
+        assert!(!out.exists(), "{extra:?} created {}", out.display());
+    }
+    // The identification study shares `--runs`.
+    let (ok, stderr) = harness(&["identify", "--runs", "0..200000", "--out", out_s]);
+    assert!(!ok && stderr.contains("200000 runs"), "{stderr}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_refused_invocation_creates_no_output_directory() {
+    let dir = scratch("no-dir");
+    // Sources that cannot be read, and a range error: refused before anything is created.
+    let out = dir.join("out");
+    std::fs::create_dir_all(dir.join("sources")).unwrap();
+    refused(
+        puddle_on(&dir.join("sources"), &out),
+        &["shared_dynamics_source_1.csv"],
+        &out,
+    );
+    assert!(!out.exists(), "{} was created", out.display());
+    // An existing file that is not a directory is named as such.
+    for blocker in [Path::new("/dev/null").to_path_buf(), dir.join("a-file")] {
+        if !blocker.exists() {
+            std::fs::write(&blocker, "x").unwrap();
+        }
+        let (ok, stderr) = harness(&[
+            "puddle",
+            "--algorithms",
+            "fqi",
+            "--steps",
+            "1",
+            "--runs",
+            "1",
+            "--quiet",
+            "--out",
+            blocker.to_str().unwrap(),
+        ]);
+        assert!(!ok);
+        assert!(
+            stderr.contains(&format!(
+                "{}: it exists and is not a directory",
+                blocker.display()
+            )),
+            "{stderr}"
+        );
+    }
+    assert_eq!(std::fs::read(dir.join("a-file")).unwrap(), b"x");
+}
+
+#[test]
+fn a_source_file_that_is_not_utf8_names_the_line() {
+    let dir = scratch("utf8");
+    sources_with(&dir, 2, |_| {});
+    let path = dir.join("shared_dynamics_source_2.csv");
+    let mut bytes = std::fs::read(&path).unwrap();
+    // Line 4 starts after the third newline; put a Latin-1 byte two bytes into it.
+    let at = bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| **b == b'\n')
+        .nth(2)
+        .unwrap()
+        .0
+        + 3;
+    bytes[at] = 0xE9;
+    std::fs::write(&path, bytes).unwrap();
+    let out = dir.join("out");
+    refused(
+        puddle_on(&dir, &out),
+        &[
+            "shared_dynamics_source_2.csv",
+            "line 4, byte 3",
+            "not UTF-8",
+        ],
+        &out,
+    );
+}
+
+#[test]
+fn long_values_are_cut_in_messages() {
+    let dir = scratch("long");
+    let out = dir.join("out");
+    let long = "9".repeat(5_000) + "x";
+    sources_with(&dir, 5, |c| c[4] = long.clone());
+    let (ok, stderr) = puddle_on(&dir, &out);
+    assert!(!ok);
+    let shown = format!("\"{}\"… ({} bytes in all)", "9".repeat(80), long.len());
+    assert!(stderr.contains("line 5, field `r`"), "{stderr}");
+    assert!(stderr.contains(&shown), "{stderr}");
+    assert!(stderr.len() < 1_000, "{} bytes of stderr", stderr.len());
+    // A header of one huge column name too.
+    sources_with(&dir, 1, |c| c[7] = "y".repeat(100_000));
+    let (ok, stderr) = puddle_on(&dir, &out);
+    assert!(
+        !ok && stderr.contains("line 1") && stderr.len() < 2_000,
+        "{stderr}"
+    );
+}
+
+#[test]
+fn errors_are_plain_messages_unless_a_debug_report_is_asked_for() {
+    let dir = scratch("backtrace");
+    let out = dir.join("out");
+    let words = [
+        "puddle",
+        "--algorithms",
+        "fqi",
+        "--steps",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let run = |env: &[(&str, &str)]| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_awfqi-harness"));
+        command.args(words).env_remove("AWFQI_DEBUG");
+        for (k, v) in env {
+            command.env(k, v);
+        }
+        let output = command.output().unwrap();
+        assert_eq!(output.status.code(), Some(1));
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    for env in [
+        &[][..],
+        &[("RUST_BACKTRACE", "1")],
+        &[("RUST_BACKTRACE", "full")],
+    ] {
+        let stderr = run(env);
+        assert!(
+            stderr.starts_with("Error: --steps 0 is out of range"),
+            "{stderr}"
+        );
+        assert!(
+            !stderr.to_lowercase().contains("backtrace"),
+            "{env:?}: {stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    let stderr = run(&[("AWFQI_DEBUG", "1")]);
+    assert!(stderr.contains("--steps 0 is out of range"), "{stderr}");
+    assert!(stderr.contains("Stack backtrace"), "{stderr}");
 }

@@ -16,8 +16,29 @@ fn scratch(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-/// Runs `gp --cases FILE extra…` and parses standard output.
+/// Runs `gp --cases FILE extra…` and parses standard output; asserts it succeeded.
 fn run(cases: &Value, extra: &[&str]) -> Value {
+    let (ok, stderr, output) = run_status(cases, extra);
+    assert!(ok, "gp {extra:?} failed: {stderr}");
+    output
+}
+
+/// Runs `gp --cases FILE extra…` where the cases `failed` fail: the command writes every
+/// case's output, then exits non-zero naming each failed case.
+fn run_failing(cases: &Value, extra: &[&str], failed: &[&str]) -> Value {
+    let (ok, stderr, output) = run_status(cases, extra);
+    assert!(!ok, "gp {extra:?} succeeded with failed cases");
+    let total = cases["cases"].as_array().unwrap().len();
+    let count = format!("{} of {total} case(s) failed", failed.len());
+    assert!(stderr.contains(&count), "{stderr}");
+    for name in failed {
+        assert!(stderr.contains(name), "{name} not named: {stderr}");
+    }
+    output
+}
+
+/// Runs `gp --cases FILE extra…`: (exit success, stderr, parsed standard output).
+fn run_status(cases: &Value, extra: &[&str]) -> (bool, String, Value) {
     static RUNS: AtomicUsize = AtomicUsize::new(0);
     let file = scratch(&format!(
         "cases-{}.json",
@@ -30,12 +51,11 @@ fn run(cases: &Value, extra: &[&str]) -> Value {
         .args(extra)
         .output()
         .unwrap();
-    assert!(
+    (
         output.status.success(),
-        "gp {extra:?} failed: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    serde_json::from_slice(&output.stdout).unwrap()
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+        serde_json::from_slice(&output.stdout).unwrap(),
+    )
 }
 
 /// A case of `n` points in `d` dimensions on a deterministic lattice-like pattern.
@@ -149,11 +169,21 @@ fn one_point_case_matches_the_closed_form() {
 #[test]
 fn every_case_runs_and_bad_ones_report_an_error() {
     let input = cases();
-    let core = run(&input, &[]);
+    let bad = [
+        "too many points",
+        "wrong dimension",
+        "no points",
+        "zero signal variance",
+    ];
+    let core = run_failing(&input, &[], &bad);
     // The reference with the core's base jitter on the diagonal: the same model.
     let base_jitter = awfqi::gp::BASE_JITTER.to_string();
-    let reference = run(&input, &["--reference", "--jitter", &base_jitter]);
-    let f32_core = run(&input, &["--precision", "f32"]);
+    let reference = run_failing(
+        &input,
+        &["--reference", "--jitter", &base_jitter],
+        &bad[1..],
+    );
+    let f32_core = run_failing(&input, &["--precision", "f32"], &bad);
     assert_eq!(core["cases"].as_array().unwrap().len(), 7);
 
     for (name, needle) in [
@@ -212,14 +242,19 @@ fn out_file_and_f32_overflow() {
     let file = scratch("overflow.json");
     std::fs::write(&file, input.to_string()).unwrap();
     let out = scratch("overflow-out.json");
-    let status = binary()
+    let result = binary()
         .args(["gp", "--precision", "f32", "--cases"])
         .arg(&file)
         .arg("--out")
         .arg(&out)
-        .status()
+        .output()
         .unwrap();
-    assert!(status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(
+        stderr.contains("1 of 2 case(s) failed: overflows f32"),
+        "{stderr}"
+    );
     let output: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let error = entry(&output, "overflows f32")["error"].as_str().unwrap();
     assert!(error.contains("non-finite"), "{error}");
@@ -240,4 +275,35 @@ fn malformed_document_fails() {
         .output()
         .unwrap();
     assert!(!output.status.success());
+}
+
+/// Targets too large for the precision are each case's error, naming the targets, and the
+/// command fails: never a `null` likelihood as a success, never "not positive definite".
+#[test]
+fn overflowing_targets_fail_by_name_in_the_core_and_the_reference() {
+    let case = |name: &str, y: [f64; 3]| {
+        json!({"name": name, "x": [[0.0], [0.5], [1.0]], "y": y, "signal_variance": 1.0,
+               "length_scales": [1.0], "noise_variance": 0.01, "x_test": [[0.25]]})
+    };
+    let input = json!({"cases": [
+        one_point_case(),
+        case("all at 1e200", [1e200; 3]),
+        case("one at 1e308", [0.0, 1e308, 0.0]),
+    ]});
+    let failed = ["all at 1e200", "one at 1e308"];
+    for extra in [&[][..], &["--reference"]] {
+        let output = run_failing(&input, extra, &failed);
+        for name in failed {
+            let e = entry(&output, name);
+            let error = e["error"]
+                .as_str()
+                .unwrap_or_else(|| panic!("{name} {extra:?}: {e}"));
+            assert!(
+                error.contains("`y` is too large"),
+                "{name} {extra:?}: {error}"
+            );
+            assert!(e.get("log_marginal_likelihood").is_none(), "{e}");
+        }
+        assert!(entry(&output, "one point")["mean"].is_array());
+    }
 }

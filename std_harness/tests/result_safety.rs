@@ -435,8 +435,9 @@ fn a_write_that_fails_is_an_error_and_leaves_the_old_file() {
     assert!(err.contains("cannot be written"), "{err}");
     assert!(bytes(&out.join("fqi.json")) == old);
 
-    // 2. A file-size limit (RLIMIT_FSIZE, as a full disk: the write fails part-way).
-    // `trap '' XFSZ`: the failed write is an error returned to the harness, not a signal.
+    // 2. A file-size limit (RLIMIT_FSIZE, as a full disk: the write fails part-way). The
+    // harness ignores SIGXFSZ, so the write fails with EFBIG: an error naming the file, an
+    // exit status of 1 (not death by the signal), and no temporary file left behind.
     let out = dir.join("limited");
     ok(&puddle(&out, "0..1", &["--no-plots"]));
     let old = bytes(&out.join("fqi.json"));
@@ -448,18 +449,140 @@ fn a_write_that_fails_is_an_error_and_leaves_the_old_file() {
     );
     let result = Command::new("/bin/sh")
         .arg("-c")
-        .arg("trap '' XFSZ; ulimit -f 4; exec \"$0\" \"$@\"")
+        .arg("ulimit -f 4; exec \"$0\" \"$@\"")
         .arg(BIN)
         .args(puddle(&out, "1..2", &["--no-plots"]))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&result.stderr);
-    assert!(!result.status.success(), "the write succeeded: {err}");
+    assert_eq!(result.status.code(), Some(1), "{:?}: {err}", result.status);
     assert!(
         err.contains("fqi.json failed; the previous file, if any, is unchanged"),
         "{err}"
     );
     assert!(bytes(&out.join("fqi.json")) == old);
     assert_eq!(names(&out), listing, "a temporary file was left behind");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_result_file_holding_a_run_index_twice_is_refused_in_runs_and_merges() {
+    let dir = scratch("duplicate");
+    let (edited, shard) = (dir.join("edited"), dir.join("shard"));
+    ok(&puddle(&edited, "0..2", &["--no-plots"]));
+    ok(&puddle(&shard, "2..3", &["--no-plots"]));
+    // A hand edit: run 1 saved twice, the copy with another value.
+    let path = edited.join("fqi.json");
+    let mut v = json(&path);
+    let mut copy = v["runs"][1].clone();
+    copy["steps"][0]["perf_disc_greedy_mean"] = serde_json::json!(0.0);
+    v["runs"].as_array_mut().unwrap().push(copy);
+    v["n_runs"] = serde_json::json!(3);
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    std::fs::write(&path, &text).unwrap();
+    let named = format!("{} holds run 1 more than once", path.display());
+    // Summarising, adding runs, merging it as a shard or into it: refused, nothing written.
+    for words in [
+        puddle(&edited, "0..2", &["--no-plots", "--no-run"]),
+        puddle(&edited, "2..3", &["--no-plots"]),
+        vec![
+            "merge".into(),
+            dir.join("merged").display().to_string(),
+            edited.display().to_string(),
+            shard.display().to_string(),
+        ],
+        vec![
+            "merge".into(),
+            edited.display().to_string(),
+            shard.display().to_string(),
+        ],
+    ] {
+        let err = refused(&words);
+        assert!(err.contains(&named), "{words:?}: {err}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+    }
+    assert!(!dir.join("merged").join("fqi.json").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn replace_starts_anew_only_the_files_of_the_algorithms_asked_for() {
+    let dir = scratch("replace-only");
+    let out = dir.join("out");
+    ok(&puddle(&out, "0..1", &["--no-plots"]));
+    // Another algorithm's file of this configuration (a copy stands in for it).
+    std::fs::copy(out.join("fqi.json"), out.join("rbt.json")).unwrap();
+    let (fqi, rbt) = (bytes(&out.join("fqi.json")), bytes(&out.join("rbt.json")));
+    let listing = names(&out);
+    // Another configuration with --replace for fqi only: rbt.json would have to go too,
+    // so nothing is touched and the error names it.
+    let err = refused(&puddle(
+        &out,
+        "0..1",
+        &["--no-plots", "--steps", "2", "--replace"],
+    ));
+    assert!(
+        err.contains(&format!("{}", out.join("rbt.json").display())),
+        "{err}"
+    );
+    assert!(err.contains("add rbt to them"), "{err}");
+    assert_eq!(names(&out), listing, "a file was moved or written");
+    assert!(bytes(&out.join("fqi.json")) == fqi && bytes(&out.join("rbt.json")) == rbt);
+    // Without the other file, --replace starts fqi.json anew as before.
+    std::fs::remove_file(out.join("rbt.json")).unwrap();
+    ok(&puddle(
+        &out,
+        "0..1",
+        &["--no-plots", "--steps", "2", "--replace"],
+    ));
+    assert_eq!(
+        json(&out.join("fqi.json"))["experiment"]["protocol"]["steps"],
+        2
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn merge_names_shards_without_an_algorithm_s_file_and_refuses_an_empty_shard() {
+    let dir = scratch("merge-shapes");
+    let (a, b, empty) = (dir.join("a"), dir.join("b"), dir.join("empty"));
+    ok(&puddle(&a, "0..1", &["--no-plots"]));
+    ok(&puddle(&b, "1..2", &["--no-plots"]));
+    std::fs::create_dir_all(&empty).unwrap();
+    let merge = |out: &Path, shards: &[&Path]| -> Vec<String> {
+        let mut words = vec!["merge".to_string(), out.display().to_string()];
+        words.extend(shards.iter().map(|s| s.display().to_string()));
+        words.push("--no-plots".into());
+        words
+    };
+    // An empty shard: refused by name, and OUT is not created.
+    let merged = dir.join("merged");
+    let err = refused(&merge(&merged, &[&a, &empty, &b]));
+    assert!(
+        err.contains(&format!(
+            "shard(s) {} hold no result files",
+            empty.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        !merged.exists(),
+        "the refused merge created {}",
+        merged.display()
+    );
+    // A shard without an algorithm's file (here: a's rbt.json, which b lacks) is named.
+    std::fs::copy(a.join("fqi.json"), a.join("rbt.json")).unwrap();
+    let out = ok(&merge(&merged, &[&a, &b]));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "rbt.json is in {} but not in {}",
+            a.display(),
+            b.display()
+        )),
+        "{err}"
+    );
+    assert_eq!(run_indices(&merged.join("rbt.json")), [0]);
+    assert_eq!(run_indices(&merged.join("fqi.json")), [0, 1]);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,7 +6,7 @@
 //! flooding (storage above 300) and for missing the demand (releasing less than 10). Our
 //! reservoir (the paper's target) has its own inflow season and cost weights; the source
 //! reservoirs' records were logged elsewhere. Yours would be a motor, a pump, a heater:
-//! implement `awfqi::GenerativeModel` for it (one sampled step from any state and action)
+//! implement `awfqi::model::GenerativeModel` for it (one sampled step from any state and action)
 //! and change the sizes in `src/reservoir.rs`.
 //!
 //! What runs where:

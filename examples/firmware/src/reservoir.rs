@@ -4,12 +4,13 @@
 //! [`learn_and_compare`], adaptive AWFQI (what the firmware runs), and
 //! [`learn_and_compare_thesis`], the thesis's AWFQI (the faithful variant).
 
+use awfqi::adaptive::AdaptiveParts;
 use awfqi::env::{DAM_ACTIONS, DAM_DISCOUNT, DAM_EVALUATION_STATE, DAM_HORIZON, Dam};
-use awfqi::{
+use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid,
     Conditioning, EmptyCells, Estimator, Evaluation, EvaluationProtocol, FqiConfig,
-    HyperparameterBounds, Hyperparameters, MeanFunction, ModelSweep, PointGrid, RewardModel,
-    RowSet, SourceData, StepReport, SweepStorage, WeightParams, evaluate, evaluate_greedy,
+    HyperparameterBounds, Hyperparameters, ModelSweep, PointGrid, RewardModel, RowSet, SourceData,
+    StepReport, SweepStorage, WeightParams, evaluate, evaluate_greedy,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -50,27 +51,30 @@ pub const SWEEP_CELLS: [usize; 2] = [10, 4];
 /// Nodes of the sweep.
 pub const SWEEP_NODES: usize = (SWEEP_CELLS[0] + 1) * (SWEEP_CELLS[1] + 1);
 
-/// All the RAM the adaptive loop writes: the sources' reward mean functions (fitted on the
-/// device at set-up), the kernel's block (`f32`, state dimension 2, GP input dimension 3,
-/// then the capacities: GP points, target records, one weight per source record, candidate
-/// slots, no table entries, the verified states of a step, one belief per source) and the
-/// model sweep's entries and nodes.
+awfqi::adaptive_storage! {
+    /// The adaptive kernel's block: its buffers and each source's reward mean function
+    /// (fitted on the device at set-up); the posteriors stay in flash and the model sweep's
+    /// memory is lent beside it.
+    pub struct Kernel {
+        scalar: f32,
+        state_dim: 2,
+        actions: DAM_ACTIONS,
+        gp_points: GP_POINTS,
+        steps: STEPS,
+        budget: BUDGET,
+        sources: tables::SOURCES,
+        source_records: SOURCE_RECORDS,
+        source_posteriors: 0,
+        candidates: CANDIDATES,
+        table_entries: 0,
+    }
+}
+
+/// All the RAM the adaptive loop writes: the kernel's block and the model sweep's entries
+/// and nodes.
 pub struct Memory {
-    /// Each source's reward mean function.
-    pub means: [MeanFunction<f32, GP_POINTS, 3>; tables::SOURCES],
     /// The adaptive kernel's block.
-    pub kernel: AdaptiveStorage<
-        f32,
-        2,
-        3,
-        GP_POINTS,
-        { STEPS * BUDGET },
-        SOURCE_RECORDS,
-        CANDIDATES,
-        0,
-        BUDGET,
-        { tables::SOURCES },
-    >,
+    pub kernel: Kernel,
     /// The model sweep's memory: one entry per (node, release), one value per node.
     pub sweep: SweepStorage<f32, 2, { SWEEP_NODES * DAM_ACTIONS }, SWEEP_NODES>,
 }
@@ -79,8 +83,7 @@ impl Memory {
     /// All-zero memory, for a `static` in `.bss`.
     pub const fn new() -> Self {
         Self {
-            means: [MeanFunction::EMPTY; tables::SOURCES],
-            kernel: AdaptiveStorage::new(),
+            kernel: Kernel::new(),
             sweep: SweepStorage::new(),
         }
     }
@@ -147,11 +150,10 @@ pub fn learn_and_compare(
 ) -> awfqi::Result<Outcome> {
     // All randomness comes from the caller's seeded generator: same seed, same run.
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let Memory {
-        means,
-        kernel,
-        sweep,
-    } = memory;
+    let Memory { kernel, sweep } = memory;
+    let AdaptiveParts {
+        mut buffers, means, ..
+    } = kernel.parts();
 
     // 1. Settings: the thesis's GP and FQI settings for this plant ([`settings`]), queries
     //    that verify the current plan from the evaluation's start (a year from storage 200
@@ -167,7 +169,6 @@ pub fn learn_and_compare(
     let sources = tables::SOURCE_RECORDS
         .each_ref()
         .map(|source| source.as_slice());
-    let mut buffers = kernel.buffers();
     for (mean, source) in means.iter_mut().zip(&sources) {
         let training = &config.awfqi.gp_training;
         mean.fit_rewards(buffers.gp, source, training, config.awfqi.subset, &mut rng)?;

@@ -6,7 +6,7 @@
 //! reward posterior of each source's GP at each of its records, and the oracle score
 //! table over the candidate grid. Everything here is `static`: it stays in flash.
 
-use awfqi::{Posterior, Scores, Transition};
+use awfqi::prelude::{Posterior, Scores, Transition};
 
 /// Records per source.
 pub const RECORDS_PER_SOURCE: usize = 200;

@@ -4,7 +4,7 @@
 //! space, and 100 queries to a model of our own.
 //!
 //! Nothing about the GP or the weights is set by hand: the settings come from the logs
-//! (`awfqi::SourceScales` → `AdaptiveConfig::scaled`), the Q-function is the recommended
+//! (`awfqi::thesis::SourceScales` → `AdaptiveConfig::scaled`), the Q-function is the recommended
 //! adaptive kernel's (a model sweep), and each step's report warns when its
 //! numbers should not be trusted. The program prints the learned policy's return next to
 //! FQI's on the same target queries and a hand-written thermostat's, over the same starts.

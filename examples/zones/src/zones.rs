@@ -6,15 +6,13 @@
 //! engineer would start a plant of their own: implement `GenerativeModel`, measure the
 //! sources' scales, take the recommended adaptive kernel on the scaled settings.
 
-use awfqi::adaptive::{FadeCell, Fading, MeanFunction};
-use awfqi::rand_core::{Rng, SeedableRng};
-use awfqi::record_gp::predict_posteriors;
-use awfqi::{
-    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, EmptyCells, Evaluation,
-    FqiConfig, GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, Posterior, Real,
-    RewardModel, RowSet, SampleSet, SourceData, SourceScales, StepReport, SweepStorage, Transition,
-    evaluate_greedy_multi_start, evaluate_multi_start,
+use awfqi::prelude::{
+    AdaptiveAwfqi, AdaptiveConfig, Approximator, EmptyCells, Evaluation, FqiConfig, GenerativeModel, ModelSweep,
+    MultiStartProtocol, PointGrid, Real, RewardModel, RowSet, SampleSet, SourceScales, StepReport,
+    SweepStorage, Transition, evaluate_greedy_multi_start, evaluate_multi_start,
 };
+use awfqi::adaptive::{FadeCell, Fading};
+use awfqi::rand_core::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 // ---- The plant: three heated zones in a row. ----
@@ -150,8 +148,6 @@ pub const SOURCE_RECORDS: usize = SOURCES * PER_SOURCE;
 pub const BUDGET: usize = 50;
 /// Steps: `STEPS · BUDGET` target queries in all.
 pub const STEPS: usize = 2;
-/// Target records of the run.
-pub const QUERIES: usize = STEPS * BUDGET;
 /// Capacity of every GP (the target's and the sources' mean functions): the recommended
 /// 32 points.
 pub const GP_POINTS: usize = 32;
@@ -178,29 +174,30 @@ pub fn approximator() -> awfqi::Result<Approximator<f32, ZONES>> {
 /// A model sweep's memory: one entry per (node, action), one value per node.
 pub type Sweep = SweepStorage<f32, ZONES, { SWEEP_NODES * ACTIONS }, SWEEP_NODES>;
 
+awfqi::adaptive_storage! {
+    /// The adaptive kernel's block, by name: its buffers, each source's reward model and
+    /// the posteriors stored with the source records, and the model sweep's memory.
+    pub struct Kernel {
+        scalar: f32,
+        state_dim: ZONES,
+        actions: ACTIONS,
+        gp_points: GP_POINTS,
+        steps: STEPS,
+        budget: BUDGET,
+        sources: SOURCES,
+        source_records: SOURCE_RECORDS,
+        source_posteriors: SOURCE_RECORDS,
+        candidates: CANDIDATES,
+        sweep_cells: SWEEP_CELLS,
+    }
+}
+
 /// All the RAM of a run, in one block for a `static` (`new` is all-zero: `.bss`).
 pub struct Memory {
     /// The two sources' logs (on a device with real logs: `static` tables in flash).
     pub sources: [[Transition<[f32; ZONES], f32>; PER_SOURCE]; SOURCES],
-    /// Each source record's reward posterior under its source's GP.
-    pub posteriors: [Posterior<f32>; SOURCE_RECORDS],
-    /// Each source's reward model.
-    pub means: [MeanFunction<f32, GP_POINTS, { ZONES + 1 }>; SOURCES],
-    /// The adaptive kernel's storage (its FQI entries unused: the sweep has its own).
-    pub kernel: AdaptiveStorage<
-        f32,
-        ZONES,
-        { ZONES + 1 },
-        GP_POINTS,
-        QUERIES,
-        SOURCE_RECORDS,
-        CANDIDATES,
-        0,
-        BUDGET,
-        SOURCES,
-    >,
-    /// The kernel's model sweep.
-    pub sweep: Sweep,
+    /// The adaptive kernel's block.
+    pub kernel: Kernel,
     /// The FQI baseline's model sweep, over the target records alone.
     pub baseline: Sweep,
 }
@@ -210,10 +207,7 @@ impl Memory {
     pub const fn new() -> Self {
         Self {
             sources: [[Transition::EMPTY; PER_SOURCE]; SOURCES],
-            posteriors: [Posterior::EMPTY; SOURCE_RECORDS],
-            means: [MeanFunction::EMPTY, MeanFunction::EMPTY],
-            kernel: AdaptiveStorage::new(),
-            sweep: SweepStorage::new(),
+            kernel: Kernel::new(),
             baseline: SweepStorage::new(),
         }
     }
@@ -264,7 +258,7 @@ fn log_sources<R: Rng>(
 }
 
 /// How a run spends its target queries: `steps` steps of `budget` queries (at most
-/// [`BUDGET`] a step and [`QUERIES`] in all), verified from every start state of
+/// [`BUDGET`] a step and `BUDGET · STEPS` in all), verified from every start state of
 /// [`STARTS`] or from the first alone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Variant {
@@ -306,7 +300,7 @@ pub fn learn_and_compare_with(
     fading: Option<(Fading<f32>, &mut [FadeCell<f32>])>,
     mut on_step: impl FnMut(&StepReport<f32, { ZONES + 1 }>),
 ) -> awfqi::Result<Outcome> {
-    if variant.budget > BUDGET || variant.budget.saturating_mul(variant.steps) > QUERIES {
+    if variant.budget > BUDGET || variant.budget.saturating_mul(variant.steps) > BUDGET * STEPS {
         return Err(awfqi::Error::InvalidParameter {
             parameter: "variant",
         });
@@ -314,54 +308,33 @@ pub fn learn_and_compare_with(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let Memory {
         sources,
-        posteriors,
-        means,
         kernel,
-        sweep,
         baseline,
     } = memory;
     log_sources(sources, &mut rng)?;
     let logs: [&[Transition<[f32; ZONES], f32>]; SOURCES] = [&sources[0], &sources[1]];
 
-    // Settings from the logs: nothing tuned by hand but the task's discount.
-    let scales = SourceScales::measure(&logs)?;
-    let mut config = AdaptiveConfig::scaled(variant.budget, &scales, STARTS[0], HORIZON, 0.3)?;
-    config.awfqi.fqi =
-        FqiConfig::new(DISCOUNT, 60, EmptyCells::CappedNearest)?.with_min_weight(0.5)?;
-    configure(&mut config);
-    let config = config.validate()?;
-
-    // Each source's reward model and the posteriors stored with its records, fitted in the
-    // kernel's GP before the kernel borrows it.
-    let mut buffers = kernel.buffers();
-    let training = config.awfqi().gp_training;
-    for (j, (mean, log)) in means.iter_mut().zip(&logs).enumerate() {
-        let gp = &mut *buffers.gp;
-        mean.fit_rewards(gp, log, &training, config.awfqi().subset, &mut rng)?;
-        let mine = posteriors
-            .get_mut(j * PER_SOURCE..(j + 1) * PER_SOURCE)
-            .ok_or(awfqi::Error::EmptyData)?;
-        predict_posteriors(gp, log, config.awfqi().noise_subtraction, mine)?;
-    }
-
-    // The adaptive kernel on our building.
+    // The kernel on our building: settings scaled from the logs (nothing tuned by hand but
+    // the task's discount), each source's reward model and stored posteriors fitted in the
+    // kernel's GP, the model sweep over [0, 1]³ and the spacing-0.1 grid of candidates.
     let plant = Zones {
         building: Building::Target,
     };
-    buffers.fqi = sweep.storage();
+    let bounds = SourceScales::measure(&logs)?.bounds();
+    let fqi = FqiConfig::new(DISCOUNT, 60, EmptyCells::CappedNearest)?.with_min_weight(0.5)?;
     let rows = RowSet::grid(
         PointGrid::spanning([0.0; ZONES], [1.0; ZONES], 0.1)?,
         ACTIONS,
     )?;
-    let kernel = AdaptiveAwfqi::new(
-        config,
-        approximator()?,
-        SourceData::new(&logs, &posteriors[..])?,
-        &means[..],
-        rows,
-        &plant,
-        buffers,
-    )?;
+    let kernel = AdaptiveAwfqi::builder(&plant, &logs, variant.budget, bounds, STARTS[0])
+        .horizon(HORIZON)
+        .approximator(approximator()?)
+        .rows(rows)
+        .configure(|c| {
+            c.awfqi.fqi = fqi;
+            configure(c);
+        })
+        .build(kernel, &mut rng)?;
     let starts = if variant.all_starts {
         &STARTS[..]
     } else {
@@ -372,6 +345,7 @@ pub fn learn_and_compare_with(
         Some((fading, table)) => kernel.with_fading(fading, table)?,
         None => kernel,
     };
+    let config = *kernel.config();
     for _ in 0..variant.steps {
         on_step(&kernel.step(&mut rng)?);
     }

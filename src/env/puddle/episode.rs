@@ -5,11 +5,12 @@
 //! been taken, so it has 1 to `horizon` records and only the last can be absorbing. Per
 //! step the policy draws first, then the step's three noise draws ε_x, ε_y, η.
 
-use super::{PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON, Policy, PuddleWorld};
-use crate::env::Transition;
+use super::{PUDDLE_DISCOUNT, PUDDLE_EVALUATION_ROLLOUTS, PUDDLE_HORIZON, PuddleWorld};
 use crate::error::{Error, Result};
 use crate::evaluation::{EvaluationProtocol, Rollout};
 use crate::float::Real;
+use crate::model::Transition;
+use crate::policy::Policy;
 use rand_core::Rng;
 
 /// One record of an episode: spec §1's 8-tuple (t, s, a, r, s′, ω), i.e. the time index

@@ -1,7 +1,9 @@
 extern crate std;
 
 use super::*;
-use crate::env::{EpisodeRecord, GenerativeModel};
+use crate::env::EpisodeRecord;
+use crate::model::GenerativeModel;
+use crate::policy::{EpsilonGreedyPolicy, UniformPolicy};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::vec::Vec;

@@ -13,11 +13,10 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use awfqi::env::{
-    Dynamics, EpisodeRecord, EpsilonGreedyPolicy, GenerativeModel, PUDDLE_DISCOUNT, PUDDLE_HORIZON,
-    PuddleWorld,
-};
+use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_DISCOUNT, PUDDLE_HORIZON, PuddleWorld};
 use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions};
+use awfqi::model::GenerativeModel;
+use awfqi::policy::EpsilonGreedyPolicy;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::Serialize;

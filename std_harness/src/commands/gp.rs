@@ -12,7 +12,8 @@
 //! added to the training diagonal beyond `s2` (the core's `Gp::jitter()`, or `--jitter` for
 //! the reference), so a fit that needed more than the base jitter never passes silently.
 //! A case that cannot be computed gives `{"name":…, "error":"…"}` and the other cases
-//! still run.
+//! still run; the command then ends with an error naming the failed cases (exit status 1),
+//! after writing the whole output.
 //!
 //! The core's capacity `N` and dimension `D` are const generics; this command supports
 //! `D` in `1..=MAX_DIM` and picks the smallest capacity of [`CAPACITIES`] that holds the
@@ -22,7 +23,7 @@ use std::fmt;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use awfqi::Real;
+use awfqi::float::Real;
 use awfqi::gp::{Conditioning, Gp, Hyperparameters};
 use serde::{Deserialize, Serialize};
 
@@ -211,6 +212,22 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", path.display()))?,
         None => println!("{json}"),
     }
+    let failed: Vec<&str> = output
+        .cases
+        .iter()
+        .filter_map(|c| match c {
+            CaseOutput::Failed { name, .. } => Some(name.as_str()),
+            CaseOutput::Fit { .. } => None,
+        })
+        .collect();
+    if !failed.is_empty() {
+        anyhow::bail!(
+            "{} of {} case(s) failed: {} (each has an `error` entry in the output)",
+            failed.len(),
+            output.cases.len(),
+            failed.join(", ")
+        );
+    }
     Ok(())
 }
 
@@ -298,10 +315,16 @@ pub fn fit_reference(case: &Case, extra_diagonal: f64) -> Result<Fit, CaseError>
         mean.push(m);
         std.push(v.sqrt());
     }
+    let log_marginal_likelihood = gp.log_marginal_likelihood();
+    if !(log_marginal_likelihood.is_finite() && mean.iter().all(|m| m.is_finite())) {
+        return Err(CaseError::Reference(
+            "`y` is too large for f64: the log marginal likelihood or a mean overflows".into(),
+        ));
+    }
     Ok(Fit {
         mean,
         std,
-        log_marginal_likelihood: gp.log_marginal_likelihood(),
+        log_marginal_likelihood,
         jitter: extra_diagonal,
     })
 }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Parser, Subcommand};
 
+use crate::commands::transfer::ensure_writable;
 use crate::identification::{self, stored};
 use crate::store::{self, Conflict, DirLock, conflict_error};
 use crate::transfer::algorithms::Algorithm;
@@ -56,14 +57,27 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map(|s| s.join(stored::FILE))
         .filter(|p| p.exists())
         .collect();
-    if transfer.is_empty() && identify.is_empty() {
+    let empty: Vec<String> = args
+        .shards
+        .iter()
+        .filter(|s| {
+            !s.join(stored::FILE).exists()
+                && !transfer
+                    .iter()
+                    .any(|(_, p, _)| p.parent() == Some(s.as_path()))
+        })
+        .map(|s| s.display().to_string())
+        .collect();
+    if !empty.is_empty() {
         bail!(
-            "the shards hold no result files (<algorithm>.json or {})",
+            "shard(s) {} hold no result files (<algorithm>.json or {}). Nothing was written.",
+            empty.join(", "),
             stored::FILE
         );
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    for note in missing_algorithms(&args.shards, &transfer) {
+        eprintln!("note: {note}");
+    }
     if !identify.is_empty() {
         merge_identify(args, &identify)?;
     }
@@ -88,6 +102,40 @@ fn shard_files(shards: &[PathBuf]) -> anyhow::Result<Vec<(Algorithm, PathBuf, Re
         }
     }
     Ok(files)
+}
+
+/// One note per algorithm whose file some shards lack: the merged file then holds only the
+/// runs of the shards named (legitimate when the shards split the algorithms, a lost shard
+/// file otherwise).
+fn missing_algorithms(
+    shards: &[PathBuf],
+    files: &[(Algorithm, PathBuf, ResultFile)],
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    for a in Algorithm::ALL {
+        let holds = |s: &PathBuf| {
+            files
+                .iter()
+                .any(|(b, p, _)| *b == a && p.parent() == Some(s.as_path()))
+        };
+        let (with, without): (Vec<&PathBuf>, Vec<&PathBuf>) = shards.iter().partition(|s| holds(s));
+        if with.is_empty() || without.is_empty() {
+            continue;
+        }
+        let names = |v: &[&PathBuf]| {
+            v.iter()
+                .map(|s| s.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        notes.push(format!(
+            "{}.json is in {} but not in {}: the merged file holds only the runs of the first",
+            a.name(),
+            names(&with),
+            names(&without)
+        ));
+    }
+    notes
 }
 
 /// The remedy of a shard that does not fit the others.
@@ -139,6 +187,7 @@ fn merge_transfer(
         .unwrap_or_default();
 
     let out = &args.out;
+    ensure_writable(out)?;
     let _lock = DirLock::acquire(out)?;
     let runs: Vec<usize> = merged.values().flat_map(|m| m.keys().copied()).collect();
     let (_, notes) = inspect(out, experiment, &parameters, &runs, args.replace)?;
@@ -297,6 +346,7 @@ fn merge_identify(args: &Args, paths: &[PathBuf]) -> anyhow::Result<()> {
         }
     }
     let out = &args.out;
+    ensure_writable(out)?;
     let _lock = DirLock::acquire(out)?;
     let target = out.join(stored::FILE);
     let mut all: BTreeMap<usize, identification::IdentificationRun> = BTreeMap::new();

@@ -20,8 +20,8 @@ pub mod puddle;
 use std::fmt::Debug;
 use std::sync::Arc;
 
-use awfqi::env::Transition;
 use awfqi::evaluation::Evaluation;
+use awfqi::model::Transition;
 use awfqi::policy::Policy;
 use rand_chacha::ChaCha8Rng;
 
@@ -41,7 +41,7 @@ pub const GP_INPUT: usize = 5;
 pub type GpInput = [f64; GP_INPUT];
 
 /// One MDP of an experiment (the target or a source), as the harness drives it: the core
-/// plant's [`GenerativeModel::query`](awfqi::env::GenerativeModel::query), its mean
+/// plant's [`GenerativeModel::query`](awfqi::model::GenerativeModel::query), its mean
 /// functions and its first state, under the same names, behind one object-safe trait in
 /// `f64` with the harness's generator.
 pub trait Task<const D: usize>: Send + Sync + Debug {

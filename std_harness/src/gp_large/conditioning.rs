@@ -76,8 +76,8 @@ pub(super) fn check_condition(factor: &Mat<f64>, conditioning: &LargeConditionin
         Ok(())
     } else {
         Err(Error::IllConditioned {
-            condition: awfqi::error::Number(condition),
-            limit: awfqi::error::Number(conditioning.max_condition),
+            condition: awfqi::Number(condition),
+            limit: awfqi::Number(conditioning.max_condition),
         })
     }
 }

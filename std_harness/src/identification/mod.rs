@@ -24,11 +24,12 @@
 //!   give all budgets: cheaper, and smoother curves, but budgets are then correlated).
 
 use anyhow::{anyhow, bail};
-use awfqi::env::{FiniteMdp, GridWorld};
+use awfqi::env::GridWorld;
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, belief_weighted_policy, compute_score,
     run_queries,
 };
+use awfqi::model::FiniteMdp;
 use awfqi::planning::{StoppingRule, evaluate_policy, greedy_policy, value_iteration};
 use awfqi::rng;
 use indicatif::{ProgressBar, ProgressStyle};

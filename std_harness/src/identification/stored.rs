@@ -17,7 +17,9 @@ pub fn check(path: &Path, config: &StudyConfig) -> Result<Option<Study>, Conflic
     }
     let read = || -> anyhow::Result<Study> {
         let text = std::fs::read_to_string(path)?;
-        Ok(serde_json::from_str(&text)?)
+        let study: Study = serde_json::from_str(&text)?;
+        store::unique_runs(path, study.records.iter().map(|r| r.run))?;
+        Ok(study)
     };
     let study = read().map_err(Conflict::Unreadable)?;
     let comparable = |c: &StudyConfig| {

@@ -201,6 +201,9 @@ pub type Present = BTreeMap<Algorithm, BTreeSet<usize>>;
 
 /// The runs present per algorithm in `out` and the notes of backups made: what
 /// [`ResultDir::open`] checks and does, with the directory's lock held by the caller.
+/// `--replace` starts anew only the files of the algorithms written (those of
+/// `parameters`): a file of another algorithm that cannot take the runs is refused, and
+/// every file is checked before any backup is made.
 pub fn inspect(
     out: &Path,
     experiment: &Value,
@@ -208,11 +211,33 @@ pub fn inspect(
     runs: &[usize],
     replace: bool,
 ) -> anyhow::Result<(Present, Vec<String>)> {
-    let mut present = BTreeMap::new();
-    let mut notes = Vec::new();
+    let mut checked = Vec::new();
     for a in Algorithm::ALL {
         let path = result_path(out, a);
         match check(&path, experiment, parameters.get(&a)) {
+            Err(conflict) if !(replace && parameters.contains_key(&a)) => {
+                return Err(if replace {
+                    store::conflict_error(
+                        &path,
+                        conflict,
+                        "this invocation",
+                        &format!(
+                            "Nothing was written. --replace starts anew only the files of the \
+                             algorithms written: add {} to them, or move the file away.",
+                            a.name()
+                        ),
+                    )
+                } else {
+                    refusal(&path, conflict)
+                });
+            }
+            result => checked.push((a, path, result)),
+        }
+    }
+    let mut present = BTreeMap::new();
+    let mut notes = Vec::new();
+    for (a, path, result) in checked {
+        match result {
             Ok(None) => {}
             Ok(Some(file)) => {
                 let have: BTreeSet<usize> = file.runs.iter().map(|r| r.run).collect();
@@ -226,7 +251,7 @@ pub fn inspect(
                 }
                 present.insert(a, have);
             }
-            Err(conflict) if replace => {
+            Err(conflict) => {
                 let kept = store::backup(&path)?;
                 let why = match conflict {
                     Conflict::Unreadable(_) => "could not be read",
@@ -237,9 +262,6 @@ pub fn inspect(
                     path.display(),
                     kept.display()
                 ));
-            }
-            Err(conflict) => {
-                return Err(refusal(&path, conflict));
             }
         }
     }

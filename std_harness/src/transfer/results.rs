@@ -86,10 +86,15 @@ impl ResultFile {
     }
 
     /// Reads a file.
+    ///
+    /// Errors: it cannot be read or parsed, or it holds a run index twice.
     pub fn read(path: &Path) -> anyhow::Result<Self> {
         let text =
             std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+        let file: Self =
+            serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        crate::store::unique_runs(path, file.runs.iter().map(|r| r.run))?;
+        Ok(file)
     }
 
     /// Writes the file (pretty JSON) atomically ([`crate::store::write_atomic`]): an

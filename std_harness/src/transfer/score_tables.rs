@@ -9,8 +9,8 @@
 //! A table is built once per experiment and shared by every run (§11.2 \[CHOICE\]).
 
 use awfqi::alias::{AliasEntry, AliasTable};
+use awfqi::prelude::{Real, Transition};
 use awfqi::score::{PointGrid, RowSet};
-use awfqi::{Real, Transition};
 use rand_chacha::ChaCha8Rng;
 
 use super::gp::{GpOptions, Output, SourceGps, Weighting};

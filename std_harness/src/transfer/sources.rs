@@ -9,7 +9,7 @@
 //!
 //! Layout ([`SourceLayout`]): `t`, the state, `a`, `r`, the next state, `absorbing`, then
 //! `(mean, std)` of the reward GP and of each stored next-state GP. Puddle World's files
-//! (`shared/data/puddle-sources/`) and the IWFQI paper's Dam and Acrobot files
+//! (`std_harness/data/puddle-sources/`) and the IWFQI paper's Dam and Acrobot files
 //! (`std_harness/data/iwfqi-sources/`, see its README) differ only in the column names
 //! and in the Dam's `a`, which holds the release rather than the action index.
 //!
@@ -34,7 +34,7 @@ use crate::trees::{ActionForests, TreeParams};
 /// One record in `f64` (Puddle World's, by default).
 pub type Record<const D: usize = 2> = crate::domains::Record<D>;
 
-/// The CSV header of Puddle World's published layout (`shared/data/puddle-sources/README.md`).
+/// The CSV header of Puddle World's published layout (`std_harness/data/puddle-sources/README.md`).
 pub const CSV_HEADER: &str = "t,s_x,s_y,a,r,next_s_x,next_s_y,absorbing,src_gp_r_mean,\
 src_gp_r_std_noise_subtracted,src_gp_next_x_mean,src_gp_next_x_std_noise_subtracted,\
 src_gp_next_y_mean,src_gp_next_y_std_noise_subtracted";
@@ -198,14 +198,16 @@ impl<const D: usize> SourceDataset<D> {
                 .filter(|e| !names.contains(e))
                 .copied()
                 .collect();
-            let unknown: Vec<&str> = names
+            let unknown: Vec<String> = names
                 .iter()
                 .filter(|n| !expected.contains(n))
-                .copied()
+                .map(|n| shown(n))
                 .collect();
             bail!(
-                "line 1: unexpected header {header:?} (missing columns {missing:?}, unknown \
-                 columns {unknown:?}); expected {:?}",
+                "line 1: unexpected header {} (missing columns {missing:?}, unknown columns \
+                 [{}]); expected {:?}",
+                shown(header),
+                unknown.join(", "),
                 layout.header
             );
         }
@@ -228,7 +230,10 @@ impl<const D: usize> SourceDataset<D> {
             let mut v = Vec::with_capacity(columns);
             for (cell, name) in cells.iter().zip(&expected) {
                 let x: f64 = cell.parse().with_context(|| {
-                    format!("line {row}, field `{name}`: {cell:?} is not a number")
+                    format!(
+                        "line {row}, field `{name}`: {} is not a number",
+                        shown(cell)
+                    )
                 })?;
                 if !x.is_finite() {
                     bail!("line {row}, field `{name}`: non-finite value {cell}");
@@ -363,7 +368,7 @@ const PUBLISHED_PUDDLE: [&str; 3] = [
 
 impl SourceSet<2> {
     /// Puddle World's published source datasets of the reference runs (spec §6, embedded
-    /// copies of `shared/data/puddle-sources/`).
+    /// copies of `std_harness/data/puddle-sources/`).
     pub fn published(dynamics: Dynamics) -> anyhow::Result<Self> {
         let texts = match dynamics {
             Dynamics::Shared => PUBLISHED_SHARED,
@@ -410,8 +415,7 @@ impl<const D: usize> SourceSet<D> {
         let sources = (1..=count)
             .map(|k| {
                 let path = dir.join(layout.file_name(k));
-                let text = std::fs::read_to_string(&path)
-                    .with_context(|| format!("reading {}", path.display()))?;
+                let text = read_text(&path)?;
                 SourceDataset::from_csv(&text, layout, num_actions)
                     .with_context(|| format!("{}", path.display()))
             })
@@ -460,6 +464,33 @@ impl<const D: usize> SourceSet<D> {
         }
         data
     }
+}
+
+/// The most characters of a value an error message shows.
+const SHOWN_CHARS: usize = 80;
+
+/// `value` as an error message quotes it: at most [`SHOWN_CHARS`] characters, the rest cut
+/// with an ellipsis and counted, so a field of megabytes does not fill the terminal.
+fn shown(value: &str) -> String {
+    match value.char_indices().nth(SHOWN_CHARS) {
+        None => format!("{value:?}"),
+        Some((end, _)) => format!("{:?}… ({} bytes in all)", &value[..end], value.len()),
+    }
+}
+
+/// The file at `path` as text. Errors name the file, and for bytes that are not UTF-8 the
+/// line and the byte in it.
+fn read_text(path: &Path) -> anyhow::Result<String> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + valid.iter().rev().take_while(|&&b| b != b'\n').count();
+        anyhow::anyhow!(
+            "{}: line {line}, byte {column}: not UTF-8 text (a source file is UTF-8 CSV)",
+            path.display()
+        )
+    })
 }
 
 /// How fresh source data are generated.

@@ -5,7 +5,7 @@
 //! realistic score table (`V_r` from one 24-point reward GP per source) over the
 //! spacing-1.25 puddle grid. All `static`: flash.
 
-use awfqi::{Posterior, Scores, Transition};
+use awfqi::prelude::{Posterior, Scores, Transition};
 
 /// Records of all sources.
 pub const SOURCE_RECORDS: usize = 1033;

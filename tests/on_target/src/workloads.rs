@@ -3,7 +3,7 @@
 
 use awfqi::gp::{Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull};
 use awfqi::rng::{normal, uniform_in};
-use awfqi::{Real, Result};
+use awfqi::{Result, prelude::Real};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -48,11 +48,11 @@ pub fn gp_reward_model<const N: usize>(gp: &mut Gp<f32, N, 3>, seed: u64) -> Res
 }
 
 use awfqi::env::{Dynamics, EpisodeRecord, PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::{
-    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, ExtraTrees, MeanFunction,
-    ModelSweep, SourceData, Tilings,
+use awfqi::prelude::{
+    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Approximator, ExtraTrees, ModelSweep,
+    SourceData, Tilings,
 };
-use awfqi::{
+use awfqi::prelude::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EpsilonGreedyPolicy, Evaluation,
     FqiConfig, GenerativeModel, PointGrid, Posterior, RowSet, Scores, SourceMeans, SourceModel,
     StepReport, Transition, evaluate_greedy,
@@ -463,40 +463,6 @@ pub fn grid_identification(
     })
 }
 
-/// The sources' reward mean functions and the adaptive kernel's [`AdaptiveStorage`]: a
-/// target GP of `N` points, `Q` target records (steps × budget), one weight per published
-/// source record (1033), `C` candidate slots, `E` FQI entries (tiles), room for `B`
-/// verified states (the budget), 3 source beliefs. The memory of another approximator
-/// (trees, a model sweep) is lent to [`adaptive_puddle`] beside it.
-pub struct AdaptiveMemory<
-    const N: usize,
-    const Q: usize,
-    const C: usize,
-    const E: usize,
-    const B: usize,
-> {
-    /// Each published source's reward-GP posterior mean, fitted on the device.
-    pub means: [MeanFunction<f32, N, 3>; 3],
-    /// The kernel's memory.
-    pub kernel: AdaptiveStorage<f32, 2, 3, N, Q, 1033, C, E, B, 3>,
-}
-
-impl<const N: usize, const Q: usize, const C: usize, const E: usize, const B: usize>
-    AdaptiveMemory<N, Q, C, E, B>
-{
-    /// All-zero memory, for a `static` in `.bss`.
-    pub const fn new() -> Self {
-        Self {
-            means: [
-                MeanFunction::EMPTY,
-                MeanFunction::EMPTY,
-                MeanFunction::EMPTY,
-            ],
-            kernel: AdaptiveStorage::new(),
-        }
-    }
-}
-
 /// The FQI approximator of an adaptive run.
 #[derive(Clone, Copy)]
 pub enum AdaptiveQ {
@@ -507,7 +473,7 @@ pub enum AdaptiveQ {
     Trees(usize, usize),
     /// A model sweep: cells per axis, reward model, least reward mass (the lent storage
     /// must hold its entries and nodes).
-    Sweep(usize, awfqi::RewardModel, f32),
+    Sweep(usize, awfqi::fqi::RewardModel, f32),
 }
 
 /// What a run of [`adaptive_puddle`] changes from the recommended configuration.
@@ -554,21 +520,16 @@ pub fn adaptive_approximator(q: AdaptiveQ) -> Result<Approximator<f32, 2>> {
 /// source fitted in the kernel's GP and kept as a mean function, the candidate rows of the
 /// spacing-0.1 puddle grid (arithmetic, no memory), the shared-dynamics target; `fqi` lends
 /// the memory of trees or a model sweep.
-pub fn adaptive_setup<
-    'm,
-    const N: usize,
-    const Q: usize,
-    const C: usize,
-    const E: usize,
-    const B: usize,
->(
-    memory: &'m mut AdaptiveMemory<N, Q, C, E, B>,
-    fqi: awfqi::QStorage<'m, f32, 2>,
+pub fn adaptive_setup<'m, S: AdaptiveStorage<f32, 2, 3, N>, const N: usize>(
+    memory: &'m mut S,
+    fqi: awfqi::fqi::QStorage<'m, f32, 2>,
     run: &AdaptiveRun,
     rng: &mut ChaCha8Rng,
 ) -> Result<AdaptiveAwfqi<'m, f32, PuddleWorld<f32>, 2, 3, N>> {
     use crate::puddle_tables as t;
-    let AdaptiveMemory { means, kernel } = memory;
+    let awfqi::adaptive::AdaptiveParts {
+        mut buffers, means, ..
+    } = memory.parts();
     let target = PuddleWorld::target(Dynamics::Shared);
     let mut config = AdaptiveConfig::recommended(
         run.budget,
@@ -584,15 +545,16 @@ pub fn adaptive_setup<
         config.awfqi.gp_training.search.restarts = restarts;
     }
     config.refit = match run.refit {
-        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
-            max_evaluations,
-            restarts,
-            isotropic: true,
-        }),
+        Some((max_evaluations, restarts)) => {
+            awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
+                max_evaluations,
+                restarts,
+                isotropic: true,
+            })
+        }
         None => awfqi::adaptive::Refit::Search,
     };
     let sources = &PUBLISHED_SOURCES;
-    let mut buffers = kernel.buffers();
     let approximator = adaptive_approximator(run.q)?;
     if !matches!(run.q, AdaptiveQ::Tiles(..)) {
         buffers.fqi = fqi;
@@ -621,15 +583,9 @@ pub fn adaptive_setup<
 /// Adaptive AWFQI on Puddle World on the device: [`adaptive_setup`], the plan on the
 /// sources, `steps` steps and the greedy policy's evaluation. `inspect` sees the kernel
 /// after the last step.
-pub fn adaptive_puddle<
-    const N: usize,
-    const Q: usize,
-    const C: usize,
-    const E: usize,
-    const B: usize,
->(
-    memory: &mut AdaptiveMemory<N, Q, C, E, B>,
-    fqi: awfqi::QStorage<'_, f32, 2>,
+pub fn adaptive_puddle<S: AdaptiveStorage<f32, 2, 3, N>, const N: usize>(
+    memory: &mut S,
+    fqi: awfqi::fqi::QStorage<'_, f32, 2>,
     run: AdaptiveRun,
     seed: u64,
     inspect: impl FnOnce(&AdaptiveAwfqi<'_, f32, PuddleWorld<f32>, 2, 3, N>),
@@ -647,16 +603,30 @@ pub fn adaptive_puddle<
     Ok((report.ok_or(awfqi::Error::EmptyData)?, evaluation))
 }
 
-/// The trees' configuration of adaptive AWFQI (the harness's `awfqi-adaptive` with
-/// `--adaptive-q trees`): the sources' 64-point mean functions and the kernel's
-/// memory — a 64-point target GP, 6 steps × 50 target records, one weight per published
-/// source record, 4 000 candidate slots (and their alias table), 50 verified states, 3
-/// beliefs — with [`AdaptiveTreeMemory`] lent beside it.
-pub type AdaptiveTrees = AdaptiveMemory<64, 300, 4000, 0, 50>;
+awfqi::adaptive_storage! {
+    /// The trees' configuration of adaptive AWFQI (the harness's `awfqi-adaptive` with
+    /// `--adaptive-q trees`): the sources' 64-point mean functions and the kernel's
+    /// memory — a 64-point target GP, 6 steps × 50 target records, one weight per
+    /// published source record, 4 000 candidate slots, 50 verified states, 3 beliefs —
+    /// with [`AdaptiveTreeMemory`] lent beside it (the posteriors are in flash).
+    pub struct AdaptiveTrees {
+        scalar: f32,
+        state_dim: 2,
+        actions: 4,
+        gp_points: 64,
+        steps: 6,
+        budget: 50,
+        sources: 3,
+        source_records: 1033,
+        source_posteriors: 0,
+        candidates: 4000,
+        table_entries: 0,
+    }
+}
 
 /// The trees' FQI memory: one record slot per target and source record (300 + 1 033) and
 /// a 1 023-node scratch tree.
-pub type AdaptiveTreeMemory = awfqi::TreeStorage<f32, 2, 1333, 1023>;
+pub type AdaptiveTreeMemory = awfqi::fqi::TreeStorage<f32, 2, 1333, 1023>;
 
 /// The trees' run: 6 steps of 50 queries, 4 000 candidates, 50 streamed trees per action,
 /// the thesis's GP search.
@@ -670,9 +640,23 @@ pub const ADAPTIVE_TREES: AdaptiveRun = AdaptiveRun {
     refit: None,
 };
 
-/// The former recommendation's memory, tile coding: 12 × 12 tiles × 8 tilings of FQI
-/// entries (13² · 8 · 4 = 5 408) instead of the trees.
-pub type AdaptiveTiles = AdaptiveMemory<64, 300, 4000, 5408, 50>;
+awfqi::adaptive_storage! {
+    /// The former recommendation's memory, tile coding: 12 × 12 tiles × 8 tilings of FQI
+    /// entries (13² · 8 · 4 = 5 408) instead of the trees.
+    pub struct AdaptiveTiles {
+        scalar: f32,
+        state_dim: 2,
+        actions: 4,
+        gp_points: 64,
+        steps: 6,
+        budget: 50,
+        sources: 3,
+        source_records: 1033,
+        source_posteriors: 0,
+        candidates: 4000,
+        table_entries: 5408,
+    }
+}
 
 /// The former recommendation's run: [`ADAPTIVE_TREES`] with 12 × 8 tiles.
 pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
@@ -680,22 +664,36 @@ pub const ADAPTIVE_TILES: AdaptiveRun = AdaptiveRun {
     ..ADAPTIVE_TREES
 };
 
-/// The recommended configuration of adaptive AWFQI on Puddle World (what the harness's
-/// `awfqi-adaptive` runs by default, the footprint image `adaptive_puddle` and the
-/// instruction-count image `m4_adaptive`): the sources' 32-point mean functions and the
-/// kernel's memory — a 32-point target GP, 6 steps × 50 target records, one weight per
-/// published source record, 250 candidate slots, 50 verified states, 3 beliefs — with
-/// [`AdaptiveRecommendedFqi`] lent beside it.
-pub type AdaptiveRecommended = AdaptiveMemory<32, 300, 250, 0, 50>;
+awfqi::adaptive_storage! {
+    /// The recommended configuration of adaptive AWFQI on Puddle World (what the harness's
+    /// `awfqi-adaptive` runs by default, the footprint image `adaptive_puddle` and the
+    /// instruction-count image `m4_adaptive`): the sources' 32-point mean functions and
+    /// the kernel's memory — a 32-point target GP, 6 steps × 50 target records, one weight
+    /// per published source record, 250 candidate slots, 50 verified states, 3 beliefs —
+    /// with [`AdaptiveRecommendedFqi`] lent beside it (the posteriors are in flash).
+    pub struct AdaptiveRecommended {
+        scalar: f32,
+        state_dim: 2,
+        actions: 4,
+        gp_points: 32,
+        steps: 6,
+        budget: 50,
+        sources: 3,
+        source_records: 1033,
+        source_posteriors: 0,
+        candidates: 250,
+        table_entries: 0,
+    }
+}
 /// Its FQI memory: a model sweep of 12 × 12 cells (13² nodes), 4 actions.
-pub type AdaptiveRecommendedFqi = awfqi::SweepStorage<f32, 2, { 169 * 4 }, 169>;
+pub type AdaptiveRecommendedFqi = awfqi::fqi::SweepStorage<f32, 2, { 169 * 4 }, 169>;
 /// Its run: 6 steps of 50 queries, 250 candidates, the sweep with pooled rewards, warm
 /// refits of 30 evaluations.
 pub const ADAPTIVE_RECOMMENDED: AdaptiveRun = AdaptiveRun {
     budget: 50,
     steps: 6,
     candidates: 250,
-    q: AdaptiveQ::Sweep(12, awfqi::RewardModel::Pooled, 0.0),
+    q: AdaptiveQ::Sweep(12, awfqi::fqi::RewardModel::Pooled, 0.0),
     search: None,
     relabel: false,
     refit: Some((30, 0)),

@@ -50,8 +50,8 @@ fn chain_state(c: usize) -> [f32; 1] {
 
 /// The chain's 8 samples: from each state, action 0 steps right for reward −1 (the
 /// step out of state 3 is absorbing), action 1 steps left (clipped at state 0).
-fn chain_samples() -> [awfqi::Transition<[f32; 1], f32>; 8] {
-    use awfqi::Transition;
+fn chain_samples() -> [awfqi::model::Transition<[f32; 1], f32>; 8] {
+    use awfqi::model::Transition;
     let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 8];
     for c in 0..4 {
         samples[2 * c] = Transition {
@@ -117,16 +117,16 @@ impl Shift {
     }
 }
 
-impl awfqi::SourceModel<f32, 1> for Shift {
-    fn predict(&self, s: [f32; 1], a: usize) -> awfqi::Result<awfqi::SourceMeans<f32, 1>> {
-        Ok(awfqi::SourceMeans {
+impl awfqi::model::SourceModel<f32, 1> for Shift {
+    fn predict(&self, s: [f32; 1], a: usize) -> awfqi::Result<awfqi::model::SourceMeans<f32, 1>> {
+        Ok(awfqi::model::SourceMeans {
             reward: -libm::fabsf(s[0] - 5.0) / 5.0,
             next_state: [self.mean_next(s[0], a)],
         })
     }
 }
 
-impl awfqi::GenerativeModel<f32> for Shift {
+impl awfqi::model::GenerativeModel<f32> for Shift {
     type State = [f32; 1];
 
     fn num_actions(&self) -> usize {
@@ -138,9 +138,9 @@ impl awfqi::GenerativeModel<f32> for Shift {
         s: [f32; 1],
         a: usize,
         rng: &mut R,
-    ) -> awfqi::Result<awfqi::Transition<[f32; 1], f32>> {
+    ) -> awfqi::Result<awfqi::model::Transition<[f32; 1], f32>> {
         let next = self.mean_next(s[0], a) + awfqi::rng::normal(rng, 0.0, 0.1)?;
-        Ok(awfqi::Transition {
+        Ok(awfqi::model::Transition {
             state: s,
             action: a,
             reward: -libm::fabsf(s[0] - 5.0) / 5.0 + awfqi::rng::normal(rng, 0.0, 0.1)?,
@@ -154,8 +154,9 @@ impl awfqi::GenerativeModel<f32> for Shift {
 mod tests {
     use super::{check_predictions, gp_hyper, gp_point, instance};
     use awfqi::Error;
-    use awfqi::env::{Dynamics, EpisodeRecord, FiniteMdp, GenerativeModel, GridWorld, PuddleWorld};
+    use awfqi::env::{Dynamics, EpisodeRecord, GridWorld, PuddleWorld};
     use awfqi::gp::{Gp, HyperparameterBounds, SearchOptions, WhenFull};
+    use awfqi::model::{FiniteMdp, GenerativeModel};
     use awfqi::policy::{EpsilonGreedyPolicy, UniformPolicy};
     use awfqi_on_target::{close, golden};
     use rand_chacha::ChaCha8Rng;
@@ -623,8 +624,23 @@ mod tests {
     /// relabelled source rewards and that every output is finite and in range.
     #[test]
     fn adaptive_awfqi_on_the_published_sources() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 392, 12> = AdaptiveMemory::new();
+        use awfqi_on_target::workloads::{AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: 16,
+                steps: 2,
+                budget: 12,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: 60,
+                table_entries: 392,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
         // SAFETY: the only reference.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let run = AdaptiveRun {
@@ -637,7 +653,7 @@ mod tests {
             refit: None,
         };
         let mut checked = false;
-        let fqi = awfqi::QStorage::default();
+        let fqi = awfqi::fqi::QStorage::default();
         let (report, evaluation) = adaptive_puddle(memory, fqi, run, 4, |kernel| {
             let d0 = kernel.target_samples();
             let starts = d0.chunks(4).all(|b| b[0].state == [0.0, 0.0]);
@@ -673,9 +689,25 @@ mod tests {
     /// of the final trees (grown along each query's path) acts.
     #[test]
     fn adaptive_awfqi_with_streamed_trees() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
-        static mut TREES: awfqi::TreeStorage<f32, 2, 1057, 511> = awfqi::TreeStorage::new();
+        use awfqi_on_target::workloads::{AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: 16,
+                steps: 2,
+                budget: 12,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: 60,
+                table_entries: 0,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
+        static mut TREES: awfqi::fqi::TreeStorage<f32, 2, 1057, 511> =
+            awfqi::fqi::TreeStorage::new();
         // SAFETY: the only references.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let trees = unsafe { &mut *core::ptr::addr_of_mut!(TREES) };
@@ -879,8 +911,8 @@ mod tests {
     /// Q(c0) = −2 + 0.9·(1·Q(c1) + 0.5·Q(c0))/1.5, whose fixed point is −2; Q(c1) = 1.
     #[test]
     fn weighted_fqi_sweep_on_a_chain() {
-        use awfqi::env::Transition;
         use awfqi::fqi::{CellGrid, EmptyCells, FqiConfig, FqiEntry, SampleSet, TabularFqi};
+        use awfqi::model::Transition;
         let t = |s: [f32; 2], r: f32, n: [f32; 2], absorbing: bool| Transition {
             state: s,
             action: 0,
@@ -992,7 +1024,7 @@ mod tests {
     /// states, the mean of their values.
     #[test]
     fn tile_coding_on_a_chain() {
-        use awfqi::{EmptyCells, FqiConfig, FqiEntry, SampleSet, TileFqi, Tilings};
+        use awfqi::prelude::{EmptyCells, FqiConfig, FqiEntry, SampleSet, TileFqi, Tilings};
         let at = super::chain_state;
         let samples = super::chain_samples();
         let tilings = Tilings::<f32, 1>::cube(0.0, 5.0, 5, 2).unwrap();
@@ -1025,7 +1057,7 @@ mod tests {
     /// reach of 0.1 of the range caps an action tried only far away (hand-computed).
     #[test]
     fn knn_q_on_a_chain() {
-        use awfqi::{
+        use awfqi::prelude::{
             EmptyCells, FqiConfig, Kernel, KnnFqi, KnnRecord, Neighbours, SampleSet, Transition,
         };
         let at = super::chain_state;
@@ -1081,7 +1113,9 @@ mod tests {
     /// iteration and Q is the closed-form Q* at the states.
     #[test]
     fn trees_q_on_a_chain() {
-        use awfqi::{EmptyCells, ExtraTrees, FqiConfig, SampleSet, TreeFqi, TreeNode, TreeRecord};
+        use awfqi::prelude::{
+            EmptyCells, ExtraTrees, FqiConfig, SampleSet, TreeFqi, TreeNode, TreeRecord,
+        };
         use rand_chacha::ChaCha8Rng;
         use rand_core::SeedableRng;
         let at = super::chain_state;
@@ -1114,7 +1148,7 @@ mod tests {
     /// greedy action between two states is the interpolated one.
     #[test]
     fn sweep_q_on_a_chain() {
-        use awfqi::{
+        use awfqi::prelude::{
             EmptyCells, FqiConfig, ModelSweep, RewardModel, SampleSet, SweepEntry, SweepFqi,
             SweepNode,
         };
@@ -1149,9 +1183,25 @@ mod tests {
     /// warm refits. Checks the run's sizes, the weights, and that the greedy policy acts.
     #[test]
     fn adaptive_awfqi_with_a_model_sweep() {
-        use awfqi_on_target::workloads::{AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_puddle};
-        static mut MEMORY: AdaptiveMemory<16, 24, 60, 0, 12> = AdaptiveMemory::new();
-        static mut SWEEP: awfqi::SweepStorage<f32, 2, { 49 * 4 }, 49> = awfqi::SweepStorage::new();
+        use awfqi_on_target::workloads::{AdaptiveQ, AdaptiveRun, adaptive_puddle};
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: 16,
+                steps: 2,
+                budget: 12,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: 60,
+                table_entries: 0,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
+        static mut SWEEP: awfqi::fqi::SweepStorage<f32, 2, { 49 * 4 }, 49> =
+            awfqi::fqi::SweepStorage::new();
         // SAFETY: the only references.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };
         let sweep = unsafe { &mut *core::ptr::addr_of_mut!(SWEEP) };
@@ -1159,7 +1209,7 @@ mod tests {
             budget: 12,
             steps: 2,
             candidates: 60,
-            q: AdaptiveQ::Sweep(6, awfqi::RewardModel::Pooled, 0.0),
+            q: AdaptiveQ::Sweep(6, awfqi::fqi::RewardModel::Pooled, 0.0),
             search: Some((40, 1)),
             relabel: false,
             refit: Some((10, 0)),
@@ -1191,7 +1241,7 @@ mod tests {
     #[test]
     fn transition_weights_in_the_loop() {
         use crate::Shift;
-        use awfqi::{
+        use awfqi::prelude::{
             Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiEntry, GenerativeModel, PointGrid,
             Posterior, RowSet, SampleSet, Scores, SourceModel, TabularFqi, Transition,
             WeightParams,

@@ -53,7 +53,8 @@ pub struct CommonArgs {
     /// Steps K. Default: Puddle World 6, Dam 10, Acrobot 20.
     #[arg(long)]
     pub steps: Option<usize>,
-    /// Runs: a count N (runs 0..N) or a range A..B; results merge with those in --out.
+    /// Runs: a count N (runs 0..N) or a range A..B (at most 100 000 runs); results merge
+    /// with those in --out.
     /// Default: Puddle World 10, Dam and Acrobot 20.
     #[arg(long)]
     pub runs: Option<RunRange>,
@@ -73,7 +74,7 @@ pub struct CommonArgs {
     /// Output directory. Default: `results/<command>`.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Worker threads (0: all cores).
+    /// Worker threads (0: all cores; at most 4 per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// FQI iterations. Default: Puddle World and Dam 60, Acrobot 50.
@@ -167,7 +168,8 @@ pub struct CommonArgs {
     /// Compute nothing: summarise and plot the runs of this configuration already in --out.
     #[arg(long)]
     pub no_run: bool,
-    /// Recompute runs already in --out, and start anew a result file that holds another
+    /// Recompute runs already in --out, and start anew a result file of an algorithm asked
+    /// for that holds another
     /// configuration or cannot be read, keeping the old file as
     /// `<name>.json.<timestamp>.bak`. Without it such a file is an error (nothing is
     /// written) and runs already there are kept, so rerunning an interrupted command

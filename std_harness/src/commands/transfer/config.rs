@@ -110,6 +110,9 @@ pub const MAX_TREES: usize = 10_000;
 pub const MAX_GP_POINTS: usize = 100_000;
 /// The largest `--gp-restarts` accepted.
 pub const MAX_GP_RESTARTS: usize = 10_000;
+/// The largest `--threads` accepted, per core available: more threads only share the
+/// cores (and each holds a run's memory).
+pub const THREADS_PER_CORE: usize = 4;
 /// Run indices must be below this (seeds are derived from them).
 pub const MAX_RUN_INDEX: usize = 1 << 32;
 
@@ -165,7 +168,8 @@ impl Config {
     }
 
     /// The CLI's ranges: every budget positive and below a bound that still finishes, the
-    /// run range non-empty, the score spacing and the threshold finite. Each error names
+    /// run range non-empty, the threads at most [`THREADS_PER_CORE`] per core, the score
+    /// spacing and the threshold finite. Each error names
     /// the option.
     fn check_ranges(&self) -> anyhow::Result<()> {
         let within = |name: &str, value: usize, low: usize, high: usize| -> anyhow::Result<()> {
@@ -197,6 +201,15 @@ impl Config {
                 "--runs {}..{} is out of range: it must be a non-empty range of run indices below {MAX_RUN_INDEX}",
                 self.runs.start,
                 self.runs.end
+            );
+        }
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let max_threads = THREADS_PER_CORE * cores;
+        if self.args.threads > max_threads {
+            bail!(
+                "--threads {} is out of range: it must be 0 (every core) to {max_threads} \
+                 ({THREADS_PER_CORE} per core, {cores} core(s) available)",
+                self.args.threads
             );
         }
         if !(self.spacing.is_finite() && self.spacing > 0.0) {

@@ -52,7 +52,7 @@ pub enum SweepRewardsArg {
     Backfilled,
 }
 
-impl From<SweepRewardsArg> for awfqi::RewardModel {
+impl From<SweepRewardsArg> for awfqi::fqi::RewardModel {
     fn from(r: SweepRewardsArg) -> Self {
         match r {
             SweepRewardsArg::PerAction => Self::PerAction,
@@ -300,7 +300,7 @@ pub struct SweepDefaults {
     /// Cells per axis.
     pub cells: usize,
     /// Which records a node's reward averages.
-    pub rewards: awfqi::RewardModel,
+    pub rewards: awfqi::fqi::RewardModel,
     /// Value-iteration sweeps (`None`: FQI's iterations).
     pub sweeps: Option<usize>,
 }
@@ -310,7 +310,7 @@ impl SweepDefaults {
     /// state only).
     pub const PUDDLE: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
-        rewards: awfqi::RewardModel::Pooled,
+        rewards: awfqi::fqi::RewardModel::Pooled,
         sweeps: None,
     };
     /// The Dam's: 24 cells per axis (chosen on the tuning runs, `--seed 100`, 20 runs at
@@ -320,7 +320,7 @@ impl SweepDefaults {
     /// 400: at γ = 0.999 the protocol's 60 iterations value only the next 60 days).
     pub const DAM: Self = Self {
         cells: 24,
-        rewards: awfqi::RewardModel::Backfilled,
+        rewards: awfqi::fqi::RewardModel::Backfilled,
         sweeps: Some(400),
     };
     /// Acrobot's: [`ADAPTIVE_SWEEP_CELLS`] cells per axis (chosen on the tuning runs,
@@ -328,7 +328,7 @@ impl SweepDefaults {
     /// (they depend on the state only).
     pub const ACROBOT: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
-        rewards: awfqi::RewardModel::Pooled,
+        rewards: awfqi::fqi::RewardModel::Pooled,
         sweeps: None,
     };
 }
@@ -377,7 +377,9 @@ mod tests {
     }
 
     fn iterations(q: EmbeddedQ) -> usize {
-        q.fqi(awfqi::FqiConfig::published()).unwrap().iterations()
+        q.fqi(awfqi::fqi::FqiConfig::published())
+            .unwrap()
+            .iterations()
     }
 
     #[test]
@@ -400,7 +402,7 @@ mod tests {
 
     #[test]
     fn the_sweeps_keep_the_rest_of_fqi() {
-        let fqi = awfqi::FqiConfig::new(0.999, 60, awfqi::EmptyCells::Value(-2.0))
+        let fqi = awfqi::fqi::FqiConfig::new(0.999, 60, awfqi::fqi::EmptyCells::Value(-2.0))
             .unwrap()
             .with_min_weight(0.25)
             .unwrap();
@@ -409,7 +411,7 @@ mod tests {
         assert_eq!(got.iterations(), 9);
         assert!((got.discount() - 0.999).abs() < 1e-7);
         assert!((got.min_weight() - 0.25).abs() < 1e-7);
-        assert_eq!(got.empty_cells(), awfqi::EmptyCells::Value(-2.0));
+        assert_eq!(got.empty_cells(), awfqi::fqi::EmptyCells::Value(-2.0));
     }
 
     #[test]

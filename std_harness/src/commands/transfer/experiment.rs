@@ -6,8 +6,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use awfqi::env::Dynamics;
+use awfqi::prelude::{Dims, StatePlusAction};
 use awfqi::weights::NoiseSubtraction;
-use awfqi::{Dims, StatePlusAction};
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::Domain;

@@ -119,8 +119,15 @@ pub fn run<const D: usize>(
     pool.install(|| run_in_pool(config, Arc::new(domain), Arc::new(data), dynamics, embedded))
 }
 
-/// Creates `out` and checks that a file can be written in it, before any run starts.
+/// Creates `out` and checks that a file can be written in it, before any run starts (and
+/// after every check that can refuse the invocation, so a refusal creates no directory).
 pub fn ensure_writable(out: &Path) -> anyhow::Result<()> {
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "output directory {}: it exists and is not a directory",
+            out.display()
+        );
+    }
     std::fs::create_dir_all(out)
         .with_context(|| format!("output directory {}: cannot be created", out.display()))?;
     // One probe per process: writers sharing the directory must not remove each other's.
@@ -145,7 +152,6 @@ fn run_in_pool<const D: usize>(
 ) -> anyhow::Result<()> {
     let args = &config.args;
     let out = &config.out;
-    ensure_writable(out)?;
     let wall = Instant::now();
     let algorithms = config.algorithms.clone();
     if algorithms.is_empty() {
@@ -160,6 +166,7 @@ fn run_in_pool<const D: usize>(
         ..config.clone()
     };
     let experiment = build_experiment(&build, domain, data, dynamics, embedded)?;
+    ensure_writable(out)?;
     let runs: Vec<usize> = if args.no_run {
         Vec::new()
     } else {

@@ -42,9 +42,9 @@ pub enum Algorithm {
     Awfqi,
     /// AWFQI with the oracle score table (§12).
     AwfqiOracle,
-    /// The thesis's AWFQI as the core runs it (`awfqi::Awfqi`: f32, fixed memory).
+    /// The thesis's AWFQI as the core runs it (`awfqi::thesis::Awfqi`: f32, fixed memory).
     AwfqiEmbedded,
-    /// The adaptive AWFQI as the core runs it (`awfqi::AdaptiveAwfqi`: f32, fixed memory):
+    /// The adaptive AWFQI as the core runs it (`awfqi::adaptive::AdaptiveAwfqi`: f32, fixed memory):
     /// queries re-planned from the target's answers within every step (not a thesis
     /// algorithm).
     AwfqiAdaptive,

@@ -305,7 +305,7 @@ impl<const D: usize> EpisodicLearner<D> for Rbt<'_, D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use awfqi::env::Transition;
+    use awfqi::model::Transition;
     use rand_core::SeedableRng;
 
     fn row(v: [f64; 6]) -> Record<2> {

@@ -66,7 +66,7 @@ fn measure<T>(label: &str, reps: usize, mut op: impl FnMut() -> Result<T>) -> Re
 /// prediction (one per source record for the weights, one per candidate for the scores)
 /// and a source mean function's evaluation.
 fn parts<const N: usize>(
-    kernel: &awfqi::AdaptiveAwfqi<'_, f32, awfqi::env::PuddleWorld<f32>, 2, 3, N>,
+    kernel: &awfqi::adaptive::AdaptiveAwfqi<'_, f32, awfqi::env::PuddleWorld<f32>, 2, 3, N>,
     rng: &mut ChaCha8Rng,
 ) -> Result<()> {
     use awfqi::fqi::{FqiConfig, SampleSet};

@@ -16,7 +16,10 @@
 use awfqi::env::{Dynamics, PUDDLE_ACTIONS, PuddleWorld};
 use awfqi::fqi::{Approximator, FqiConfig, FqiEntry, SampleSet};
 use awfqi::record_gp::{Output, fit_gp};
-use awfqi::{Awfqi, AwfqiConfig, CellGrid, Conditioning, Result, RowSet};
+use awfqi::{
+    Result,
+    prelude::{Awfqi, AwfqiConfig, CellGrid, Conditioning, RowSet},
+};
 use awfqi_on_target::probe;
 use awfqi_on_target::puddle_tables as t;
 use awfqi_on_target::workloads::{Record, Storage32k};

@@ -9,12 +9,13 @@
 #![no_std]
 #![no_main]
 
-use awfqi::RewardModel::{Backfilled, PerAction, Pooled};
-use awfqi::{Result, SweepStorage, TreeStorage};
-use awfqi_on_target::probe;
-use awfqi_on_target::workloads::{
-    ADAPTIVE_RECOMMENDED, AdaptiveMemory, AdaptiveQ, AdaptiveRun, adaptive_setup,
+use awfqi::fqi::RewardModel::{Backfilled, PerAction, Pooled};
+use awfqi::{
+    Result,
+    prelude::{SweepStorage, TreeStorage},
 };
+use awfqi_on_target::probe;
+use awfqi_on_target::workloads::{ADAPTIVE_RECOMMENDED, AdaptiveQ, AdaptiveRun, adaptive_setup};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -41,15 +42,15 @@ fn label<'b>(buffer: &'b mut [u8; 48], name: &str, region: &str) -> &'b str {
 /// Runs one configuration: memory, set-up, plan, steps, stack (not inlined, so the stack
 /// it reports is its own and its callees', as a footprint image's would be).
 #[inline(never)]
-fn measure<const N: usize, const C: usize, const E: usize>(
+fn measure<S: AdaptiveStorage<f32, 2, 3, N>, const N: usize>(
     name: &str,
-    memory: &mut AdaptiveMemory<N, 300, C, E, 50>,
-    fqi: awfqi::QStorage<'_, f32, 2>,
+    memory: &mut S,
+    fqi: awfqi::fqi::QStorage<'_, f32, 2>,
     fqi_bytes: usize,
     run: AdaptiveRun,
 ) -> Result<()> {
     let mut buffer = [0u8; 48];
-    let ram = core::mem::size_of::<AdaptiveMemory<N, 300, C, E, 50>>() + fqi_bytes;
+    let ram = core::mem::size_of::<S>() + fqi_bytes;
     probe::report(label(&mut buffer, name, "RAM"), ram);
     probe::paint_stack();
     let mut rng = ChaCha8Rng::seed_from_u64(core::hint::black_box(1));
@@ -75,7 +76,22 @@ fn measure<const N: usize, const C: usize, const E: usize>(
 /// A configuration's memory and sweep storage, as statics, and its run.
 macro_rules! config {
     ($name:expr, $n:expr, $c:expr, $e:expr, $fqi:ty, $run:expr) => {{
-        static mut MEMORY: AdaptiveMemory<$n, 300, $c, $e, 50> = AdaptiveMemory::new();
+        awfqi::adaptive_storage! {
+            struct Memory {
+                scalar: f32,
+                state_dim: 2,
+                actions: 4,
+                gp_points: $n,
+                steps: 6,
+                budget: 50,
+                sources: 3,
+                source_records: 1033,
+                source_posteriors: 0,
+                candidates: $c,
+                table_entries: $e,
+            }
+        }
+        static mut MEMORY: Memory = Memory::new();
         static mut FQI: $fqi = <$fqi>::new();
         // SAFETY: the only references to this configuration's statics.
         let memory = unsafe { &mut *core::ptr::addr_of_mut!(MEMORY) };

@@ -1,4 +1,4 @@
-//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::AdaptiveAwfqi`]; not
+//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::adaptive::AdaptiveAwfqi`]; not
 //! a thesis algorithm — the thesis's `awfqi` and `awfqi-oracle` stay as they are): the
 //! query distribution is recomputed from what the target has answered, several times per
 //! step, and aims at what decides the greedy policy.
@@ -13,8 +13,8 @@
 //! [`EmbeddedConfig::adaptive_q`]: super::EmbeddedConfig::adaptive_q
 //! [`ADAPTIVE_Q`]: super::ADAPTIVE_Q
 
-use awfqi::env::GenerativeModel;
-use awfqi::{
+use awfqi::model::GenerativeModel;
+use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, Dims, FqiEntry, Gp, KnnRecord, MeanFunction,
     QStorage, SourceData, StatePlusAction, Transition, TreeNode, TreeRecord,
 };
@@ -136,33 +136,35 @@ where
     c.relevance_width = o.relevance_width as T;
     c.relabel = o.relabel;
     c.refit = match o.refit {
-        Some((max_evaluations, restarts)) => awfqi::adaptive::Refit::Warm(awfqi::SearchOptions {
-            max_evaluations,
-            restarts,
-            isotropic: c.awfqi.gp_training.search.isotropic,
-        }),
+        Some((max_evaluations, restarts)) => {
+            awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
+                max_evaluations,
+                restarts,
+                isotropic: c.awfqi.gp_training.search.isotropic,
+            })
+        }
         None => awfqi::adaptive::Refit::Search,
     };
     Ok(c)
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
-/// an [`awfqi::AdaptiveStorage`].
+/// an [`awfqi::adaptive::AdaptiveStorage`].
 #[derive(Debug)]
 struct Memory<const N: usize, const D: usize, const I: usize> {
     gp: Box<Gp<T, N, I>>,
     samples: Vec<Record32<D>>,
     weights: Vec<T>,
-    candidates: Vec<awfqi::adaptive::Candidate<T>>,
+    candidates: Vec<awfqi::adaptive::candidates::Candidate<T>>,
     fqi: Vec<FqiEntry<T>>,
     records: Vec<KnnRecord<T, D>>,
     links: Vec<u16>,
     tree_records: Vec<TreeRecord<T, D>>,
     nodes: Vec<TreeNode<T>>,
-    sweep_entries: Vec<awfqi::SweepEntry<T, D>>,
-    sweep_nodes: Vec<awfqi::SweepNode<T>>,
+    sweep_entries: Vec<awfqi::fqi::SweepEntry<T, D>>,
+    sweep_nodes: Vec<awfqi::fqi::SweepNode<T>>,
     path: Vec<[T; D]>,
-    beliefs: Vec<awfqi::adaptive::SourceBelief<T>>,
+    beliefs: Vec<awfqi::adaptive::plausibility::SourceBelief<T>>,
 }
 
 impl<const N: usize, const D: usize, const I: usize> Memory<N, D, I> {
@@ -280,7 +282,7 @@ where
             &mut gp,
             source,
             &training,
-            awfqi::SubsetRule::Spread,
+            awfqi::record_gp::SubsetRule::Spread,
             &mut rng,
         )?;
     }
@@ -311,7 +313,7 @@ where
     // Kernel averaging and trees hold every target and source record of a fit.
     let n = experiment.protocol.steps * budget + setup.posteriors().len();
     let (records, links) = match approximator {
-        awfqi::Approximator::Knn(nb) | awfqi::Approximator::Hybrid(_, nb) => {
+        awfqi::fqi::Approximator::Knn(nb) | awfqi::fqi::Approximator::Hybrid(_, nb) => {
             let links = nb
                 .required_links(n, actions)
                 .ok_or_else(|| anyhow::anyhow!("kNN links overflow"))?;
@@ -320,7 +322,7 @@ where
         _ => (0, 0),
     };
     let (tree_records, nodes) = match approximator {
-        awfqi::Approximator::Trees(forests) => {
+        awfqi::fqi::Approximator::Trees(forests) => {
             let nodes = forests
                 .required_nodes(actions)
                 .ok_or_else(|| anyhow::anyhow!("tree nodes overflow"))?;
@@ -329,7 +331,7 @@ where
         _ => (0, 0),
     };
     let (sweep_entries, sweep_nodes) = match approximator {
-        awfqi::Approximator::Sweep(sweep) => (
+        awfqi::fqi::Approximator::Sweep(sweep) => (
             sweep
                 .required_entries(actions)
                 .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
@@ -341,16 +343,16 @@ where
         gp: Box::new(Gp::empty()),
         samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
         weights: vec![0.0; setup.posteriors().len()],
-        candidates: vec![awfqi::adaptive::Candidate::EMPTY; slots],
+        candidates: vec![awfqi::adaptive::candidates::Candidate::EMPTY; slots],
         fqi: vec![FqiEntry::EMPTY; entries],
         records: vec![KnnRecord::EMPTY; records],
         links: vec![0; links],
         tree_records: vec![TreeRecord::EMPTY; tree_records],
         nodes: vec![TreeNode::EMPTY; nodes],
-        sweep_entries: vec![awfqi::SweepEntry::EMPTY; sweep_entries],
-        sweep_nodes: vec![awfqi::SweepNode::EMPTY; sweep_nodes],
+        sweep_entries: vec![awfqi::fqi::SweepEntry::EMPTY; sweep_entries],
+        sweep_nodes: vec![awfqi::fqi::SweepNode::EMPTY; sweep_nodes],
         path: vec![[0.0; D]; budget],
-        beliefs: vec![awfqi::adaptive::SourceBelief::EMPTY; sources.len()],
+        beliefs: vec![awfqi::adaptive::plausibility::SourceBelief::EMPTY; sources.len()],
     };
     let means = means_of::<N, D, I>(setup, &sources)?;
     let means: &[MeanFunction<T, N, I>] = &means;

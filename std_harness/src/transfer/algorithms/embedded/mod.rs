@@ -1,6 +1,6 @@
 //! The core's algorithms on the same protocol as the std ones, so the embedded versions are
-//! measured, not guessed: `awfqi-embedded`, the thesis's AWFQI ([`awfqi::Awfqi`], in
-//! [`thesis`]), and `awfqi-adaptive`, the adaptive AWFQI ([`awfqi::AdaptiveAwfqi`], in
+//! measured, not guessed: `awfqi-embedded`, the thesis's AWFQI ([`awfqi::thesis::Awfqi`], in
+//! [`thesis`]), and `awfqi-adaptive`, the adaptive AWFQI ([`awfqi::adaptive::AdaptiveAwfqi`], in
 //! [`adaptive`]).
 //!
 //! They run as on a microcontroller, in `f32`, with everything in fixed storage sized once
@@ -23,8 +23,9 @@ use std::time::Instant;
 use std::any::Any;
 use std::fmt::Debug;
 
-use awfqi::env::{Acrobot, Dam, GenerativeModel, PUDDLE_ACTIONS, PuddleWorld};
-use awfqi::{
+use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::model::GenerativeModel;
+use awfqi::prelude::{
     AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp,
     Kernel, MeanFunction, Neighbours, Posterior, RowSet, ScoreTable, Scores, SourceScales,
     StatePlusAction, SubsetRule, Tilings, Transition,
@@ -65,7 +66,7 @@ pub const ADAPTIVE_SWEEP_CELLS: usize = 12;
 /// state only).
 pub const ADAPTIVE_Q: EmbeddedQ = EmbeddedQ::Sweep(SweepKnobs {
     cells: ADAPTIVE_SWEEP_CELLS,
-    rewards: awfqi::RewardModel::Pooled,
+    rewards: awfqi::fqi::RewardModel::Pooled,
     min_mass: 0.0,
     lookahead: false,
     sweeps: None,
@@ -103,7 +104,7 @@ pub struct SweepKnobs {
     /// Cells per axis (nodes at their corners).
     pub cells: usize,
     /// Which records a node's reward averages.
-    pub rewards: awfqi::RewardModel,
+    pub rewards: awfqi::fqi::RewardModel,
     /// The least reward weight of a node with data.
     pub min_mass: f64,
     /// Decide by one step of lookahead.
@@ -155,7 +156,7 @@ impl EmbeddedQ {
     /// Kernel averaging over `k` neighbours, uniform or Gaussian of bandwidth `bandwidth`
     /// (a share of the range), with a `reach` and one ball for every action or not.
     ///
-    /// Errors: those of [`awfqi::Neighbours::new`].
+    /// Errors: those of [`awfqi::fqi::Neighbours::new`].
     pub fn knn(
         k: usize,
         bandwidth: Option<f64>,
@@ -169,8 +170,8 @@ impl EmbeddedQ {
 
     /// Per-action Extra-Trees forests.
     ///
-    /// Errors: those of [`awfqi::ExtraTrees::new`] and
-    /// [`awfqi::ExtraTrees::with_min_samples`].
+    /// Errors: those of [`awfqi::fqi::ExtraTrees::new`] and
+    /// [`awfqi::fqi::ExtraTrees::with_min_samples`].
     pub fn trees(knobs: TreeKnobs) -> anyhow::Result<Self> {
         let out = Self::Trees(knobs);
         out.check()?;
@@ -179,7 +180,7 @@ impl EmbeddedQ {
 
     /// A model sweep.
     ///
-    /// Errors: those of [`awfqi::ModelSweep::cube`] and [`awfqi::ModelSweep::with_min_mass`].
+    /// Errors: those of [`awfqi::fqi::ModelSweep::cube`] and [`awfqi::fqi::ModelSweep::with_min_mass`].
     pub fn sweep(knobs: SweepKnobs) -> anyhow::Result<Self> {
         let out = Self::Sweep(knobs);
         out.check()?;
@@ -233,11 +234,13 @@ impl EmbeddedQ {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
-            Self::Sweep(k) => awfqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
-                .with_rewards(k.rewards)
-                .with_min_mass(k.min_mass as T)?
-                .with_lookahead(k.lookahead)
-                .into(),
+            Self::Sweep(k) => {
+                awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
+                    .with_rewards(k.rewards)
+                    .with_min_mass(k.min_mass as T)?
+                    .with_lookahead(k.lookahead)
+                    .into()
+            }
         })
     }
 }
@@ -333,7 +336,7 @@ impl EmbeddedConfig {
 pub enum DomainGrid<const D: usize> {
     /// A core point grid for a spacing × this many actions (Puddle World's
     /// [`PuddleWorld::score_grid`]).
-    Points(fn(T) -> awfqi::Result<awfqi::PointGrid<T, D>>, usize),
+    Points(fn(T) -> awfqi::Result<awfqi::score::PointGrid<T, D>>, usize),
     /// The domain's `(state, action)` pairs ([`Domain::grid_rows`]), converted to `f32`.
     Pairs(fn(f64) -> anyhow::Result<Rows<D>>),
 }
@@ -600,10 +603,9 @@ where
 
     /// The AWFQI settings of a run with `budget` queries per step.
     pub fn awfqi_config(&self, budget: usize) -> AwfqiConfig<T, I> {
-        AwfqiConfig {
-            budget,
-            ..self.awfqi
-        }
+        let mut config = self.awfqi;
+        config.budget = budget;
+        config
     }
 
     /// The score table's rows over `sources` (this set-up's
@@ -752,12 +754,12 @@ fn row_set<'a, const D: usize>(
 }
 
 /// What both embedded learners do after a core step: print its warnings
-/// ([`awfqi::StepReport::warnings`]) to stderr naming the algorithm, append the target
+/// ([`awfqi::thesis::StepReport::warnings`]) to stderr naming the algorithm, append the target
 /// samples the step added to `collected` (in f64), and return the step's diagnostics
 /// (the transition weights' only when the learner weighs transitions).
 fn after_step<const D: usize, const I: usize>(
     algorithm: &str,
-    report: &awfqi::StepReport<T, I>,
+    report: &awfqi::thesis::StepReport<T, I>,
     samples: &[Record32<D>],
     collected: &mut Vec<Record<D>>,
     transition_weights: bool,
@@ -782,7 +784,7 @@ fn after_step<const D: usize, const I: usize>(
 }
 
 /// The target reward GP of an embedded step, as the result files record it.
-fn reward_gp_summary<const I: usize>(report: &awfqi::StepReport<T, I>) -> GpSummary {
+fn reward_gp_summary<const I: usize>(report: &awfqi::thesis::StepReport<T, I>) -> GpSummary {
     let hyper = &report.gp_hyperparameters;
     GpSummary {
         points: report.gp_points,

@@ -1,14 +1,14 @@
-//! `awfqi-embedded`: the thesis's AWFQI as the core runs it ([`awfqi::Awfqi`]): a target
+//! `awfqi-embedded`: the thesis's AWFQI as the core runs it ([`awfqi::thesis::Awfqi`]): a target
 //! reward GP of capacity [`GP_POINTS`] fitted on an even spread of `D₀` (the core's
-//! [`awfqi::SubsetRule::Spread`]) with the core's bounded Nelder–Mead search, weighted FQI
+//! [`awfqi::record_gp::SubsetRule::Spread`]) with the core's bounded Nelder–Mead search, weighted FQI
 //! by tile coding ([`TILINGS`](super::TILINGS) offset tilings of [`TILES`](super::TILES)
 //! tiles per axis, or the [`CELLS`](super::CELLS) × `CELLS` table) instead of Extra-Trees,
 //! transition weights on request (`--transition-weights true`), and the realistic score
 //! table of the set-up ([`EmbeddedSetup`]), on any domain ([`Plant`]) with its settings
 //! ([`EmbeddedDomain`](super::EmbeddedDomain)).
 
-use awfqi::env::GenerativeModel;
-use awfqi::{
+use awfqi::model::GenerativeModel;
+use awfqi::prelude::{
     AliasEntry, Awfqi, AwfqiBuffers, Dims, Estimator, FqiEntry, Gp, StatePlusAction, Transition,
     WeightParams,
 };
@@ -19,7 +19,7 @@ use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 
 /// The memory one run writes, on the heap and sized at run time: what a
-/// firmware holds in an [`awfqi::AwfqiStorage`].
+/// firmware holds in an [`awfqi::thesis::AwfqiStorage`].
 #[derive(Debug)]
 pub struct EmbeddedMemory<const N: usize = GP_POINTS, const D: usize = 2, const I: usize = 3> {
     gp: Box<Gp<T, N, I>>,

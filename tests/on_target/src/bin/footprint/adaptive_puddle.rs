@@ -8,7 +8,7 @@
 #![no_std]
 #![no_main]
 
-use awfqi::AdaptiveAwfqi;
+use awfqi::adaptive::AdaptiveAwfqi;
 use awfqi::env::PuddleWorld;
 use awfqi_on_target::workloads::{
     ADAPTIVE_RECOMMENDED, AdaptiveRecommended, AdaptiveRecommendedFqi, adaptive_puddle,

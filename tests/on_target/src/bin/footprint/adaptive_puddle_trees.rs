@@ -12,7 +12,7 @@
 #![no_std]
 #![no_main]
 
-use awfqi::AdaptiveAwfqi;
+use awfqi::adaptive::AdaptiveAwfqi;
 use awfqi::env::PuddleWorld;
 use awfqi_on_target::workloads::{
     ADAPTIVE_TREES, AdaptiveRun, AdaptiveTreeMemory, AdaptiveTrees, adaptive_puddle,

@@ -63,12 +63,12 @@ pub(super) fn error_and_float<T: Real>() {
         awfqi::Error::EmptyData,
         awfqi::Error::NotPositiveDefinite,
         awfqi::Error::JitterLimit {
-            needed: awfqi::error::Number(opaque(1e-6)),
-            allowed: awfqi::error::Number(opaque(1e-9)),
+            needed: awfqi::Number(opaque(1e-6)),
+            allowed: awfqi::Number(opaque(1e-9)),
         },
         awfqi::Error::IllConditioned {
-            condition: awfqi::error::Number(opaque(1e9)),
-            limit: awfqi::error::Number(opaque(8e4)),
+            condition: awfqi::Number(opaque(1e9)),
+            limit: awfqi::Number(opaque(8e4)),
         },
     ];
     let e = errors

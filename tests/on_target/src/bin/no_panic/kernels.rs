@@ -15,7 +15,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + Copy,
-    awfqi::Dims<D, I>: awfqi::StatePlusAction,
+    awfqi::record_gp::Dims<D, I>: awfqi::record_gp::StatePlusAction,
 {
     let mut config = AdaptiveConfig::<T, D, I>::recommended(
         index(6),
@@ -150,8 +150,8 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
     let Ok(grid) = CellGrid::cube(num::<T>(0.0), high, index(3)) else {
         return;
     };
-    let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 400, 6, 2>::new();
-    let built = AdaptiveAwfqi::new(config, grid, data, &means, rows, plant, &mut storage);
+    let mut storage = AdaptiveBlock::<T, D, I>::new();
+    let built = AdaptiveAwfqi::new(config, grid, data, &means, rows, plant, storage.buffers());
     if let Ok(mut kernel) = built {
         keep(kernel.plan(rng));
         keep(kernel.step(rng));
@@ -177,7 +177,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
     // The kernel with kernel-averaging Q: records for the target and source records.
     let neighbours = Neighbours::cube(index(3), num::<T>(0.0), high, Kernel::Uniform);
     if let Ok(neighbours) = neighbours {
-        let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
+        let mut storage = AdaptiveBlock::<T, D, I>::new();
         let mut knn = KnnStorage::<T, D, 24, { 24 * 4 * 3 }>::new();
         let mut buffers = storage.buffers();
         buffers.fqi = knn.storage();
@@ -195,7 +195,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
         ExtraTrees::new(index(2), index(15))
     };
     if let Ok(forests) = forests {
-        let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
+        let mut storage = AdaptiveBlock::<T, D, I>::new();
         let mut trees = TreeStorage::<T, D, 24, { 2 * 4 * 15 }>::new();
         let mut buffers = storage.buffers();
         buffers.fqi = trees.storage();
@@ -209,7 +209,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
     let sweep = ModelSweep::<T, D>::cube(num(0.0), high, index(3))
         .map(|s| s.with_rewards(RewardModel::Pooled));
     if let Ok(sweep) = sweep {
-        let mut storage = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 0, 6, 2>::new();
+        let mut storage = AdaptiveBlock::<T, D, I>::new();
         let mut block = SweepStorage::<T, D, { 64 * 4 }, 64>::new();
         let mut buffers = storage.buffers();
         buffers.fqi = block.storage();
@@ -220,7 +220,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
             keep(kernel.q().greedy_action([num(0.5); D]));
         }
     }
-    let mut heap = AdaptiveStorage::<T, D, I, 8, 12, 12, 20, 400, 6, 2>::default();
+    let mut heap = AdaptiveBlock::<T, D, I>::new();
     let buffers: AdaptiveBuffers<'_, T, D, I, 8> = heap.buffers();
     keep(buffers.samples.len());
 }
@@ -240,7 +240,7 @@ pub(super) fn kernel<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
-    awfqi::Dims<D, I>: awfqi::StatePlusAction,
+    awfqi::record_gp::Dims<D, I>: awfqi::record_gp::StatePlusAction,
 {
     // Settings that scale themselves.
     if let Ok(scales) = SourceScales::measure(&[&records[..5], &records[5..]]) {
@@ -339,4 +339,43 @@ pub(super) fn kernel<T, G, const D: usize, const I: usize>(
     let mut heap = AwfqiStorage::<T, D, I, 8, 8, 12, 200, 400>::default();
     let buffers: AwfqiBuffers<'_, T, D, I, 8> = heap.buffers();
     keep(buffers.samples.len());
+}
+
+/// The adaptive kernel's buffers at this image's sizes, for any scalar and dimension: an
+/// 8-point GP, 12 target and 12 source records, 20 candidate slots, 400 table entries, 6
+/// path states, 2 beliefs.
+struct AdaptiveBlock<T, const D: usize, const I: usize> {
+    gp: Gp<T, 8, I>,
+    samples: [Transition<[T; D], T>; 12],
+    weights: [T; 12],
+    candidates: [awfqi::adaptive::candidates::Candidate<T>; 20],
+    fqi: [FqiEntry<T>; 400],
+    path: [[T; D]; 6],
+    beliefs: [awfqi::adaptive::plausibility::SourceBelief<T>; 2],
+}
+
+impl<T: Real, const D: usize, const I: usize> AdaptiveBlock<T, D, I> {
+    fn new() -> Self {
+        Self {
+            gp: Gp::zeroed(),
+            samples: [Transition::EMPTY; 12],
+            weights: [T::ZERO; 12],
+            candidates: [awfqi::adaptive::candidates::Candidate::EMPTY; 20],
+            fqi: [FqiEntry::EMPTY; 400],
+            path: [[T::ZERO; D]; 6],
+            beliefs: [awfqi::adaptive::plausibility::SourceBelief::EMPTY; 2],
+        }
+    }
+
+    fn buffers(&mut self) -> AdaptiveBuffers<'_, T, D, I, 8> {
+        AdaptiveBuffers {
+            gp: &mut self.gp,
+            samples: &mut self.samples,
+            weights: &mut self.weights,
+            candidates: &mut self.candidates,
+            fqi: awfqi::fqi::QStorage::from(&mut self.fqi[..]),
+            path: &mut self.path,
+            beliefs: &mut self.beliefs,
+        }
+    }
 }

@@ -15,28 +15,21 @@ use core::hint::black_box as opaque;
 use awfqi::adaptive;
 use awfqi::alias::AliasTable;
 use awfqi::env::{
-    Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, FiniteMdp, GridWorld, InflowProfile,
-    Puddle, PuddleWorld,
+    Acrobot, AcrobotTask, Dam, Dynamics, EpisodeRecord, GridWorld, InflowProfile, Puddle,
+    PuddleWorld,
 };
-use awfqi::identify::query_score::{mutual_information_score, uniform_score, variance_score};
 use awfqi::identify::{
     Belief, Criterion, MiConfig, RewardEntropy, Scoring, StateAction, belief_weighted_policy,
     belief_weighted_q, compute_score, draw_pair, draw_pairs, log_likelihood, run_queries,
 };
+use awfqi::identify::{mutual_information_score, uniform_score, variance_score};
+use awfqi::model::FiniteMdp;
 use awfqi::planning::{
     StoppingRule, backup, evaluate_policy, greedy_action, greedy_policy, q_from_values,
     value_iteration,
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
-use awfqi::record_gp::{
-    batch_transform, fit_gp, fit_gp_on, input, map_posteriors, predict_posteriors,
-};
-use awfqi::score::{GpSourceModel, PointGrid};
-use awfqi::weights::{
-    Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
-    effective_sample_size, ideal_weight, predictive_stds,
-};
-use awfqi::{
+use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, Approximator,
     Awfqi, AwfqiBuffers, AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol,
     ExtraTrees, FqiConfig, FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi,
@@ -46,6 +39,14 @@ use awfqi::{
     SourceModel, SourceScales, SubsetRule, SweepEntry, SweepFqi, SweepNode, SweepStorage,
     TabularFqi, TileFqi, Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull,
     evaluate, evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+};
+use awfqi::record_gp::{
+    batch_transform, fit_gp, fit_gp_on, input, map_posteriors, predict_posteriors,
+};
+use awfqi::score::{GpSourceModel, PointGrid};
+use awfqi::weights::{
+    Estimator, NoiseSubtraction, Posterior, StdTransform, WeightParams, WeightSummary,
+    effective_sample_size, ideal_weight, predictive_stds,
 };
 use cortex_m_rt::entry;
 use rand_chacha::ChaCha8Rng;

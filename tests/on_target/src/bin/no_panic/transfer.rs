@@ -164,7 +164,7 @@ pub(super) fn transfer_path<T, G, const D: usize, const I: usize>(
 ) where
     T: Real,
     G: GenerativeModel<T, State = [T; D]> + SourceModel<T, D> + Copy,
-    awfqi::Dims<D, I>: awfqi::StatePlusAction,
+    awfqi::record_gp::Dims<D, I>: awfqi::record_gp::StatePlusAction,
 {
     let actions = plant.num_actions();
     let mode = [

@@ -9,9 +9,9 @@
 
 mod common;
 
-use awfqi::Real;
 use awfqi::alias::{AliasEntry, AliasTable};
 use awfqi::env::{Dynamics, PuddleWorld};
+use awfqi::float::Real;
 use awfqi::gp::{HyperparameterBounds, SearchOptions, WhenFull};
 use awfqi::identify::{Belief, Criterion as Score, compute_score};
 use awfqi::score::{GpSourceModel, ScoreTable, Scores};

@@ -62,15 +62,99 @@
 //! **Errors part-way.** A step validates its capacity before drawing. If the target model,
 //! the GP or the weights fail later, the records already queried stay in `D₀` and the
 //! Q-function keeps its previous fit; the step counter does not advance.
+//!
+//! **Example**: the thesis's AWFQI on the crate docs' heater: the builder performs its whole set-up
+//! once (source reward GPs → stored posteriors → score table over your candidate pairs →
+//! sampler → source data → FQI table).
+//!
+//! ```rust
+//! use awfqi::prelude::{
+//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior,
+//!     RowSet, Scores, SourceMeans, SourceModel, Transition,
+//! };
+//! use rand_chacha::ChaCha8Rng;
+//! use rand_core::{Rng, SeedableRng};
+//! # #[derive(Clone, Copy)]
+//! # struct Heater {
+//! #     gain: f32,
+//! # }
+//! # impl SourceModel<f32, 1> for Heater {
+//! #     fn predict(&self, [s]: [f32; 1], action: usize) -> awfqi::Result<SourceMeans<f32, 1>> {
+//! #         if !(0.0..=1.0).contains(&s) || action > 1 {
+//! #             return Err(awfqi::Error::OutOfRange { parameter: "state" });
+//! #         }
+//! #         let next = s + self.gain * action as f32 - 0.1 * s;
+//! #         Ok(SourceMeans { reward: -(s - 0.5).abs(), next_state: [next.clamp(0.0, 1.0)] })
+//! #     }
+//! # }
+//! # impl GenerativeModel<f32> for Heater {
+//! #     type State = [f32; 1];
+//! #     fn num_actions(&self) -> usize {
+//! #         2
+//! #     }
+//! #     fn query<R: Rng + ?Sized>(
+//! #         &self,
+//! #         state: [f32; 1],
+//! #         action: usize,
+//! #         rng: &mut R,
+//! #     ) -> awfqi::Result<Transition<[f32; 1], f32>> {
+//! #         let mean = self.predict(state, action)?;
+//! #         let noise = (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 0.02;
+//! #         let next_state = [(mean.next_state[0] + noise).clamp(0.0, 1.0)];
+//! #         Ok(Transition { state, action, reward: mean.reward, next_state, absorbing: false })
+//! #     }
+//! # }
+//!
+//! # fn main() -> awfqi::Result<()> {
+//! let mut rng = ChaCha8Rng::seed_from_u64(7);
+//! let sources = [Heater { gain: 0.15 }, Heater { gain: 0.3 }];
+//! let mut data = [[Transition::EMPTY; 20]; 2];
+//! for (heater, records) in sources.iter().zip(&mut data) {
+//!     for (i, r) in records.iter_mut().enumerate() {
+//!         *r = heater.query([i as f32 / 19.0], i % 2, &mut rng)?;
+//!     }
+//! }
+//! let records: [&[Transition<[f32; 1], f32>]; 2] = [&data[0], &data[1]];
+//!
+//! // All the memory the loop writes: a 16-point GP over (s, a), 2 steps × 10 queries,
+//! // 40 source records, 42 candidate rows, 10 cells × 2 actions (`static` in `.bss` on a
+//! // device). Set-up memory: the fitted source posteriors and the score values.
+//! let mut storage = AwfqiStorage::<f32, 1, 2, 16, 20, 40, 42, 20>::new();
+//! let mut posteriors = [Posterior::default(); 40];
+//! let mut scores = [Scores::ZERO; 42];
+//!
+//! // The thesis's settings (Puddle World's scales; for a plant of your own derive them from
+//! // the logs: `AwfqiConfig::scaled`, docs/embedding.md), 10 queries per step.
+//! let mut config = AwfqiConfig::thesis(10);
+//! config.gp_training.search.restarts = 1;
+//! let candidates = RowSet::grid(PointGrid::spanning([0.0], [1.0], 0.05)?, 2)?;
+//! let mut kernel = Awfqi::builder(config.validate()?, CellGrid::cube(0.0, 1.0, 10)?, &records, candidates)
+//!     .fit_posteriors(&mut posteriors) // one reward GP per source, fitted here
+//!     .scores_from(&sources, &mut scores)? // oracle scores from the sources' means
+//!     .build(Heater { gain: 0.2 }, &mut storage, &mut rng)?;
+//! for _ in 0..2 {
+//!     let report = kernel.step(&mut rng)?; // 10 queries, target GP, weights, weighted FQI
+//!     assert!(report.wr_eff > 0.0);
+//! }
+//! // The greedy policy heats when cold and not when hot.
+//! assert_eq!(kernel.q().greedy_action([0.2])?, 1);
+//! assert_eq!(kernel.q().greedy_action([0.9])?, 0);
+//! # Ok(())
+//! # }
+//! ```
+//!
 
-pub mod builder;
-pub mod report;
-pub mod scaled;
+pub(crate) mod builder;
+mod report;
+mod scaled;
 pub(crate) mod transfer;
 
 pub use builder::{AwfqiBuffers, AwfqiBuilder, AwfqiStorage};
 pub use report::{COLLAPSED_SHARE, DISCARDED_SHARE, StepReport, Warning, Warnings, Weights};
-pub use scaled::SourceScales;
+pub use scaled::{
+    NOISE_MULTIPLIER, SCALED_ESTIMATOR, SCALED_EVALUATIONS_PER_PARAMETER, SCALED_RESTARTS,
+    SourceScales,
+};
 
 use crate::error::{Error, Result};
 use crate::float::Real;
@@ -91,6 +175,7 @@ use transfer::{ReplanGp, SourceValues, Transfer};
 /// [`ValidAwfqiConfig`], which is what the builder takes).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct AwfqiConfig<T, const I: usize> {
     /// Queries per step, `n = H·B` (§12: 500 for B = 10, 50 for B = 1).
     pub budget: usize,
@@ -129,7 +214,7 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
     /// step's queries, while an even spread keeps them all represented.
     ///
     /// ```
-    /// use awfqi::{AwfqiConfig, EmptyCells, Estimator, NoiseSubtraction, ScoreColumn, SubsetRule};
+    /// use awfqi::prelude::{AwfqiConfig, EmptyCells, Estimator, NoiseSubtraction, ScoreColumn, SubsetRule};
     /// let c = AwfqiConfig::<f64, 3>::thesis(50);
     /// assert_eq!(c.budget, 50);
     /// assert_eq!(c.weights.estimator(), Estimator::Mean);

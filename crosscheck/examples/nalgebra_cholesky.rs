@@ -68,7 +68,7 @@ fn main() {
     // against the core under its default policy.
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/gp_hard_cases.json"
+        "/../tests/data/gp_hard_cases.json"
     ))
     .unwrap();
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -609,7 +609,10 @@ struct ExactSummary {
 }
 
 fn exact_cases() -> Vec<serde_json::Value> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gp_hard_cases.json");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/gp_hard_cases.json"
+    );
     let text = std::fs::read_to_string(path).expect("tests/data/gp_hard_cases.json");
     let doc: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
     doc["cases"].as_array().expect("cases").clone()

@@ -290,13 +290,13 @@ impl<T: Real, const D: usize> SourceScales<T, D> {
 }
 
 impl<T: Real, const I: usize> AwfqiConfig<T, I> {
-    /// Settings derived from the source data (the [rules](crate::awfqi::scaled)): the
+    /// Settings derived from the source data (the [rules](crate::thesis::scaled)): the
     /// scaled GP training and reward weights, and otherwise [`AwfqiConfig::thesis`]'s
     /// values for `budget` queries per step. The start for a plant of your own; set `fqi`
     /// to its discount.
     ///
     /// ```
-    /// use awfqi::{AwfqiConfig, SourceScales, Transition};
+    /// use awfqi::prelude::{AwfqiConfig, SourceScales, Transition};
     /// # fn main() -> awfqi::Result<()> {
     /// // Two logs of a plant whose state spans [0, 500] and whose rewards are near −300.
     /// let log = |shift: f32| -> [Transition<[f32; 1], f32>; 40] {

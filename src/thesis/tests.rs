@@ -342,6 +342,43 @@ fn the_builder_fits_each_source_gp_once_for_posteriors_and_realistic_scores() {
 }
 
 #[test]
+fn a_target_buffer_one_sample_short_of_the_run_is_refused_before_the_first_step() {
+    let fx = Fixture::new();
+    let slices = fx.slices();
+    let worlds = PuddleWorld::sources(Dynamics::Shared);
+    let rows = RowSet::grid(PuddleWorld::score_grid(5.0).unwrap(), 4).unwrap();
+    let mut scores = vec![Scores::default(); rows.len()];
+    ScoreTable::compute(rows, &worlds, &mut scores).unwrap();
+    let grid = CellGrid::cube(0.0, 10.0, 3).unwrap();
+    let config = small_config(10).validate().unwrap();
+    let n_source = fx.source_records();
+    // Ten steps of 10 queries need 100 target samples.
+    let build = |samples: usize| {
+        let mut heap = Heap::<8>::new(samples, n_source, rows.len(), 36);
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        Awfqi::builder(config, grid, &slices, rows)
+            .stored_posteriors(&fx.posteriors)
+            .stored_scores(&scores)
+            .steps(10)
+            .build(
+                PuddleWorld::target(Dynamics::Shared),
+                heap.buffers(),
+                &mut rng,
+            )
+            .map(|kernel| kernel.steps())
+    };
+    assert_eq!(
+        build(99),
+        Err(Error::BufferTooSmall {
+            buffer: "samples (`Q`: steps × budget target records)",
+            capacity: 99,
+            needed: 100,
+        })
+    );
+    assert_eq!(build(100), Ok(0));
+}
+
+#[test]
 fn the_builder_checks_sizes_and_stages_before_fitting() {
     let fx = Fixture::new();
     let slices = fx.slices();

@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use awfqi::env::{DAM_ACTIONS, DAM_DAYS, DAM_MAX_STORAGE, DAM_MIN_STORAGE, Dam};
-use awfqi::{
+use awfqi::prelude::{
     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior, RowSet,
     Scores, SourceMeans, SourceModel, Transition,
 };
@@ -45,7 +45,7 @@ const SCORE_ROWS: usize = 11 * 6 * DAM_ACTIONS;
 /// Seed of the generation.
 const SEED: u64 = 2018;
 /// Where the tables live.
-const TABLES: &str = "examples/firmware/src/tables.rs";
+const TABLES: &str = "../examples/firmware/src/tables.rs";
 
 /// The Dam's noise-free means, for the oracle score table (the core's Dam has them as
 /// methods; `SourceModel` is how the score table asks for them).
@@ -264,7 +264,7 @@ fn committed_firmware_tables_are_what_the_generator_makes() {
 /// The 32 KiB configuration's GP capacity and score-grid spacing (324 rows).
 const PUDDLE_GP_POINTS: usize = 24;
 const PUDDLE_SPACING: f32 = 1.25;
-const PUDDLE_TABLES: &str = "tests/on_target/src/puddle_tables.rs";
+const PUDDLE_TABLES: &str = "../tests/on_target/src/puddle_tables.rs";
 
 #[test]
 fn committed_puddle_32k_tables_are_what_the_generator_makes() {
@@ -369,10 +369,10 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     );
 }
 
-#[path = "../examples/firmware/src/reservoir.rs"]
+#[path = "../../examples/firmware/src/reservoir.rs"]
 #[allow(dead_code)]
 mod reservoir;
-#[path = "../examples/firmware/src/tables.rs"]
+#[path = "../../examples/firmware/src/tables.rs"]
 #[rustfmt::skip]
 mod tables;
 
@@ -387,7 +387,7 @@ fn firmware_example_beats_its_baseline_on_its_seed() {
     let mut storage = Box::new(reservoir::Storage::new());
     for thesis in [false, true] {
         let mut steps = 0;
-        let check = |report: &awfqi::StepReport<f32, 3>| {
+        let check = |report: &awfqi::thesis::StepReport<f32, 3>| {
             steps += 1;
             assert_eq!(report.n_target_samples, steps * reservoir::BUDGET);
             assert_eq!(report.n_source_samples, SOURCES * RECORDS_PER_SOURCE);

@@ -198,7 +198,7 @@ impl<T: Real, const I: usize> StepReport<T, I> {
     /// GP, verified plan), without allocating.
     ///
     /// ```
-    /// # use awfqi::{StepReport, awfqi::Warning};
+    /// # use awfqi::thesis::{StepReport, Warning};
     /// # fn log(report: &StepReport<f32, 3>) {
     /// for warning in report.warnings() {
     ///     // e.g. "reward weights collapsed: the 700 source records are worth 15 …"
@@ -357,7 +357,7 @@ mod tests {
         );
         let text = w[0].to_string();
         assert!(text.starts_with("reward weights collapsed"), "{text}");
-        assert!(text.contains("700") && text.contains("1.5e1") && text.contains("4 at the cap"));
+        assert!(text.contains("700") && text.contains(" 15 ") && text.contains("4 at the cap"));
         r.wr_source_eff = 35.0;
         assert_eq!(r.warnings().count(), 0);
         // 71 of 700 discarded (10.1 %) is more than 10 %; 70 is not.

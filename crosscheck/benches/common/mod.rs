@@ -11,9 +11,12 @@ use awfqi::identify::MiConfig;
 use awfqi::record_gp::{Output, fit_gp, predict_posteriors};
 use awfqi::rng::uniform_f64;
 use awfqi::{
-    Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiConfig, FqiEntry, GenerativeModel, Gp,
-    GpTraining, Hyperparameters, Real, Result, RowSet, SampleSet, Scores, SubsetRule, TabularFqi,
-    Transition,
+    Result,
+    prelude::{
+        Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, FqiConfig, FqiEntry, GenerativeModel, Gp,
+        GpTraining, Hyperparameters, Real, RowSet, SampleSet, Scores, SubsetRule, TabularFqi,
+        Transition,
+    },
 };
 use awfqi_harness::forest_fqi;
 use awfqi_harness::gp_large::{FitOptions, GpHyperparameters, LargeGp, Parallelism};

@@ -16,9 +16,10 @@ use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::fqi::{Approximator, FqiEntry};
 use crate::gp::Gp;
+use crate::model::SourceModel;
 use crate::model::{GenerativeModel, Transition};
 use crate::record_gp::{Dims, InputDim, Output, StatePlusAction, fit_gp, predict_posteriors};
-use crate::score::{RowSet, ScoreTable, Scores, SourceModel};
+use crate::score::{RowSet, ScoreTable, Scores};
 use crate::weights::{Posterior, WeightParams};
 use rand_core::Rng;
 
@@ -29,7 +30,7 @@ use rand_core::Rng;
 ///
 /// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
 /// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
-/// (39 096 bytes on a Cortex-M4F, see [`crate::awfqi`]). The builder hands out its parts as
+/// (39 096 bytes on a Cortex-M4F, see [`crate::thesis`]). The builder hands out its parts as
 /// slices, so the learner's code does not depend on the capacities.
 #[derive(Debug, Clone)]
 pub struct AwfqiStorage<
@@ -184,6 +185,7 @@ pub struct AwfqiBuilder<'a, T, const D: usize, const I: usize> {
     posteriors: Posteriors<'a, T>,
     scores: ScoreValues<'a, T, D>,
     transitions: Option<TransitionWeighting<'a, T>>,
+    steps: usize,
 }
 
 impl<'a, T: Real, const D: usize, const I: usize> AwfqiBuilder<'a, T, D, I>
@@ -211,7 +213,16 @@ where
             posteriors: Posteriors::Missing,
             scores: ScoreValues::Missing,
             transitions: None,
+            steps: 1,
         }
+    }
+
+    /// The steps the run must hold (default 1): [`build`](Self::build) refuses a
+    /// target-sample buffer with less room than `steps × budget` records, so a run too long
+    /// for its buffer fails before its first step, not at the step that overflows it.
+    pub fn steps(mut self, steps: usize) -> Self {
+        self.steps = steps;
+        self
     }
 
     /// Turns transition weights on (§7.2 step 4 with every next-state dimension on; off
@@ -359,7 +370,14 @@ where
                 })
             }
         };
-        short(samples.len(), config.budget, buffer::SAMPLES)?;
+        let room = self
+            .steps
+            .max(1)
+            .checked_mul(config.budget)
+            .ok_or(Error::CapacityExceeded {
+                capacity: samples.len(),
+            })?;
+        short(samples.len(), room, buffer::SAMPLES)?;
         short(weights.len(), source_records, buffer::WEIGHTS)?;
         short(alias.len(), rows, buffer::ALIAS)?;
         match &self.posteriors {
@@ -505,6 +523,7 @@ pub(crate) mod buffer {
     pub(crate) const ALIAS: &str = "alias (`R`: one entry per candidate row)";
     pub(crate) const FQI: &str = "fqi (`E`: the approximator's entries, cells × actions)";
     pub(crate) const POSTERIORS: &str = "posteriors (one per source record)";
+    pub(crate) const MEANS: &str = "means (one mean function per source)";
     pub(crate) const SCORES: &str = "scores (one per candidate row)";
     pub(crate) const TRANSITION_WEIGHTS: &str = "transition weights (one per source record)";
     pub(crate) const CANDIDATES: &str = "candidates (`C`: min(candidates, rows))";

@@ -13,10 +13,11 @@
 //! | V^π | f64 | 1e-8 abs | iterative (core) vs direct solve (reference) |
 //! | greedy / belief-weighted policies | — | equal | random values have no near-ties |
 
-use awfqi::env::{FiniteMdp, GenerativeModel, GridWorld, Transition};
+use awfqi::env::GridWorld;
 use awfqi::identify::{Belief, Criterion, MiConfig, belief_weighted_policy, compute_score};
+use awfqi::model::{FiniteMdp, GenerativeModel, Transition};
 use awfqi::planning::{StoppingRule, evaluate_policy, greedy_policy, value_iteration};
-use awfqi::{Error, Real, Result};
+use awfqi::{Error, Result, prelude::Real};
 use awfqi_reference::identify as reference;
 use awfqi_reference::identify::{Observation, TabularMdp};
 use rand_chacha::ChaCha8Rng;

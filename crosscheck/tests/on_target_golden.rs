@@ -6,7 +6,7 @@
 //! and the message prints the recomputed table.
 
 #[allow(dead_code)]
-#[path = "on_target/src/golden.rs"]
+#[path = "../../tests/on_target/src/golden.rs"]
 mod golden;
 
 use awfqi_reference::gp::{Hyperparameters, ReferenceGp};
@@ -128,7 +128,7 @@ fn puddle_step_golden_values_follow_spec_2_3() {
 #[allow(dead_code, clippy::type_complexity, clippy::approx_constant)]
 #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
 mod iwfqi_golden {
-    include!("data/iwfqi_domains_golden.rs");
+    include!("../../tests/data/iwfqi_domains_golden.rs");
 }
 
 /// The on-target Dam and Acrobot cases are rows of the table the published definitions

@@ -1,0 +1,1 @@
+//! Cross-checks of the awfqi core: see the tests, examples and benchmarks of this crate.
