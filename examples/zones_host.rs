@@ -24,8 +24,8 @@ fn main() -> awfqi::Result<()> {
         .position(|a| a == "--out")
         .and_then(|i| args.get(i + 1));
     // Host-only variations (ablations and budget schedules): `--schedule STEPSxBUDGET`,
-    // `--first-start` (verify from the first start state alone), `--sub-batches S` and
-    // `--verify V` (instead of the schedule rule's).
+    // `--all-starts` (verify from every start state), `--sub-batches S` and `--verify V`
+    // (instead of the schedule rule's), `--safeguard`.
     let flag = |name: &str| {
         args.iter()
             .position(|a| a == name)
@@ -36,7 +36,7 @@ fn main() -> awfqi::Result<()> {
         variant.steps = steps.parse().unwrap_or(variant.steps);
         variant.budget = budget.parse().unwrap_or(variant.budget);
     }
-    variant.all_starts = !args.iter().any(|a| a == "--first-start");
+    variant.all_starts = args.iter().any(|a| a == "--all-starts");
     let sub_batches: Option<usize> = flag("--sub-batches").and_then(|s| s.parse().ok());
     let verify: Option<f32> = flag("--verify").and_then(|s| s.parse().ok());
     // `--k K`: the reward weights' noise variance K·ν_r instead of the scaled rule's.
@@ -68,8 +68,7 @@ fn main() -> awfqi::Result<()> {
             }
             if let Some(k) = k {
                 let w = c.awfqi.weights;
-                // The scaled rule's multiplier is 4 (`SourceScales::reward_weights`).
-                let v = w.noise_variance() * k / 4.0;
+                let v = w.noise_variance() * k / awfqi::thesis::NOISE_MULTIPLIER as f32;
                 if let Ok(p) = awfqi::prelude::WeightParams::new(w.estimator(), v, w.max_weight()) {
                     c.awfqi.weights = p;
                 }

@@ -164,7 +164,7 @@ pub struct AdaptiveArgs {
     /// Where the verification rollouts start: `all` the domain's distinct evaluation start
     /// states (each for an equal share of a step's verification), `middle` the middle one
     /// alone.
-    #[arg(long, value_enum, default_value_t = AdaptiveStartsArg::All)]
+    #[arg(long, value_enum, default_value_t = AdaptiveStartsArg::Middle)]
     pub adaptive_starts: AdaptiveStartsArg,
     /// Spend a sub-batch's drawn queries on more verification when its plan verified short
     /// of its promise (`AdaptiveConfig::safeguard`).

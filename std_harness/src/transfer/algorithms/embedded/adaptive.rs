@@ -76,7 +76,7 @@ impl Default for AdaptiveOptions {
         Self {
             sub_batches: None,
             verify: None,
-            all_starts: true,
+            all_starts: false,
             safeguard: c.safeguard,
             fading: None,
             surprise: c.surprise,
