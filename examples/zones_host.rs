@@ -123,7 +123,8 @@ fn main() -> awfqi::Result<()> {
             };
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
             let mut policy = awfqi::prelude::UniformPolicy::new(zones::ACTIONS)?;
-            awfqi::prelude::evaluate_multi_start(&plant, &mut policy, &protocol, &mut rng)?.mean_return
+            awfqi::prelude::evaluate_multi_start(&plant, &mut policy, &protocol, &mut rng)?
+                .mean_return
         };
         println!("seed {seed}: random {random:.2}");
         let r = [

@@ -158,7 +158,12 @@ mod tests {
     fn where_the_target_has_records_the_sources_weigh_at_most_kappa() {
         // Two cells on [0, 1]: [0, 0.5) and [0.5, 1]. Source records: four in cell 0
         // (action 0), two in cell 1 (action 0), one in cell 0 with action 1.
-        let a = [record(0.1, 0), record(0.2, 0), record(0.3, 0), record(0.6, 0)];
+        let a = [
+            record(0.1, 0),
+            record(0.2, 0),
+            record(0.3, 0),
+            record(0.6, 0),
+        ];
         let b = [record(0.4, 0), record(0.9, 0), record(0.2, 1)];
         let mut w = [1.0, 0.5, 1.0, 2.0, 0.5, 2.0, 3.0];
         // The target answered in cell 0 with action 0, and with action 1 (weight 3 ≤ κ there).
@@ -199,10 +204,25 @@ mod tests {
         };
         let mut table = [FadeCell::EMPTY; 1];
         let sources = [&a[..]];
-        fade(&fading, &mut w, sources.iter().copied(), &[], &[(0.0, 1.0)], &mut table).unwrap();
+        fade(
+            &fading,
+            &mut w,
+            sources.iter().copied(),
+            &[],
+            &[(0.0, 1.0)],
+            &mut table,
+        )
+        .unwrap();
         assert_eq!(w, [1.0, 1.0]);
         assert_eq!(
-            fade(&fading, &mut w, sources.iter().copied(), &[], &[(0.0, 1.0)], &mut []),
+            fade(
+                &fading,
+                &mut w,
+                sources.iter().copied(),
+                &[],
+                &[(0.0, 1.0)],
+                &mut []
+            ),
             Err(Error::CapacityExceeded { capacity: 0 })
         );
         assert_eq!(

@@ -58,10 +58,10 @@ mod verify;
 
 pub use builder::{AdaptiveBuilder, ROWS_PER_AXIS, ROWS_PER_CELL};
 pub use fading::{FadeCell, Fading};
-pub use safeguard::PlanCheck;
-pub use schedule::Schedule;
 pub use mean_function::MeanFunction;
 pub use replan::relabelled_reward;
+pub use safeguard::PlanCheck;
+pub use schedule::Schedule;
 pub use storage::{AdaptiveBuffers, AdaptiveCapacities, AdaptiveParts, AdaptiveStorage};
 
 use draw::Draw;
@@ -614,7 +614,13 @@ where
 }
 
 /// The standard deviation of the target's rewards in `run`'s `D₀`.
-fn reward_std<T: Real, G: GenerativeModel<T, State = [T; D]>, const D: usize, const I: usize, const N: usize>(
+fn reward_std<
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]>,
+    const D: usize,
+    const I: usize,
+    const N: usize,
+>(
     run: &Transfer<'_, T, G, D, I, N>,
 ) -> T {
     safeguard::reward_std(run.target_samples().iter().map(|r| r.reward))

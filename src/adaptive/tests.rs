@@ -924,7 +924,10 @@ fn fading_bounds_the_sources_weight_where_the_target_answered() {
             None => kernel,
         };
         kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
-        (kernel.target_samples().to_vec(), kernel.reward_weights().to_vec())
+        (
+            kernel.target_samples().to_vec(),
+            kernel.reward_weights().to_vec(),
+        )
     };
     let (_, plain) = run(None);
     let (d0, faded) = run(Some(0.5));

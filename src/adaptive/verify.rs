@@ -115,7 +115,8 @@ impl<'a, T: Real, const D: usize> Verification<'a, T, D> {
     {
         let actions = run.target.num_actions();
         let m = self.starts(&config.start).len().max(1);
-        let length = schedule::rollout_length(config.awfqi.budget, config.verify, config.horizon, m);
+        let length =
+            schedule::rollout_length(config.awfqi.budget, config.verify, config.horizon, m);
         let gamma = config.awfqi.fqi.discount();
         let mut left = n;
         let mut rollouts = 0usize;

@@ -325,7 +325,10 @@ mod tests {
                 reward_std: 1.0
             }]
         );
-        assert!(w[0].to_string().starts_with("the greedy policy verified short"));
+        assert!(
+            w[0].to_string()
+                .starts_with("the greedy policy verified short")
+        );
         r.plan_shortfall = 0.5;
         assert_eq!(r.warnings().count(), 0);
         // Learners that do not verify report a zero std: never a warning.

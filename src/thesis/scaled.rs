@@ -514,7 +514,11 @@ fn local_residual<T: Real, const D: usize>(
     }
     // A ridge of 10⁻⁶ of the mean diagonal keeps a flat neighbourhood solvable.
     let trace = (0..D).fold(T::ZERO, |t, a| {
-        t + gram.get(a).and_then(|row| row.get(a)).copied().unwrap_or(T::ZERO)
+        t + gram
+            .get(a)
+            .and_then(|row| row.get(a))
+            .copied()
+            .unwrap_or(T::ZERO)
     });
     let ridge = (trace / T::from_usize(D.max(1))) * T::from_f64(1e-6) + T::MIN_POSITIVE;
     for (a, row) in gram.iter_mut().enumerate() {
@@ -851,7 +855,8 @@ mod tests {
                         for (n, d) in next.iter_mut().zip(drift) {
                             *n += d + 0.05 * crate::rng::standard_normal::<f64, _>(&mut rng);
                         }
-                        let cost = 0.5 * (s[0] - 0.6).powi(2) + 0.3 * (s[1] - 0.4).powi(2)
+                        let cost = 0.5 * (s[0] - 0.6).powi(2)
+                            + 0.3 * (s[1] - 0.4).powi(2)
                             + 0.1 * pump.abs()
                             + 0.05 * k as f64 * s[2];
                         Transition {

@@ -6,12 +6,13 @@
 //! engineer would start a plant of their own: implement `GenerativeModel`, measure the
 //! sources' scales, take the recommended adaptive kernel on the scaled settings.
 
-use awfqi::prelude::{
-    AdaptiveAwfqi, AdaptiveConfig, Approximator, EmptyCells, Evaluation, FqiConfig, GenerativeModel, ModelSweep,
-    MultiStartProtocol, PointGrid, Real, RewardModel, RowSet, SampleSet, SourceScales, StepReport,
-    SweepStorage, Transition, evaluate_greedy_multi_start, evaluate_multi_start,
-};
 use awfqi::adaptive::{FadeCell, Fading};
+use awfqi::prelude::{
+    AdaptiveAwfqi, AdaptiveConfig, Approximator, EmptyCells, Evaluation, FqiConfig,
+    GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, Real, RewardModel, RowSet,
+    SampleSet, SourceScales, StepReport, SweepStorage, Transition, evaluate_greedy_multi_start,
+    evaluate_multi_start,
+};
 use awfqi::rand_core::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

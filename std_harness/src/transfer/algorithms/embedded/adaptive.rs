@@ -362,7 +362,10 @@ where
             pseudo_records: kappa as T,
             cells,
         };
-        let len = cells.saturating_pow(D as u32).saturating_mul(actions).min(1 << 20);
+        let len = cells
+            .saturating_pow(D as u32)
+            .saturating_mul(actions)
+            .min(1 << 20);
         (f, vec![awfqi::adaptive::FadeCell::EMPTY; len.max(1)])
     });
     let mut fade_table = fading.as_ref().map(|(_, t)| t.clone()).unwrap_or_default();
