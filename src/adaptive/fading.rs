@@ -94,17 +94,14 @@ fn slot<T: Real, const D: usize>(
 ///
 /// Errors: `table` empty ([`Error::CapacityExceeded`] 0);
 /// `weights` shorter than the source records ([`Error::CapacityExceeded`]).
-pub fn fade<'s, T: Real, const D: usize>(
+pub fn fade<'s, T: Real + 's, const D: usize>(
     fading: &Fading<T>,
     weights: &mut [T],
     sources: impl Iterator<Item = &'s [Transition<[T; D], T>]> + Clone,
     target: &[Transition<[T; D], T>],
     bounds: &[(T, T); D],
     table: &mut [FadeCell<T>],
-) -> Result<()>
-where
-    T: 's,
-{
+) -> Result<()> {
     let len = table.len();
     if len == 0 {
         return Err(Error::CapacityExceeded { capacity: 0 });
