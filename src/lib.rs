@@ -35,9 +35,10 @@
 //! them, the block's `new()` is `const` and all-zero, so a `static` of it lands in `.bss`.
 //! A capacity of 0 does not compile; a block too small for the run (steps × budget target
 //! records, one weight per source record, …) is refused by the builder with
-//! [`Error::BufferTooSmall`] before the first GP fit. The thesis's learner takes an
-//! [`AwfqiStorage`](thesis::AwfqiStorage) (const generics) or any
-//! [`AwfqiBuffers`](thesis::AwfqiBuffers). Measured footprints (flash, RAM, stack per
+//! [`Error::BufferTooSmall`] before the first GP fit. [`awfqi_storage!`] declares the
+//! thesis's learner's block the same way (its builder's `steps` refuses a target buffer too
+//! short for the run); code generic over the scalar uses
+//! [`AwfqiStorage`](thesis::AwfqiStorage) or any [`AwfqiBuffers`](thesis::AwfqiBuffers). Measured footprints (flash, RAM, stack per
 //! configuration on a Cortex-M4F) are in the repository's `docs/footprint.md`, written by
 //! `scripts/footprint`.
 //!
@@ -217,6 +218,7 @@ pub mod prelude {
     };
     pub use crate::adaptive_storage;
     pub use crate::alias::AliasEntry;
+    pub use crate::awfqi_storage;
     pub use crate::error::{Error, Result};
     pub use crate::evaluation::{
         Evaluation, EvaluationProtocol, MultiStartProtocol, Rollout, evaluate, evaluate_greedy,

@@ -69,7 +69,7 @@
 //!
 //! ```rust
 //! use awfqi::prelude::{
-//!     Awfqi, AwfqiConfig, AwfqiStorage, CellGrid, GenerativeModel, PointGrid, Posterior,
+//!     Awfqi, AwfqiConfig, CellGrid, GenerativeModel, PointGrid, Posterior,
 //!     RowSet, Scores, SourceMeans, SourceModel, Transition,
 //! };
 //! use rand_chacha::ChaCha8Rng;
@@ -119,7 +119,19 @@
 //! // All the memory the loop writes: a 16-point GP over (s, a), 2 steps × 10 queries,
 //! // 40 source records, 42 candidate rows, 10 cells × 2 actions (`static` in `.bss` on a
 //! // device). Set-up memory: the fitted source posteriors and the score values.
-//! let mut storage = AwfqiStorage::<f32, 1, 2, 16, 20, 40, 42, 20>::new();
+//! awfqi::awfqi_storage! {
+//!     struct HeaterStorage {
+//!         scalar: f32,
+//!         state_dim: 1,
+//!         gp_points: 16,
+//!         steps: 2,
+//!         budget: 10,
+//!         source_records: 40,
+//!         candidate_rows: PointGrid::<f32, 1>::rows(21, 2),
+//!         table_entries: 10 * 2,
+//!     }
+//! }
+//! let mut storage = HeaterStorage::new();
 //! let mut posteriors = [Posterior::default(); 40];
 //! let mut scores = [Scores::ZERO; 42];
 //!
@@ -131,6 +143,7 @@
 //! let mut kernel = Awfqi::builder(config.validate()?, CellGrid::cube(0.0, 1.0, 10)?, &records, candidates)
 //!     .fit_posteriors(&mut posteriors) // one reward GP per source, fitted here
 //!     .scores_from(&sources, &mut scores)? // oracle scores from the sources' means
+//!     .steps(2) // the run's length: a target buffer too short is refused here
 //!     .build(Heater { gain: 0.2 }, &mut storage, &mut rng)?;
 //! for _ in 0..2 {
 //!     let report = kernel.step(&mut rng)?; // 10 queries, target GP, weights, weighted FQI

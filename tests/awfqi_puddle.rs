@@ -333,8 +333,9 @@ fn measure_returns_per_step() {
     // The figures the module documentation states, step by step: the oracle table's AWFQI
     // in −25…−19.5, the realistic table's in −40.5…−29.5 and below the oracle's, both
     // above plain FQI, which never beats −40.
-    for step in 0..STEPS {
-        let [oracle, realistic, fqi] = [0, 1, 2].map(|k| stats(&table[k][step]).0);
+    let steps = table[0].iter().zip(&table[1]).zip(&table[2]).enumerate();
+    for (step, ((oracle, realistic), fqi)) in steps {
+        let [oracle, realistic, fqi] = [oracle, realistic, fqi].map(|v| stats(v).0);
         let at = format!("step {}: {oracle:.2}, {realistic:.2}, {fqi:.2}", step + 1);
         assert!((-25.0..=-19.5).contains(&oracle), "oracle, {at}");
         assert!((-40.5..=-29.5).contains(&realistic), "realistic, {at}");

@@ -270,7 +270,7 @@ fn every_section_reference_names_a_section_of_the_algorithm_reference() {
     // The walk really saw the repository (a walk that found nothing would pass vacuously).
     for expected in [
         "README.md",
-        "src/awfqi.rs",
+        "src/thesis.rs",
         "std_harness/src/forest_fqi.rs",
         REFERENCE,
     ] {

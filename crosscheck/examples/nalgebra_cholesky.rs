@@ -3,7 +3,7 @@
 //! conditioning behaviour on the 90 exact hard cases of `tests/data/gp_hard_cases.json`
 //! (how often each returns a factor whose mean is wrong beyond 1e-2 of the data scale).
 //!
-//!     cargo run --release --example nalgebra_cholesky
+//!     cargo run --release -p awfqi-crosscheck --example nalgebra_cholesky
 //!
 //! Code size and stack on the Cortex-M4F: `scripts/cholesky-size`. The figures and the
 //! reason the hand-written factor stays: docs/footprint.md, "The design card's packages".

@@ -1,7 +1,7 @@
 //! Runs one benchmarked operation `k` times, for instruction counts under callgrind.
 //!
 //! ```text
-//! cargo build --release --example perf_ops
+//! cargo build --release -p awfqi-crosscheck --example perf_ops
 //! target/release/examples/perf_ops list
 //! valgrind --tool=callgrind --toggle-collect='*perf_ops*measured*' \
 //!     target/release/examples/perf_ops gp_fit/kernel_f64/64 10
@@ -10,7 +10,7 @@
 //! Everything outside `measured` (building inputs, fitting source GPs, cloning GPs for the
 //! add-point operations) is excluded by the toggle, so callgrind's total divided by `k` is
 //! the instruction count of one operation. The operations and their inputs are those of
-//! `benches/core_ops.rs` (both use `benches/common`); `scripts/perf-tables` runs every one.
+//! `crosscheck/benches/core_ops.rs` (both use `benches/common`); `scripts/perf-tables` runs every one.
 
 #[path = "../benches/common/mod.rs"]
 mod common;
@@ -329,7 +329,7 @@ fn awfqi_step<T: Real>() -> Op {
 }
 
 /// Every operation: `(name, constructor)`; names are the criterion ids of
-/// `benches/core_ops.rs`.
+/// `crosscheck/benches/core_ops.rs`.
 fn operations() -> Vec<(String, Build)> {
     let mut ops: Vec<(String, Build)> = Vec::new();
     let mut add = |name: String, f: Build| ops.push((name, f));

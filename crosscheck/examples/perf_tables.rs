@@ -8,7 +8,7 @@
 //! command line. Missing measurements show as `–`.
 //!
 //! ```text
-//! cargo run --release --example perf_tables -- docs/performance.md
+//! cargo run --release -p awfqi-crosscheck --example perf_tables -- docs/performance.md
 //! ```
 
 use std::collections::BTreeMap;

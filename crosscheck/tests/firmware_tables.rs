@@ -7,7 +7,7 @@
 //! Regenerate after changing anything here (or in the core's Dam, GP or score code):
 //!
 //! ```sh
-//! UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables
+//! UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables
 //! ```
 //!
 //! The second test does the same for the 32 KiB Puddle World footprint image
@@ -133,15 +133,15 @@ fn render(t: &Tables) -> String {
     let _ = writeln!(
         w,
         "//! Source data of the firmware example, generated on the host by\n\
-         //! `tests/firmware_tables.rs` (do not edit; regenerate with\n\
-         //! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`).\n\
+         //! `crosscheck/tests/firmware_tables.rs` (do not edit; regenerate with\n\
+         //! `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`).\n\
          //!\n\
          //! {SOURCES} Dam sources (the IWFQI paper's sources 1–{SOURCES}) × {RECORDS_PER_SOURCE} \
          one-step transitions from uniform states, the\n\
          //! reward posterior of each source's GP at each of its records, and the oracle score\n\
          //! table over the candidate grid. Everything here is `static`: it stays in flash.\n\
          \n\
-         use awfqi::{{Posterior, Scores, Transition}};\n\
+         use awfqi::prelude::{{Posterior, Scores, Transition}};\n\
          \n\
          /// Records per source.\n\
          pub const RECORDS_PER_SOURCE: usize = {RECORDS_PER_SOURCE};\n\
@@ -257,7 +257,7 @@ fn committed_firmware_tables_are_what_the_generator_makes() {
     assert!(
         committed == text,
         "{TABLES} is not what tests/firmware_tables.rs generates; regenerate it with \
-         `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`"
+         `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`"
     );
 }
 
@@ -295,13 +295,13 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     let _ = writeln!(
         w,
         "//! Source data of the 32 KiB Puddle World footprint image, generated on the host by\n\
-         //! `tests/firmware_tables.rs` (do not edit; regenerate with\n\
-         //! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`): the published\n\
+         //! `crosscheck/tests/firmware_tables.rs` (do not edit; regenerate with\n\
+         //! `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`): the published\n\
          //! shared-dynamics source records and their stored reward posteriors, and the\n\
          //! realistic score table (`V_r` from one {PUDDLE_GP_POINTS}-point reward GP per source) over the\n\
          //! spacing-{PUDDLE_SPACING} puddle grid. All `static`: flash.\n\
          \n\
-         use awfqi::{{Posterior, Scores, Transition}};\n\
+         use awfqi::prelude::{{Posterior, Scores, Transition}};\n\
          \n\
          /// Records of all sources.\n\
          pub const SOURCE_RECORDS: usize = {};\n\
@@ -365,7 +365,7 @@ fn committed_puddle_32k_tables_are_what_the_generator_makes() {
     assert!(
         committed == s,
         "{PUDDLE_TABLES} is not what tests/firmware_tables.rs generates; regenerate it with \
-         `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`"
+         `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`"
     );
 }
 

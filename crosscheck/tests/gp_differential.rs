@@ -36,7 +36,7 @@
 //!   without the base jitter: each agrees within the table or is refused, never a wrong `Ok`.
 //!
 //! The worst measured errors per class, precision and quantity are printed (run with
-//! `cargo test --test gp_differential -- --nocapture`).
+//! `cargo test -p awfqi-crosscheck --test gp_differential -- --nocapture`).
 
 use awfqi::Error;
 use awfqi::gp::BASE_JITTER;

@@ -184,36 +184,6 @@ where
         }
     }
 
-    /// The settings the learner will have: derived, then changed by
-    /// [`configure`](Self::configure), then checked.
-    ///
-    /// Errors: those of [`SourceScales::measure`], [`AdaptiveConfig::scaled`] and
-    /// [`AdaptiveConfig::validate`].
-    fn settings(
-        sources: &[&[Transition<[T; D], T>]],
-        budget: usize,
-        bounds: [(T, T); D],
-        start: [T; D],
-        horizon: usize,
-        epsilon: T,
-        thesis: bool,
-        candidates: usize,
-        configure: F,
-    ) -> Result<super::ValidAdaptiveConfig<T, D, I>> {
-        let mut config = if thesis {
-            AdaptiveConfig::recommended(budget, start, horizon, epsilon, bounds)
-        } else {
-            let scales = SourceScales::measure(sources)?;
-            AdaptiveConfig {
-                bounds,
-                ..AdaptiveConfig::scaled(budget, &scales, start, horizon, epsilon)?
-            }
-        };
-        config.candidates = candidates;
-        configure(&mut config);
-        config.validate()
-    }
-
     /// Performs the set-up in `storage` and returns the learner, ready for
     /// [`AdaptiveAwfqi::plan`] and [`AdaptiveAwfqi::step`].
     ///
@@ -235,27 +205,46 @@ where
     {
         let () = InputDim::<D, I>::CHECK;
         let capacities = storage.capacities();
-        let config = Self::settings(
-            self.sources,
-            self.budget,
-            self.bounds,
-            self.start,
-            self.horizon.unwrap_or(self.budget.max(1)),
-            self.epsilon,
-            self.thesis,
-            capacities.candidates,
-            self.configure,
-        )?;
-        let lower = self.bounds.map(|(lo, _)| lo);
-        let upper = self.bounds.map(|(_, hi)| hi);
-        let approximator = match self.approximator {
+        let Self {
+            target,
+            sources: records,
+            budget,
+            bounds,
+            start,
+            steps,
+            horizon,
+            epsilon,
+            thesis,
+            rows,
+            rewards,
+            approximator,
+            stored,
+            configure,
+        } = self;
+        // The settings: derived, then changed by `configure`, then checked.
+        let horizon = horizon.unwrap_or(budget.max(1));
+        let mut config = if thesis {
+            AdaptiveConfig::recommended(budget, start, horizon, epsilon, bounds)
+        } else {
+            let scales = SourceScales::measure(records)?;
+            AdaptiveConfig {
+                bounds,
+                ..AdaptiveConfig::scaled(budget, &scales, start, horizon, epsilon)?
+            }
+        };
+        config.candidates = capacities.candidates;
+        configure(&mut config);
+        let config = config.validate()?;
+        let lower = bounds.map(|(lo, _)| lo);
+        let upper = bounds.map(|(_, hi)| hi);
+        let approximator = match approximator {
             Some(approximator) => approximator,
             None => {
                 let cells = CellGrid::new(lower, upper, [capacities.sweep_cells; D])?;
-                ModelSweep::new(cells)?.with_rewards(self.rewards).into()
+                ModelSweep::new(cells)?.with_rewards(rewards).into()
             }
         };
-        let rows = match self.rows {
+        let rows = match rows {
             Some(rows) => rows,
             None => {
                 let per_axis = match capacities.sweep_cells {
@@ -263,13 +252,13 @@ where
                     cells => cells.saturating_mul(ROWS_PER_CELL),
                 };
                 let mut spacing = [T::ONE; D];
-                for (d, (lo, hi)) in spacing.iter_mut().zip(self.bounds) {
+                for (d, (lo, hi)) in spacing.iter_mut().zip(bounds) {
                     *d = (hi - lo) / T::from_usize(per_axis);
                 }
                 let points = [per_axis.saturating_add(1); D];
                 RowSet::grid(
                     PointGrid::new(lower, spacing, points)?,
-                    self.target.num_actions(),
+                    target.num_actions(),
                 )?
             }
         };
@@ -278,26 +267,25 @@ where
             means,
             posteriors,
         } = storage.parts();
-        let steps = self.steps.unwrap_or(capacities.steps);
+        let steps = steps.unwrap_or(capacities.steps);
         let room = steps
             .checked_mul(config.budget())
             .ok_or(Error::CapacityExceeded {
                 capacity: buffers.samples.len(),
             })?;
         short(buffers.samples.len(), room, buffer::SAMPLES)?;
-        let records = self.sources;
         let total = records.iter().map(|r| r.len()).sum::<usize>();
         short(means.len(), records.len(), buffer::MEANS)?;
-        if self.stored.is_none() {
+        if stored.is_none() {
             short(posteriors.len(), total, buffer::POSTERIORS)?;
         }
-        let mut lent = Lent::check(&config, approximator, records, &rows, &self.target, buffers)?;
+        let mut lent = Lent::check(&config, approximator, records, &rows, &target, buffers)?;
         let capacity = means.len();
         let means = means
             .get_mut(..records.len())
             .ok_or(Error::CapacityExceeded { capacity })?;
         let capacity = posteriors.len();
-        let fitted = match self.stored {
+        let fitted = match stored {
             Some(_) => &mut [],
             None => posteriors
                 .get_mut(..total)
@@ -309,7 +297,7 @@ where
         let mut rest = &mut *fitted;
         for (mean, source) in means.iter_mut().zip(records) {
             mean.fit_rewards(lent.gp, source, training, subset, rng)?;
-            if self.stored.is_none() {
+            if stored.is_none() {
                 let (out, tail) = core::mem::take(&mut rest)
                     .split_at_mut_checked(source.len())
                     .ok_or(Error::CapacityExceeded { capacity: total })?;
@@ -317,8 +305,8 @@ where
                 predict_posteriors(lent.gp, source, config.awfqi.noise_subtraction, out)?;
             }
         }
-        let sources = SourceData::new(records, self.stored.unwrap_or(fitted))?;
+        let sources = SourceData::new(records, stored.unwrap_or(fitted))?;
         let evidence = Evidence::new(means, lent.beliefs(), records.len())?;
-        Ok(lent.assemble(config, sources, rows, self.target, evidence))
+        Ok(lent.assemble(config, sources, rows, target, evidence))
     }
 }

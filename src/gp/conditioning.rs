@@ -10,7 +10,7 @@
 //! escalated jitter **relative to the noise variance**: `j ≤ ρ · (σ²ₙ + base jitter)`.
 //! The default `ρ = √ε` (`3.5·10⁻⁴` in `f32`, `1.5·10⁻⁸` in `f64`) keeps the mean within
 //! `√ε · √128 · √c` — `3.9·10⁻³·√c` in `f32`, `1.7·10⁻⁷·√c` in `f64` for `n ≤ 128` — inside
-//! the tolerance table of `tests/gp_differential.rs` (hard cases: 10⁻² in `f32`, 10⁻⁶ in
+//! the tolerance table of `crosscheck/tests/gp_differential.rs` (hard cases: 10⁻² in `f32`, 10⁻⁶ in
 //! `f64`, relative to the data scale). A fit that would need more returns
 //! [`Error::JitterLimit`] naming the jitter it needed.
 //!

@@ -1068,7 +1068,7 @@ fn a_search_whose_optimum_f32_cannot_trust_returns_the_best_trusted_point() {
     assert!(lml <= free_lml && lml.is_finite());
     assert_eq!(Ok(lml), held.log_marginal_likelihood());
     // A trusted factor answers as f64 does at the same hyperparameters (the f32 row of
-    // tests/gp_differential.rs's tolerance table: 1e-2 of the data scale, here ≈ 18).
+    // crosscheck/tests/gp_differential.rs's tolerance table: 1e-2 of the data scale, here ≈ 18).
     let mut reference = Gp::<f64, 24, 3>::new(wide(&t)).unwrap();
     reference.fit(&xs64, &ys64).unwrap();
     let lml64 = reference.log_marginal_likelihood().unwrap();

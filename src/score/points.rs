@@ -61,6 +61,36 @@ impl<T: Real, const D: usize> PointGrid<T, D> {
         })
     }
 
+    /// Points per axis of [`PointGrid::spanning`] over `[lower, upper]` with spacing `d`,
+    /// `round((upper − lower)/d) + 1`, as a `const fn` so a capacity can be sized by it
+    /// (`PointGrid::<f32, 2>::spanning_points(0.0, 10.0, 0.1)` is 101); 0 for a spacing or
+    /// an extent that [`PointGrid::spanning`] refuses.
+    pub const fn spanning_points(lower: f64, upper: f64, d: f64) -> usize {
+        if !d.is_finite() || d <= 0.0 || !(upper - lower).is_finite() || upper <= lower {
+            return 0;
+        }
+        let steps = (upper - lower) / d;
+        if steps < 0.5 || steps > 1e9 {
+            return 0;
+        }
+        let rounded = (steps + 0.5) as usize;
+        let error = steps - rounded as f64;
+        if error > 1e-6 * rounded as f64 || -error > 1e-6 * rounded as f64 {
+            return 0;
+        }
+        rounded + 1
+    }
+
+    /// Rows of [`RowSet::grid`](super::RowSet::grid) over a grid of `points` per axis on each
+    /// of `D` axes with `actions` actions, `points^D × actions`, as a `const fn` (the alias
+    /// table's capacity of the thesis's AWFQI; `usize::MAX` on overflow).
+    pub const fn rows(points: usize, actions: usize) -> usize {
+        match points.checked_pow(D as u32) {
+            Some(n) => n.saturating_mul(actions),
+            None => usize::MAX,
+        }
+    }
+
     /// The grid with spacing `d` on every axis that spans the box `[lower, upper]`, both
     /// borders included: points `lower_k, lower_k + d, …` up to `upper_k`
     /// (`round((upper_k − lower_k)/d) + 1` per axis; Puddle World's `[0, 10]²` with

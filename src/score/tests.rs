@@ -400,3 +400,28 @@ fn candidate_pairs_and_grids_in_three_dimensions() {
     );
     assert!(table.sampler(ScoreColumn::NextState(2), &mut alias).is_ok());
 }
+
+#[test]
+fn spanning_point_and_row_counts_are_const_and_agree_with_the_grid() {
+    const POINTS: usize = PointGrid::<f32, 2>::spanning_points(0.0, 10.0, 0.1);
+    const ROWS: usize = PointGrid::<f32, 2>::rows(POINTS, 4);
+    let grid = PointGrid::spanning([0.0f32; 2], [10.0; 2], 0.1).unwrap();
+    assert_eq!(grid.points(), [POINTS; 2]);
+    assert_eq!(RowSet::grid(grid, 4).unwrap().len(), ROWS);
+    assert_eq!(ROWS, 101 * 101 * 4);
+    for (lo, hi, d, want) in [
+        (0.0, 1.0, 0.05, 21),
+        (0.0, 10.0, 1.25, 9),
+        (-1.0, 1.0, 0.5, 5),
+    ] {
+        assert_eq!(PointGrid::<f64, 1>::spanning_points(lo, hi, d), want);
+        let grid = PointGrid::spanning([lo], [hi], d).unwrap();
+        assert_eq!(grid.points(), [want]);
+    }
+    // What spanning refuses counts 0 points.
+    assert_eq!(PointGrid::<f64, 1>::spanning_points(0.0, 1.0, 0.3), 0);
+    assert_eq!(PointGrid::<f64, 1>::spanning_points(0.0, 1.0, 0.0), 0);
+    assert_eq!(PointGrid::<f64, 1>::spanning_points(1.0, 0.0, 0.1), 0);
+    assert!(PointGrid::spanning([0.0f64], [1.0], 0.3).is_err());
+    assert_eq!(PointGrid::<f64, 3>::rows(usize::MAX, 2), usize::MAX);
+}

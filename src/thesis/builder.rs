@@ -28,10 +28,11 @@ use rand_core::Rng;
 /// `W` reward weights (one per source record), `R` alias entries (one per candidate row)
 /// and `E` FQI entries (cells × actions).
 ///
-/// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`:
-/// `static mut STORAGE: AwfqiStorage<f32, 2, 3, 64, 150, 910, 484, 484> = AwfqiStorage::new();`
-/// (39 096 bytes on a Cortex-M4F, see [`crate::thesis`]). The builder hands out its parts as
-/// slices, so the learner's code does not depend on the capacities.
+/// [`AwfqiStorage::new`] is `const` and all-zero, so the block can be a `static` in `.bss`.
+/// The builder hands out its parts as slices, so the learner's code does not depend on the
+/// capacities. For a plant of a fixed scalar, [`awfqi_storage!`](crate::awfqi_storage)
+/// declares the same block by named capacities; this generic form is for code generic over
+/// the scalar or the dimension.
 #[derive(Debug, Clone)]
 pub struct AwfqiStorage<
     T,
@@ -104,6 +105,104 @@ where
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// Declares the block of all the memory the thesis's AWFQI writes, sized by named
+/// capacities: a `struct` with a `const fn new()` (all-zero: a `static` lands in `.bss`) and
+/// `buffers()` (also `(&mut block).into()`) for [`AwfqiBuilder::build`].
+///
+/// ```rust
+/// awfqi::awfqi_storage! {
+///     /// Puddle World, 11 × 11 cells, the 324 rows of the spacing-1.25 grid.
+///     pub struct PuddleStorage {
+///         scalar: f32,
+///         state_dim: 2,
+///         gp_points: 24,
+///         steps: 6,
+///         budget: 50,
+///         source_records: 1033,
+///         candidate_rows: awfqi::score::PointGrid::<f32, 2>::rows(9, 4),
+///         table_entries: 11 * 11 * 4,
+///     }
+/// }
+/// static mut STORAGE: PuddleStorage = PuddleStorage::new();
+/// ```
+///
+/// The target samples are `steps × budget`, the GP input dimension `state_dim + 1`; a
+/// capacity of 0 does not compile.
+#[macro_export]
+macro_rules! awfqi_storage {
+    (
+        $(#[$attr:meta])*
+        $vis:vis struct $name:ident {
+            scalar: $t:ty,
+            state_dim: $d:expr,
+            gp_points: $n:expr,
+            steps: $steps:expr,
+            budget: $budget:expr,
+            source_records: $w:expr,
+            candidate_rows: $r:expr,
+            table_entries: $e:expr $(,)?
+        }
+    ) => {
+        $(#[$attr])*
+        #[derive(Debug, Clone)]
+        $vis struct $name {
+            gp: $crate::gp::Gp<$t, { $n }, { $d + 1 }>,
+            samples: [$crate::model::Transition<[$t; $d], $t>; $steps * $budget],
+            weights: [$t; $w],
+            alias: [$crate::alias::AliasEntry<$t>; $r],
+            fqi: [$crate::fqi::FqiEntry<$t>; $e],
+        }
+
+        const _: () = {
+            assert!($d > 0, "state_dim: a plant has at least one state coordinate");
+            assert!($n > 0, "gp_points: a GP holds at least one point");
+            assert!($steps > 0, "steps: at least one");
+            assert!($budget > 0, "budget: at least one query a step");
+            assert!($r > 0, "candidate_rows: at least one");
+        };
+
+        impl $name {
+            /// Empty, all-zero storage.
+            pub const fn new() -> Self {
+                Self {
+                    gp: $crate::gp::Gp::zeroed(),
+                    samples: [$crate::model::Transition::EMPTY; $steps * $budget],
+                    weights: [<$t as $crate::float::Real>::ZERO; $w],
+                    alias: [$crate::alias::AliasEntry::EMPTY; $r],
+                    fqi: [$crate::fqi::FqiEntry::EMPTY; $e],
+                }
+            }
+
+            /// The block as the slices a learner borrows.
+            pub fn buffers(
+                &mut self,
+            ) -> $crate::thesis::AwfqiBuffers<'_, $t, { $d }, { $d + 1 }, { $n }> {
+                $crate::thesis::AwfqiBuffers {
+                    gp: &mut self.gp,
+                    samples: &mut self.samples,
+                    weights: &mut self.weights,
+                    alias: &mut self.alias,
+                    fqi: &mut self.fqi,
+                }
+            }
+        }
+
+        impl ::core::default::Default for $name {
+            fn default() -> Self {
+                Self::new()
+            }
+        }
+
+        impl<'a> ::core::convert::From<&'a mut $name>
+            for $crate::thesis::AwfqiBuffers<'a, $t, { $d }, { $d + 1 }, { $n }>
+        {
+            fn from(storage: &'a mut $name) -> Self {
+                storage.buffers()
+            }
+        }
+    };
 }
 
 /// The memory of a learner as borrowed slices, whatever owns it: an [`AwfqiStorage`]

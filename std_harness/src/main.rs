@@ -39,6 +39,9 @@ enum Command {
     /// Combines the result files of shard directories (same configuration, disjoint runs)
     /// into OUT and regenerates the summary, metrics and plots.
     Merge(commands::merge::Args),
+    /// The plant suite: every plant at two budget schedules of the same total, against
+    /// the random policy and the best known return.
+    Suite(commands::suite::Args),
 }
 
 /// The environment variable that asks for a debug report of an error (its chain with the
@@ -113,5 +116,9 @@ fn run(command: Command) -> anyhow::Result<()> {
             commands::acrobot::run(&args)
         }
         Command::Merge(args) => commands::merge::run(&args),
+        Command::Suite(mut args) => {
+            args.command = typed();
+            commands::suite::run(&args)
+        }
     }
 }

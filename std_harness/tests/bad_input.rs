@@ -481,6 +481,10 @@ fn a_refused_invocation_creates_no_output_directory() {
         &out,
     );
     assert!(!out.exists(), "{} was created", out.display());
+    // The identification study too: a configuration the core refuses creates nothing.
+    let (ok, stderr) = harness(&["identify", "--gamma", "2", "--out", out.to_str().unwrap()]);
+    assert!(!ok && stderr.contains("gamma"), "{stderr}");
+    assert!(!out.exists(), "{} was created", out.display());
     // An existing file that is not a directory is named as such.
     for blocker in [Path::new("/dev/null").to_path_buf(), dir.join("a-file")] {
         if !blocker.exists() {

@@ -1,5 +1,5 @@
-//! Inputs shared by the criterion suite (`benches/core_ops.rs`) and the instruction-count
-//! driver (`examples/perf_ops.rs`), so both measure the same operations on the same data.
+//! Inputs shared by the criterion suite (`crosscheck/benches/core_ops.rs`) and the instruction-count
+//! driver (`crosscheck/examples/perf_ops.rs`), so both measure the same operations on the same data.
 //!
 //! Everything is generated from fixed seeds in f64; the f32 variants are the same numbers
 //! rounded to f32, and the harness's reference receives the f64 numbers.

@@ -10,7 +10,7 @@
 //! and change the sizes in `src/reservoir.rs`.
 //!
 //! What runs where:
-//! - **host, once** (`tests/firmware_tables.rs`): the source records and the posterior of
+//! - **host, once** (`crosscheck/tests/firmware_tables.rs`): the source records and the posterior of
 //!   each source's reward GP at its records → `src/tables.rs`, `static` arrays that stay in
 //!   **flash** (and the score table the thesis's AWFQI draws from);
 //! - **device**: each source's reward mean function fitted at set-up, the plan on the

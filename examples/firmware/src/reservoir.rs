@@ -7,10 +7,10 @@
 use awfqi::adaptive::AdaptiveParts;
 use awfqi::env::{DAM_ACTIONS, DAM_DISCOUNT, DAM_EVALUATION_STATE, DAM_HORIZON, Dam};
 use awfqi::prelude::{
-    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Awfqi, AwfqiConfig, AwfqiStorage, CellGrid,
-    Conditioning, EmptyCells, Estimator, Evaluation, EvaluationProtocol, FqiConfig,
-    HyperparameterBounds, Hyperparameters, ModelSweep, PointGrid, RewardModel, RowSet, SourceData,
-    StepReport, SweepStorage, WeightParams, evaluate, evaluate_greedy,
+    AdaptiveAwfqi, AdaptiveConfig, AdaptiveStorage, Awfqi, AwfqiConfig, CellGrid, Conditioning,
+    EmptyCells, Estimator, Evaluation, EvaluationProtocol, FqiConfig, HyperparameterBounds,
+    Hyperparameters, ModelSweep, PointGrid, RewardModel, RowSet, SourceData, StepReport,
+    SweepStorage, WeightParams, evaluate, evaluate_greedy,
 };
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -89,19 +89,19 @@ impl Memory {
     }
 }
 
-/// All the RAM the thesis's AWFQI writes, in one block: `f32`, state dimension 2, GP input
-/// dimension 3 (state + action), then the capacities: GP points, target records, one weight
-/// per source record, one alias entry per candidate row, the Q-table: 18 428 bytes.
-pub type Storage = AwfqiStorage<
-    f32,
-    2,
-    3,
-    GP_POINTS,
-    { STEPS * BUDGET },
-    SOURCE_RECORDS,
-    { tables::SCORE_ROWS },
-    FQI_ENTRIES,
->;
+awfqi::awfqi_storage! {
+    /// All the RAM the thesis's AWFQI writes, in one block, by name.
+    pub struct Storage {
+        scalar: f32,
+        state_dim: 2,
+        gp_points: GP_POINTS,
+        steps: STEPS,
+        budget: BUDGET,
+        source_records: SOURCE_RECORDS,
+        candidate_rows: tables::SCORE_ROWS,
+        table_entries: FQI_ENTRIES,
+    }
+}
 
 /// The returns of the learned greedy policy and of the baseline over the same inflows.
 pub struct Outcome {

@@ -1,6 +1,6 @@
 //! Source data of the firmware example, generated on the host by
-//! `tests/firmware_tables.rs` (do not edit; regenerate with
-//! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`).
+//! `crosscheck/tests/firmware_tables.rs` (do not edit; regenerate with
+//! `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`).
 //!
 //! 3 Dam sources (the IWFQI paper's sources 1–3) × 200 one-step transitions from uniform states, the
 //! reward posterior of each source's GP at each of its records, and the oracle score

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 
+use crate::commands::transfer::ensure_writable;
 use crate::identification::{
     CriterionName, Design, PolicyName, StudyConfig, assemble, run_records, stored, table,
     write_outputs,
@@ -88,10 +89,17 @@ impl Args {
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let out = &args.out;
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    // An existing --out is checked now; a new one is created only once the study's
+    // configuration has passed its checks (the runs), so a refusal creates nothing.
+    let exists = out.exists();
+    if exists {
+        ensure_writable(out)?;
+    }
     let path = out.join(stored::FILE);
     let wanted = args.config();
-    let present: BTreeSet<usize> = {
+    let present: BTreeSet<usize> = if !exists {
+        BTreeSet::new()
+    } else {
         let _lock = DirLock::acquire(out)?;
         match stored::check(&path, &wanted) {
             Ok(None) => BTreeSet::new(),
@@ -121,6 +129,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let records = run_records(&wanted, &todo, true)?;
     let elapsed = start.elapsed();
 
+    ensure_writable(out)?;
     let _lock = DirLock::acquire(out)?;
     // The file as it is now: another writer may have added records since.
     let mut all = match stored::check(&path, &wanted) {

@@ -8,4 +8,5 @@ pub mod gp;
 pub mod identify;
 pub mod merge;
 pub mod puddle;
+pub mod suite;
 pub mod transfer;

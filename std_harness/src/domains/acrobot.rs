@@ -41,6 +41,10 @@ impl Task<4> for Acrobot<f64> {
     fn initial_state(&self, rng: &mut ChaCha8Rng) -> [f64; 4] {
         Acrobot::initial_state(self, rng)
     }
+
+    fn ends_in(&self, state: [f64; 4]) -> bool {
+        Acrobot::in_goal(self, state).unwrap_or(false)
+    }
 }
 
 /// Acrobot's state space: angles wrapped into [−π, π], velocities clipped into

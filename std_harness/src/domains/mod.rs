@@ -7,7 +7,9 @@
 //!
 //! - [`puddle`]: the continuous Puddle World (spec §2), both dynamics variants, D = 2;
 //! - [`dam`]: the IWFQI paper's water reservoir, D = 2;
-//! - [`acrobot`]: the IWFQI paper's multitask Acrobot, D = 4.
+//! - [`acrobot`]: the IWFQI paper's multitask Acrobot, D = 4;
+//! - [`unit_box`]: the plant suite's plants on the unit box (the zones and the thermal
+//!   room, D = 3; the tanks, D = 4).
 //!
 //! Episodes and evaluation rollouts are run here, for every domain, with the core's
 //! policies ([`awfqi::policy`]) and the same draw order as the core's Puddle World episode
@@ -16,6 +18,7 @@
 pub mod acrobot;
 pub mod dam;
 pub mod puddle;
+pub mod unit_box;
 
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -67,6 +70,13 @@ pub trait Task<const D: usize>: Send + Sync + Debug {
 
     /// The first state of an episode (drawn from `rng` when the start is random).
     fn initial_state(&self, rng: &mut ChaCha8Rng) -> [f64; D];
+
+    /// `true` when an episode ends on reaching `state` (Puddle World's goal, Acrobot's
+    /// swing-up height; never elsewhere): what a planner on the mean model needs of the
+    /// goal.
+    fn ends_in(&self, _state: [f64; D]) -> bool {
+        false
+    }
 }
 
 /// How the ideal weights (spec §7.7) get the models' mean next states.

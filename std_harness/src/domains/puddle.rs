@@ -41,6 +41,10 @@ impl Task<2> for PuddleWorld<f64> {
     fn initial_state(&self, _rng: &mut ChaCha8Rng) -> [f64; 2] {
         PUDDLE_INITIAL_STATE
     }
+
+    fn ends_in(&self, state: [f64; 2]) -> bool {
+        PuddleWorld::in_goal(self, state).unwrap_or(false)
+    }
 }
 
 /// Grid spacing of the thesis's score tables (`dx = dy = 0.1`).

@@ -20,16 +20,22 @@
 //! - [`result_dir`]: an output directory shared by invocations: locked, checked, resumable;
 //! - [`metrics`]: transfer metrics (jump-start, asymptotic performance, total reward,
 //!   transfer ratio, time to threshold);
-//! - [`figures`]: learning curves and sample scatters.
+//! - [`figures`]: learning curves and sample scatters;
+//! - [`anchors`]: the plant suite's anchors (the random policy's return, dynamic
+//!   programming on the mean model, hand-written controllers);
+//! - [`suite`]: the plant suite: its plants, their budget schedules and the summary of
+//!   their runs against the anchors.
 //!
 //! **Seeding** (spec §1's \[CHOICE\]): every random stream is a ChaCha8 generator seeded from
 //! a hash of the experiment seed and a purpose: (seed, RUN, algorithm, run index) for a run,
 //! (seed, SCORE_TABLE) for the realistic tables, (seed, SOURCE_GENERATION, source) for
-//! generated source data, (seed, IDEAL_WEIGHTS) for the sampled means of the ideal weights. No stream depends on thread scheduling or on which other
+//! generated source data, (seed, IDEAL_WEIGHTS) for the sampled means of the ideal weights, (seed, ANCHORS, k)
+//! for the anchors' rollouts. No stream depends on thread scheduling or on which other
 //! algorithms or runs are computed, so `--runs 0..5` and `--runs 5..10` give the same runs
 //! as `--runs 0..10`.
 
 pub mod algorithms;
+pub mod anchors;
 pub mod domain_data;
 pub mod figures;
 pub mod gp;
@@ -39,6 +45,7 @@ pub mod result_dir;
 pub mod results;
 pub mod score_tables;
 pub mod sources;
+pub mod suite;
 
 /// Stream purpose: one run of one algorithm.
 pub const RUN: u64 = 1;

@@ -186,6 +186,11 @@ pub struct Diagnostics {
     /// The step's warnings (`awfqi::StepReport::warnings`), as printed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub warnings: Option<Vec<String>>,
+    /// Mean discounted return of FQI on this learner's target samples alone, with the
+    /// learner's own approximator, evaluated on the same rollouts' noise as the learner
+    /// (a paired baseline; `awfqi-adaptive` with `--adaptive-same-samples-fqi`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fqi_same_samples: Option<f64>,
 }
 
 /// One step's record (§3.3, §3.4), with the reference's field names.
@@ -233,6 +238,13 @@ pub trait Learner<const D: usize = 2> {
 
     /// The target records collected so far (`D₀`).
     fn target_samples(&self) -> &[Record<D>];
+
+    /// The greedy action of FQI on [`Learner::target_samples`] alone, where the learner
+    /// fits one (its paired baseline, evaluated on the same rollouts' noise); `None`
+    /// otherwise.
+    fn same_samples_action(&self, _state: &[f64; D]) -> Option<usize> {
+        None
+    }
 }
 
 /// Runs `K` steps of `learner` and evaluates after each; `after_step` sees each record.
@@ -246,7 +258,20 @@ pub fn run<const D: usize>(
     let mut steps = Vec::with_capacity(protocol.steps);
     for k in 1..=protocol.steps {
         let start = Instant::now();
-        let diagnostics = learner.step(k, rng)?;
+        let mut diagnostics = learner.step(k, rng)?;
+        let probe = domain
+            .evaluation_starts
+            .first()
+            .copied()
+            .unwrap_or([0.0; D]);
+        if learner.same_samples_action(&probe).is_some() {
+            // From a copy of the generator: the same rollouts' noise as the learner's
+            // evaluation below, which draws as if the baseline were not there.
+            let mut paired = rng.clone();
+            let baseline = |s: &[f64; D]| learner.same_samples_action(s).unwrap_or(0);
+            let eval = domain.evaluate(&baseline, &mut paired)?;
+            diagnostics.fqi_same_samples = Some(eval.returns.mean_return);
+        }
         let greedy = |s: &[f64; D]| learner.greedy_action(s);
         let n_target = learner.target_samples().len();
         let record = evaluate_step(

@@ -1,6 +1,6 @@
 //! Source data of the 32 KiB Puddle World footprint image, generated on the host by
-//! `tests/firmware_tables.rs` (do not edit; regenerate with
-//! `UPDATE_FIRMWARE_TABLES=1 cargo test --test firmware_tables`): the published
+//! `crosscheck/tests/firmware_tables.rs` (do not edit; regenerate with
+//! `UPDATE_FIRMWARE_TABLES=1 cargo test -p awfqi-crosscheck --test firmware_tables`): the published
 //! shared-dynamics source records and their stored reward posteriors, and the
 //! realistic score table (`V_r` from one 24-point reward GP per source) over the
 //! spacing-1.25 puddle grid. All `static`: flash.

@@ -212,6 +212,11 @@ pub struct AdaptiveArgs {
     /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
     #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
     pub adaptive_gp_points: usize,
+    /// Also fit the same approximator on each run's target samples alone after every
+    /// step and evaluate it on the same rollouts' noise (`fqi_same_samples` in the step
+    /// records): FQI paired with the learner, on the very samples it queried.
+    #[arg(long)]
+    pub adaptive_same_samples_fqi: bool,
 }
 
 /// Where `awfqi-adaptive`'s verification rollouts start.
@@ -246,6 +251,7 @@ impl AdaptiveArgs {
                 self.adaptive_refit_restarts,
             )),
             gp_points: self.adaptive_gp_points,
+            same_samples_fqi: self.adaptive_same_samples_fqi,
         }
     }
 
@@ -329,6 +335,14 @@ impl SweepDefaults {
     pub const ACROBOT: Self = Self {
         cells: ADAPTIVE_SWEEP_CELLS,
         rewards: awfqi::fqi::RewardModel::Pooled,
+        sweeps: None,
+    };
+    /// The plant suite's unit-box plants' (the zones, the thermal room, the tanks): the
+    /// zones firmware example's recommended sweep, 6 cells per axis of `[0, 1]^D`,
+    /// backfilled rewards (their energy costs depend on the action).
+    pub const UNIT_BOX: Self = Self {
+        cells: 6,
+        rewards: awfqi::prelude::RewardModel::Backfilled,
         sweeps: None,
     };
 }

@@ -5,11 +5,13 @@
 //!
 //! - [`puddle`]: Puddle World (spec §6, §7.6);
 //! - [`dam`]: the IWFQI paper's water reservoir;
-//! - [`acrobot`]: the IWFQI paper's multitask Acrobot.
+//! - [`acrobot`]: the IWFQI paper's multitask Acrobot;
+//! - [`unit_box`]: the plant suite's plants on the unit box (generated sources only).
 
 pub mod acrobot;
 pub mod dam;
 pub mod puddle;
+pub mod unit_box;
 
 use std::io::Read;
 

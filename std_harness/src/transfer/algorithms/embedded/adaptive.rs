@@ -1,4 +1,4 @@
-//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::adaptive::AdaptiveAwfqi`]; not
+//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::prelude::AdaptiveAwfqi`]; not
 //! a thesis algorithm — the thesis's `awfqi` and `awfqi-oracle` stay as they are): the
 //! query distribution is recomputed from what the target has answered, several times per
 //! step, and aims at what decides the greedy policy.
@@ -15,8 +15,9 @@
 
 use awfqi::model::GenerativeModel;
 use awfqi::prelude::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, Dims, FqiEntry, Gp, KnnRecord, MeanFunction,
-    QStorage, SourceData, StatePlusAction, Transition, TreeNode, TreeRecord,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, Dims, FqiConfig, FqiEntry, Gp, KnnRecord,
+    MeanFunction, QFunction, QStorage, SampleSet, SourceData, StatePlusAction, Transition,
+    TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -63,6 +64,11 @@ pub struct AdaptiveOptions {
     /// Capacity of the target GPs and of the sources' mean functions (16, 24, 32, 48 or
     /// 64).
     pub gp_points: usize,
+    /// Also fit the same approximator on the run's target samples alone after every step,
+    /// as a paired baseline ([`crate::transfer::protocol::Diagnostics::fqi_same_samples`]);
+    /// changes nothing of the learner's own run. Absent from the result files when off.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub same_samples_fqi: bool,
 }
 
 /// `awfqi-adaptive`'s GP capacity by default (the recommended configuration,
@@ -91,6 +97,7 @@ impl Default for AdaptiveOptions {
                 awfqi::adaptive::Refit::Search => None,
             },
             gp_points: ADAPTIVE_GP_POINTS,
+            same_samples_fqi: false,
         }
     }
 }
@@ -137,7 +144,7 @@ where
     c.relabel = o.relabel;
     c.refit = match o.refit {
         Some((max_evaluations, restarts)) => {
-            awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
+            awfqi::adaptive::Refit::Warm(awfqi::prelude::SearchOptions {
                 max_evaluations,
                 restarts,
                 isotropic: c.awfqi.gp_training.search.isotropic,
@@ -149,13 +156,21 @@ where
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
-/// an [`awfqi::adaptive::AdaptiveStorage`].
+/// an [`awfqi::prelude::AdaptiveStorage`].
 #[derive(Debug)]
 struct Memory<const N: usize, const D: usize, const I: usize> {
     gp: Box<Gp<T, N, I>>,
     samples: Vec<Record32<D>>,
     weights: Vec<T>,
     candidates: Vec<awfqi::adaptive::candidates::Candidate<T>>,
+    q: QMemory<D>,
+    path: Vec<[T; D]>,
+    beliefs: Vec<awfqi::adaptive::plausibility::SourceBelief<T>>,
+}
+
+/// The memory of one Q-function, sized for its approximator.
+#[derive(Debug, Clone)]
+struct QMemory<const D: usize> {
     fqi: Vec<FqiEntry<T>>,
     records: Vec<KnnRecord<T, D>>,
     links: Vec<u16>,
@@ -163,8 +178,20 @@ struct Memory<const N: usize, const D: usize, const I: usize> {
     nodes: Vec<TreeNode<T>>,
     sweep_entries: Vec<awfqi::fqi::SweepEntry<T, D>>,
     sweep_nodes: Vec<awfqi::fqi::SweepNode<T>>,
-    path: Vec<[T; D]>,
-    beliefs: Vec<awfqi::adaptive::plausibility::SourceBelief<T>>,
+}
+
+impl<const D: usize> QMemory<D> {
+    fn storage(&mut self) -> QStorage<'_, T, D> {
+        QStorage {
+            entries: &mut self.fqi,
+            records: &mut self.records,
+            links: &mut self.links,
+            tree_records: &mut self.tree_records,
+            nodes: &mut self.nodes,
+            sweep_entries: &mut self.sweep_entries,
+            sweep_nodes: &mut self.sweep_nodes,
+        }
+    }
 }
 
 impl<const N: usize, const D: usize, const I: usize> Memory<N, D, I> {
@@ -174,15 +201,7 @@ impl<const N: usize, const D: usize, const I: usize> Memory<N, D, I> {
             samples: &mut self.samples,
             weights: &mut self.weights,
             candidates: &mut self.candidates,
-            fqi: QStorage {
-                entries: &mut self.fqi,
-                records: &mut self.records,
-                links: &mut self.links,
-                tree_records: &mut self.tree_records,
-                nodes: &mut self.nodes,
-                sweep_entries: &mut self.sweep_entries,
-                sweep_nodes: &mut self.sweep_nodes,
-            },
+            fqi: self.q.storage(),
             path: &mut self.path,
             beliefs: &mut self.beliefs,
         }
@@ -195,6 +214,9 @@ impl<const N: usize, const D: usize, const I: usize> Memory<N, D, I> {
 struct AdaptiveLearner<'a, P, const N: usize, const D: usize, const I: usize> {
     adaptive: AdaptiveAwfqi<'a, T, P, D, I, N>,
     collected: Vec<Record<D>>,
+    /// FQI on the target samples alone with the same approximator, and its settings, when
+    /// [`AdaptiveOptions::same_samples_fqi`] asks for it.
+    baseline: Option<(QFunction<'a, T, D>, FqiConfig<T>)>,
 }
 
 impl<P, const N: usize, const D: usize, const I: usize> Learner<D>
@@ -206,6 +228,11 @@ where
     fn step(&mut self, _k: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<Diagnostics> {
         let report = self.adaptive.step(rng)?;
         let samples = self.adaptive.target_samples();
+        if let Some((q, fqi)) = &mut self.baseline {
+            // From a copy of the generator: the learner's own draws stay as without it.
+            let mut own = rng.clone();
+            q.fit(&[SampleSet::unweighted(samples)], fqi, &mut own)?;
+        }
         Ok(after_step(
             "awfqi-adaptive",
             &report,
@@ -224,6 +251,11 @@ where
 
     fn target_samples(&self) -> &[Record<D>] {
         &self.collected
+    }
+
+    fn same_samples_action(&self, s: &[f64; D]) -> Option<usize> {
+        let (q, _) = self.baseline.as_ref()?;
+        Some(q.greedy_action(s.map(|x| x as T)).unwrap_or(0))
     }
 }
 
@@ -282,7 +314,7 @@ where
             &mut gp,
             source,
             &training,
-            awfqi::record_gp::SubsetRule::Spread,
+            awfqi::prelude::SubsetRule::Spread,
             &mut rng,
         )?;
     }
@@ -313,7 +345,7 @@ where
     // Kernel averaging and trees hold every target and source record of a fit.
     let n = experiment.protocol.steps * budget + setup.posteriors().len();
     let (records, links) = match approximator {
-        awfqi::fqi::Approximator::Knn(nb) | awfqi::fqi::Approximator::Hybrid(_, nb) => {
+        awfqi::prelude::Approximator::Knn(nb) | awfqi::prelude::Approximator::Hybrid(_, nb) => {
             let links = nb
                 .required_links(n, actions)
                 .ok_or_else(|| anyhow::anyhow!("kNN links overflow"))?;
@@ -322,7 +354,7 @@ where
         _ => (0, 0),
     };
     let (tree_records, nodes) = match approximator {
-        awfqi::fqi::Approximator::Trees(forests) => {
+        awfqi::prelude::Approximator::Trees(forests) => {
             let nodes = forests
                 .required_nodes(actions)
                 .ok_or_else(|| anyhow::anyhow!("tree nodes overflow"))?;
@@ -331,7 +363,7 @@ where
         _ => (0, 0),
     };
     let (sweep_entries, sweep_nodes) = match approximator {
-        awfqi::fqi::Approximator::Sweep(sweep) => (
+        awfqi::prelude::Approximator::Sweep(sweep) => (
             sweep
                 .required_entries(actions)
                 .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
@@ -339,11 +371,7 @@ where
         ),
         _ => (0, 0),
     };
-    let mut memory = Memory::<N, D, I> {
-        gp: Box::new(Gp::empty()),
-        samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
-        weights: vec![0.0; setup.posteriors().len()],
-        candidates: vec![awfqi::adaptive::candidates::Candidate::EMPTY; slots],
+    let q = QMemory {
         fqi: vec![FqiEntry::EMPTY; entries],
         records: vec![KnnRecord::EMPTY; records],
         links: vec![0; links],
@@ -351,8 +379,24 @@ where
         nodes: vec![TreeNode::EMPTY; nodes],
         sweep_entries: vec![awfqi::fqi::SweepEntry::EMPTY; sweep_entries],
         sweep_nodes: vec![awfqi::fqi::SweepNode::EMPTY; sweep_nodes],
+    };
+    let mut spare = experiment
+        .adaptive_options
+        .same_samples_fqi
+        .then(|| q.clone());
+    let mut memory = Memory::<N, D, I> {
+        gp: Box::new(Gp::empty()),
+        samples: vec![Transition::EMPTY; experiment.protocol.steps * budget],
+        weights: vec![0.0; setup.posteriors().len()],
+        candidates: vec![awfqi::adaptive::candidates::Candidate::EMPTY; slots],
+        q,
         path: vec![[0.0; D]; budget],
         beliefs: vec![awfqi::adaptive::plausibility::SourceBelief::EMPTY; sources.len()],
+    };
+    let fqi = config.awfqi().fqi;
+    let baseline = match &mut spare {
+        Some(spare) => Some((approximator.build(actions, spare.storage())?, fqi)),
+        None => None,
     };
     let means = means_of::<N, D, I>(setup, &sources)?;
     let means: &[MeanFunction<T, N, I>] = &means;
@@ -386,6 +430,7 @@ where
     let mut learner = AdaptiveLearner {
         adaptive,
         collected: Vec::new(),
+        baseline,
     };
     f(&mut learner, rng)
 }

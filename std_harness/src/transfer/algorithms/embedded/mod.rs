@@ -23,7 +23,7 @@ use std::time::Instant;
 use std::any::Any;
 use std::fmt::Debug;
 
-use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld};
+use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld, Tanks, Thermal, Zones};
 use awfqi::model::GenerativeModel;
 use awfqi::prelude::{
     AliasEntry, Approximator, AwfqiConfig, CellGrid, Dims, EmptyCells, ExtraTrees, FqiConfig, Gp,
@@ -436,6 +436,24 @@ impl Plant<2> for Dam<T> {
 impl Plant<4> for Acrobot<T> {
     fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
         Ok(Acrobot::target())
+    }
+}
+
+impl Plant<3> for Zones<T> {
+    fn target(_: &Experiment<3>) -> anyhow::Result<Self> {
+        Ok(Zones::target())
+    }
+}
+
+impl Plant<3> for Thermal<T> {
+    fn target(_: &Experiment<3>) -> anyhow::Result<Self> {
+        Ok(Thermal::target())
+    }
+}
+
+impl Plant<4> for Tanks<T> {
+    fn target(_: &Experiment<4>) -> anyhow::Result<Self> {
+        Ok(Tanks::target())
     }
 }
 
