@@ -209,7 +209,8 @@ mod tests {
             let (n, r) = tariff.mean_unchecked(s, a);
             assert_eq!(tn, n);
             // Price 0.3 against 0.05 on command u.
-            assert!((r - (tr - 0.25 * THERMAL_COMMANDS[a])).abs() < 1e-12);
+            let u = THERMAL_COMMANDS.get(a).copied().unwrap_or(f64::NAN);
+            assert!((r - (tr - 0.25 * u)).abs() < 1e-12);
             let (n, r) = leaky.mean_unchecked(s, a);
             assert_eq!(r, tr);
             // Room: +0.1·0.3 from the stronger element, −0.07·0.4 from the larger loss.

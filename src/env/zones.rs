@@ -101,14 +101,12 @@ impl<T: Real> Zones<T> {
         let c = T::from_f64;
         let mut next = s;
         for (i, t) in next.iter_mut().enumerate() {
-            let left = if i > 0 { s[i - 1] - s[i] } else { T::ZERO };
-            let right = if i + 1 < ZONES {
-                s[i + 1] - s[i]
-            } else {
-                T::ZERO
-            };
+            let here = *t;
+            // The gap to neighbour `j` (none past either end).
+            let gap = |j: Option<usize>| j.and_then(|j| s.get(j)).map_or(T::ZERO, |&x| x - here);
+            let (left, right) = (gap(i.checked_sub(1)), gap(Some(i + 1)));
             let heat = if action == i + 1 { c(GAIN) } else { T::ZERO };
-            *t = s[i] + c(LOSS) * (c(OUTSIDE) - s[i]) + c(COUPLING) * (left + right) + heat;
+            *t = here + c(LOSS) * (c(OUTSIDE) - here) + c(COUPLING) * (left + right) + heat;
         }
         let (mut third, mut energy) = (c(ZONES_SETPOINT), c(0.05));
         match self.building {
