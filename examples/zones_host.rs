@@ -112,9 +112,7 @@ fn main() -> awfqi::Result<()> {
         // The uniform random policy over the same protocol (from its own stream).
         let random = {
             use awfqi::rand_core::SeedableRng;
-            let plant = zones::Zones {
-                building: zones::Building::Target,
-            };
+            let plant = awfqi::env::Zones::<f32>::target();
             let protocol = awfqi::prelude::MultiStartProtocol {
                 starts: &zones::STARTS,
                 rollouts: zones::ROLLOUTS,

@@ -21,7 +21,7 @@
 //!    *relevance*, `exp(−d²/2)` with `d` the distance to the nearest state verified in this
 //!    step in units of [`AdaptiveConfig::relevance_width`] of each coordinate's range;
 //! 3. **re-plan**: the target reward GP, then FQI on `D₀` and the sources (§12 steps 4–5,
-//!    the core's [`crate::Awfqi`] pieces). Without [`AdaptiveConfig::relabel`] (off in
+//!    the core's [`crate::thesis::Awfqi`] pieces). Without [`AdaptiveConfig::relabel`] (off in
 //!    [`AdaptiveConfig::recommended`]) the GP has the thesis's zero prior mean and the
 //!    source records get §7.3 reward weights. With it the GP's prior mean is the target
 //!    rewards' median, and every source record keeps weight 1 with its reward relabelled
@@ -36,11 +36,11 @@
 //!
 //! **The Q-function** is any of the core's approximators; recommended on Puddle World, the
 //! model sweep ([`crate::fqi::ModelSweep`]). Every GP has a fixed capacity `N`, fitted on an
-//! even spread of its data ([`crate::SubsetRule`]), and is refitted warm after its first fit
+//! even spread of its data ([`crate::record_gp::SubsetRule`]), and is refitted warm after its first fit
 //! ([`AdaptiveConfig::refit`]); the residual GP is fitted after the weights' GP in the same
 //! GP.
 //!
-//! **Errors part-way** are those of [`crate::Awfqi`]: records already queried stay in `D₀`,
+//! **Errors part-way** are those of [`crate::thesis::Awfqi`]: records already queried stay in `D₀`,
 //! the Q-function keeps its last fit, the step counter does not advance.
 
 mod builder;
@@ -346,7 +346,7 @@ impl<T, const D: usize, const I: usize> core::ops::Deref for ValidAdaptiveConfig
 
 /// The adaptive AWFQI learner: configuration, borrowed storage and the state of a run.
 ///
-/// Generic like [`crate::Awfqi`]: scalar `T`, target model `G`, state dimension `D`, GP
+/// Generic like [`crate::thesis::Awfqi`]: scalar `T`, target model `G`, state dimension `D`, GP
 /// input dimension `I = D + 1`, GP capacity `N` (the target GP's and the sources' mean
 /// functions'); every buffer's capacity is its slice's length. Each phase of a sub-batch
 /// keeps its own state in its own module: the verified path (`verify`), the candidate

@@ -331,7 +331,7 @@ fn construction_checks_the_parts_before_anything_changes() {
     assert_eq!(
         e.err(),
         Some(Error::BufferTooSmall {
-            buffer: "weights (`W`: one per source record)",
+            buffer: "weights (`source_records`: one per source record)",
             capacity: 119,
             needed: 120,
         })
@@ -451,7 +451,7 @@ fn a_full_buffer_refuses_the_step_before_any_query() {
     assert_eq!(
         kernel.step(&mut rng).err(),
         Some(Error::BufferTooSmall {
-            buffer: "samples (`Q`: steps × budget target records)",
+            buffer: "samples (`steps` × `budget` target records)",
             capacity: 12,
             needed: 24,
         })

@@ -204,12 +204,11 @@ mod tests {
         let target = Thermal::<f64>::target();
         let tariff = Thermal::<f64>::new(Room::Tariff);
         let leaky = Thermal::<f64>::new(Room::Leaky);
-        for a in 0..THERMAL_ACTIONS {
+        for (a, u) in THERMAL_COMMANDS.iter().enumerate().take(THERMAL_ACTIONS) {
             let (tn, tr) = target.mean_unchecked(s, a);
             let (n, r) = tariff.mean_unchecked(s, a);
             assert_eq!(tn, n);
             // Price 0.3 against 0.05 on command u.
-            let u = THERMAL_COMMANDS.get(a).copied().unwrap_or(f64::NAN);
             assert!((r - (tr - 0.25 * u)).abs() < 1e-12);
             let (n, r) = leaky.mean_unchecked(s, a);
             assert_eq!(r, tr);

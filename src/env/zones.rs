@@ -100,11 +100,15 @@ impl<T: Real> Zones<T> {
     pub fn mean_unchecked(&self, s: [T; ZONES], action: usize) -> ([T; ZONES], T) {
         let c = T::from_f64;
         let mut next = s;
+        let at = |k: usize| s.get(k).copied().unwrap_or(T::ZERO);
         for (i, t) in next.iter_mut().enumerate() {
-            let here = *t;
-            // The gap to neighbour `j` (none past either end).
-            let gap = |j: Option<usize>| j.and_then(|j| s.get(j)).map_or(T::ZERO, |&x| x - here);
-            let (left, right) = (gap(i.checked_sub(1)), gap(Some(i + 1)));
+            let here = at(i);
+            let left = if i > 0 { at(i - 1) - here } else { T::ZERO };
+            let right = if i + 1 < ZONES {
+                at(i + 1) - here
+            } else {
+                T::ZERO
+            };
             let heat = if action == i + 1 { c(GAIN) } else { T::ZERO };
             *t = here + c(LOSS) * (c(OUTSIDE) - here) + c(COUPLING) * (left + right) + heat;
         }

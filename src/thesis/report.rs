@@ -1,15 +1,15 @@
-//! What one step did, and the warnings a step's numbers call for.
-//!
-//! A kernel that runs on numbers it should not trust still runs: weights that collapsed onto
-//! a handful of source records, sources discarded wholesale by the variance rule of §7.3, a
-//! GP whose best fit the conditioning policy refused. [`StepReport`] carries the numbers
-//! and [`StepReport::warnings`] names what is wrong with them, without allocating, so
-//! firmware can log it with `defmt` or `core::fmt` and a host can print it.
-
 use crate::float::Real;
 use crate::gp::Hyperparameters;
 use core::fmt;
 
+/// What one step did, and the warnings a step's numbers call for.
+///
+/// A kernel that runs on numbers it should not trust still runs: weights that collapsed onto
+/// a handful of source records, sources discarded wholesale by the variance rule of §7.3, a
+/// GP whose best fit the conditioning policy refused. [`StepReport`] carries the numbers
+/// and [`StepReport::warnings`] names what is wrong with them, without allocating, so
+/// firmware can log it with `defmt` or `core::fmt` and a host can print it.
+///
 /// What one step did: the diagnostics of §7.2 step 6 and §12 step 6, and what a user needs
 /// to trust them ([`StepReport::warnings`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -30,14 +30,14 @@ pub struct StepReport<T, const I: usize> {
     /// The target GP's hyperparameters after the search.
     pub gp_hyperparameters: Hyperparameters<T, I>,
     /// The diagonal jitter of the target reward GP's factor (the base jitter unless the
-    /// factorisation had to escalate; see [`crate::Gp::jitter`]).
+    /// factorisation had to escalate; see [`crate::gp::Gp::jitter`]).
     pub gp_jitter: T,
     /// The condition estimate of the target reward GP's factor
-    /// ([`crate::Gp::condition_estimate`]).
+    /// ([`crate::gp::Gp::condition_estimate`]).
     pub gp_condition: T,
     /// GP fits of this step whose likelihood optimum the conditioning policy refused, so the
     /// best evaluated point it trusts was kept instead (see
-    /// [`crate::Gp::optimize_hyperparameters`]).
+    /// [`crate::gp::Gp::optimize_hyperparameters`]).
     pub gp_refused_fits: usize,
     /// Mean reward weight over all records, target ones (weight 1) included (`wr_mean`).
     pub wr_mean: T,
@@ -84,9 +84,9 @@ pub const DISCARDED_SHARE: f64 = 0.1;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Weights {
-    /// The reward weights (`v_r`, [`crate::AwfqiConfig::weights`]).
+    /// The reward weights (`v_r`, [`crate::thesis::AwfqiConfig::weights`]).
     Reward,
-    /// The transition weights (`v_s`, [`crate::AwfqiBuilder::transition_weights`]).
+    /// The transition weights (`v_s`, [`crate::thesis::AwfqiBuilder::transition_weights`]).
     Transition,
 }
 

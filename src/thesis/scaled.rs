@@ -1,53 +1,3 @@
-//! Settings that scale themselves: the GP's hyperparameter starts and bounds, its noise
-//! floor and the weights' noise variances derived from the source data, so a new plant
-//! needs no hand-tuned GP settings.
-//!
-//! [`AwfqiConfig::thesis`] is in Puddle World's units; on a plant whose states span
-//! `[0, 500]` or whose rewards are in the thousands, its GPs start at the wrong scale, its
-//! search box misses the likelihood's optimum and `v_r = 0.1` makes the reward weights
-//! collapse onto a few records. [`SourceScales::measure`] reads the scales off the source
-//! records once, [`AwfqiConfig::scaled`] turns them into settings by the rules below, and
-//! a step's [`StepReport::warnings`](super::StepReport::warnings) says when they still do
-//! not fit.
-//!
-//! **What is measured** (all source records together):
-//! - the range `[lᵢ, uᵢ]` of each state coordinate (states and next states) and the number
-//!   of actions `A` (largest action + 1); the span `sᵢ = uᵢ − lᵢ` (1 for a constant
-//!   coordinate) and, for the action input, `s_a = max(A − 1, 1)`;
-//! - the rewards' mean `r̄`, variance `σ²_r` and second moment `m₂ = r̄² + σ²_r` (the scale
-//!   of what a zero-mean GP must explain);
-//! - a **local noise** `ν` of the rewards and of each next-state coordinate: for each
-//!   record, a linear fit to its `min(2(D + 1), 16)` nearest records of the same source and
-//!   action (distance in units of the spans) and the record's residual `ε` from it, scaled
-//!   by the fit's own variance at the record (`ε²/(1 + h)`, variance `ν` for Gaussian
-//!   noise); `ν = median(ε²/(1 + h)) / 0.4549` (the median of χ²₁). The fit removes what
-//!   the output varies between neighbours to first order (a slope, the state carried into
-//!   the next state), which in four and more dimensions, where neighbours are far apart, is
-//!   most of a neighbour difference; curvature over that distance remains. With fewer than
-//!   `D + 2` such records the nearest one's difference `Δ` stands in (`Δ²/2`). The median
-//!   keeps a jump (a puddle's edge, a flood threshold) from dominating it. Three passes of
-//!   O(n²/A) distance computations per source and output, once, in no memory.
-//!
-//! **The rules** ([`AwfqiConfig::scaled`]):
-//! - every GP input `i` (each state coordinate, then the action): length-scale start
-//!   `sᵢ/2`, bounds `[sᵢ/100, 10·sᵢ]`; the search is ARD (one length scale per input) up
-//!   to 6 inputs (the search's limit), isotropic beyond;
-//! - signal variance: start `m₂`, bounds `[m₂/100, 10·m₂]`;
-//! - noise variance: start `max(ν_r, floor)`, bounds `[floor, m₂]`, with the **noise
-//!   floor** `floor = m₂ · max(10⁻⁴, 10⁴·ε)` (`ε` the precision's epsilon: `1.2·10⁻³·m₂`
-//!   in `f32`, `10⁻⁴·m₂` in `f64`), which keeps a GP whose inputs cluster (repeated
-//!   queries, rollouts) within the condition number the precision can trust;
-//! - search: [`SCALED_RESTARTS`] random restarts and [`SCALED_EVALUATIONS_PER_PARAMETER`]
-//!   likelihood evaluations per searched parameter;
-//! - reward weights: the heuristic estimator ([`SCALED_ESTIMATOR`]; the thesis's mean
-//!   estimator discards and caps records whose source posterior is nearly as uncertain as
-//!   `v`) with `v_r = max(K·ν_r, floor)`, `K =` [`NOISE_MULTIPLIER`] `= 4`, `w_max = 1000`;
-//!   transition weights ([`SourceScales::transition_weights`]): the same rule on the mean
-//!   of the next-state coordinates' `ν`;
-//! - everything else as [`AwfqiConfig::thesis`]: reference noise subtraction, the spread
-//!   subset rule, sampling on `V_r`, FQI with γ = 0.99 and 60 iterations (set `fqi` to
-//!   your plant's discount).
-
 use super::AwfqiConfig;
 use crate::error::{Error, Result};
 use crate::float::Real;
@@ -87,7 +37,57 @@ pub const SCALED_EVALUATIONS_PER_PARAMETER: usize = 40;
 /// observations of variance `ν`.
 const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_7;
 
-/// What the source records say about a plant's scales (see the [module docs](self)).
+/// Settings that scale themselves: the GP's hyperparameter starts and bounds, its noise
+/// floor and the weights' noise variances derived from the source data, so a new plant
+/// needs no hand-tuned GP settings.
+///
+/// [`AwfqiConfig::thesis`] is in Puddle World's units; on a plant whose states span
+/// `[0, 500]` or whose rewards are in the thousands, its GPs start at the wrong scale, its
+/// search box misses the likelihood's optimum and `v_r = 0.1` makes the reward weights
+/// collapse onto a few records. [`SourceScales::measure`] reads the scales off the source
+/// records once, [`AwfqiConfig::scaled`] turns them into settings by the rules below, and
+/// a step's [`StepReport::warnings`](super::StepReport::warnings) says when they still do
+/// not fit.
+///
+/// **What is measured** (all source records together):
+/// - the range `[lᵢ, uᵢ]` of each state coordinate (states and next states) and the number
+///   of actions `A` (largest action + 1); the span `sᵢ = uᵢ − lᵢ` (1 for a constant
+///   coordinate) and, for the action input, `s_a = max(A − 1, 1)`;
+/// - the rewards' mean `r̄`, variance `σ²_r` and second moment `m₂ = r̄² + σ²_r` (the scale
+///   of what a zero-mean GP must explain);
+/// - a **local noise** `ν` of the rewards and of each next-state coordinate: for each
+///   record, a linear fit to its `min(2(D + 1), 16)` nearest records of the same source and
+///   action (distance in units of the spans) and the record's residual `ε` from it, scaled
+///   by the fit's own variance at the record (`ε²/(1 + h)`, variance `ν` for Gaussian
+///   noise); `ν = median(ε²/(1 + h)) / 0.4549` (the median of χ²₁). The fit removes what
+///   the output varies between neighbours to first order (a slope, the state carried into
+///   the next state), which in four and more dimensions, where neighbours are far apart, is
+///   most of a neighbour difference; curvature over that distance remains. With fewer than
+///   `D + 2` such records the nearest one's difference `Δ` stands in (`Δ²/2`). The median
+///   keeps a jump (a puddle's edge, a flood threshold) from dominating it. Three passes of
+///   O(n²/A) distance computations per source and output, once, in no memory.
+///
+/// **The rules** ([`AwfqiConfig::scaled`]):
+/// - every GP input `i` (each state coordinate, then the action): length-scale start
+///   `sᵢ/2`, bounds `[sᵢ/100, 10·sᵢ]`; the search is ARD (one length scale per input) up
+///   to 6 inputs (the search's limit), isotropic beyond;
+/// - signal variance: start `m₂`, bounds `[m₂/100, 10·m₂]`;
+/// - noise variance: start `max(ν_r, floor)`, bounds `[floor, m₂]`, with the **noise
+///   floor** `floor = m₂ · max(10⁻⁴, 10⁴·ε)` (`ε` the precision's epsilon: `1.2·10⁻³·m₂`
+///   in `f32`, `10⁻⁴·m₂` in `f64`), which keeps a GP whose inputs cluster (repeated
+///   queries, rollouts) within the condition number the precision can trust;
+/// - search: [`SCALED_RESTARTS`] random restarts and [`SCALED_EVALUATIONS_PER_PARAMETER`]
+///   likelihood evaluations per searched parameter;
+/// - reward weights: the heuristic estimator ([`SCALED_ESTIMATOR`]; the thesis's mean
+///   estimator discards and caps records whose source posterior is nearly as uncertain as
+///   `v`) with `v_r = max(K·ν_r, floor)`, `K =` [`NOISE_MULTIPLIER`] `= 4`, `w_max = 1000`;
+///   transition weights ([`SourceScales::transition_weights`]): the same rule on the mean
+///   of the next-state coordinates' `ν`;
+/// - everything else as [`AwfqiConfig::thesis`]: reference noise subtraction, the spread
+///   subset rule, sampling on `V_r`, FQI with γ = 0.99 and 60 iterations (set `fqi` to
+///   your plant's discount).
+///
+/// What the source records say about a plant's scales (see above).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SourceScales<T, const D: usize> {
@@ -171,7 +171,7 @@ impl<T: Real, const D: usize> SourceScales<T, D> {
         })
     }
 
-    /// `(lower, upper)` of each state coordinate, as [`crate::AdaptiveConfig::bounds`]
+    /// `(lower, upper)` of each state coordinate, as [`crate::adaptive::AdaptiveConfig::bounds`]
     /// takes them (a constant coordinate gets a unit interval around its value).
     pub fn bounds(&self) -> [(T, T); D] {
         let mut bounds = [(T::ZERO, T::ONE); D];
@@ -293,7 +293,7 @@ impl<T: Real, const D: usize> SourceScales<T, D> {
 }
 
 impl<T: Real, const I: usize> AwfqiConfig<T, I> {
-    /// Settings derived from the source data (the [rules](crate::thesis::scaled)): the
+    /// Settings derived from the source data (the [rules](crate::thesis::SourceScales)): the
     /// scaled GP training and reward weights, and otherwise [`AwfqiConfig::thesis`]'s
     /// values for `budget` queries per step. The start for a plant of your own; set `fqi`
     /// to its discount.

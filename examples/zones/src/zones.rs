@@ -3,138 +3,36 @@
 //! many seeds before it is flashed.
 //!
 //! Written against the crate's public API and documentation only, the way a firmware
-//! engineer would start a plant of their own: implement `GenerativeModel`, measure the
-//! sources' scales, take the recommended adaptive kernel on the scaled settings.
+//! engineer would start a plant of their own: a plant implementing `GenerativeModel` (here
+//! the crate's own `awfqi::env::Zones`, whose source file shows how one is written), the
+//! sources' scales measured, the recommended adaptive kernel on the scaled settings.
 
 use awfqi::adaptive::{FadeCell, Fading};
+use awfqi::env::{Zones, zones_thermostat};
 use awfqi::prelude::{
     AdaptiveAwfqi, AdaptiveConfig, Approximator, EmptyCells, Evaluation, FqiConfig,
-    GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, Real, RewardModel, RowSet,
-    SampleSet, SourceScales, StepReport, SweepStorage, Transition, evaluate_greedy_multi_start,
+    GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, RewardModel, RowSet, SampleSet,
+    SourceScales, StepReport, SweepStorage, Transition, evaluate_greedy_multi_start,
     evaluate_multi_start,
 };
 use awfqi::rand_core::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-// ---- The plant: three heated zones in a row. ----
+// ---- The plant: three heated zones in a row (the core's `awfqi::env::Zones`). ----
 
 /// Zones: the state is each zone's temperature, normalised to [0, 1].
-pub const ZONES: usize = 3;
+pub const ZONES: usize = awfqi::env::ZONES;
 /// Actions: 0 = heater off, 1–3 = heat zone 1–3 (one heater, switched between zones).
-pub const ACTIONS: usize = 4;
-/// The comfort temperature every zone of our building should hold.
-pub const SETPOINT: f32 = 0.6;
+pub const ACTIONS: usize = awfqi::env::ZONES_ACTIONS;
 /// Discount of the task (an episode is a day of 40 control periods).
-pub const DISCOUNT: f32 = 0.95;
+pub const DISCOUNT: f32 = awfqi::env::ZONES_DISCOUNT as f32;
 /// Control periods per episode.
-pub const HORIZON: usize = 40;
-
-/// Heat loss to the outside per period (a share of the gap to the outside temperature).
-const LOSS: f32 = 0.1;
-/// The outside temperature.
-const OUTSIDE: f32 = 0.2;
-/// Heat exchange with each neighbouring zone per period.
-const COUPLING: f32 = 0.05;
-/// Temperature rise of the heated zone per period.
-const GAIN: f32 = 0.25;
-/// Standard deviation of each zone's temperature noise per period.
-const STATE_NOISE: f32 = 0.02;
-/// Standard deviation of the measured comfort (the reward's noise).
-const REWARD_NOISE: f32 = 0.05;
-
-/// Whose comfort is measured: every building shares the physics, not the comfort rule.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Building {
-    /// Ours: every zone at [`SETPOINT`], heating costs 0.05 a period.
-    Target,
-    /// The east wing's log: as ours while zone 1 is below 0.5; above, its third zone is a
-    /// store room held at 0.3.
-    East,
-    /// The west wing's log: as ours while zone 1 is at 0.5 or above; below, its heating
-    /// costs 0.4 a period (a night tariff).
-    West,
-}
-
-/// Three zones in a row: each loses heat to the outside and exchanges heat with its
-/// neighbours; the heater warms one zone per period.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Zones {
-    /// Whose comfort rule scores the periods.
-    pub building: Building,
-}
-
-impl Zones {
-    /// The noise-free next temperatures and comfort of `state` under `action`.
-    pub fn mean(&self, s: [f32; ZONES], action: usize) -> ([f32; ZONES], f32) {
-        let mut next = s;
-        for (i, t) in next.iter_mut().enumerate() {
-            let left = if i > 0 { s[i - 1] - s[i] } else { 0.0 };
-            let right = if i + 1 < ZONES { s[i + 1] - s[i] } else { 0.0 };
-            let heat = if action == i + 1 { GAIN } else { 0.0 };
-            *t = s[i] + LOSS * (OUTSIDE - s[i]) + COUPLING * (left + right) + heat;
-        }
-        let (mut third, mut energy) = (SETPOINT, 0.05);
-        match self.building {
-            Building::Target => {}
-            Building::East if s[0] >= 0.5 => third = 0.3,
-            Building::West if s[0] < 0.5 => energy = 0.4,
-            _ => {}
-        }
-        let discomfort =
-            Real::abs(s[0] - SETPOINT) + Real::abs(s[1] - SETPOINT) + Real::abs(s[2] - third);
-        let cost = if action == 0 { 0.0 } else { energy };
-        (next, -discomfort - cost)
-    }
-}
-
-impl GenerativeModel<f32> for Zones {
-    type State = [f32; ZONES];
-
-    fn num_actions(&self) -> usize {
-        ACTIONS
-    }
-
-    fn query<R: Rng + ?Sized>(
-        &self,
-        state: [f32; ZONES],
-        action: usize,
-        rng: &mut R,
-    ) -> awfqi::Result<Transition<[f32; ZONES], f32>> {
-        if action >= ACTIONS {
-            return Err(awfqi::Error::OutOfRange {
-                parameter: "action",
-            });
-        }
-        if !state.iter().all(|t| (0.0..=1.0).contains(t)) {
-            return Err(awfqi::Error::OutOfRange { parameter: "state" });
-        }
-        let (mean, comfort) = self.mean(state, action);
-        let mut next_state = mean;
-        for t in &mut next_state {
-            let noise: f32 = awfqi::rng::standard_normal(rng);
-            *t = (*t + STATE_NOISE * noise).clamp_to(0.0, 1.0);
-        }
-        let noise: f32 = awfqi::rng::standard_normal(rng);
-        Ok(Transition {
-            state,
-            action,
-            reward: comfort + REWARD_NOISE * noise,
-            next_state,
-            absorbing: false,
-        })
-    }
-}
+pub const HORIZON: usize = awfqi::env::ZONES_HORIZON;
 
 /// The hand-written rule: heat the zone furthest below the setpoint when it is more than
 /// 0.05 below, else switch the heater off.
 pub fn thermostat(s: &[f32; ZONES]) -> awfqi::Result<usize> {
-    let (mut action, mut worst) = (0, 0.05);
-    for (i, &t) in s.iter().enumerate() {
-        if SETPOINT - t > worst {
-            (action, worst) = (i + 1, SETPOINT - t);
-        }
-    }
-    Ok(action)
+    Ok(zones_thermostat(s))
 }
 
 // ---- Sizes: every buffer is fixed at compile time. ----
@@ -220,13 +118,22 @@ impl Default for Memory {
     }
 }
 
-/// The evaluation's start states: a cold morning, a warm afternoon and two uneven ones.
-pub const STARTS: [[f32; ZONES]; 4] = [
-    [0.2, 0.2, 0.2],
-    [0.7, 0.6, 0.8],
-    [0.3, 0.8, 0.4],
-    [0.9, 0.3, 0.1],
-];
+/// The evaluation's start states: a cold morning, a warm afternoon and two uneven ones
+/// (the plant's declared starts).
+pub const STARTS: [[f32; ZONES]; 4] = {
+    let s = awfqi::env::ZONES_STARTS;
+    let mut out = [[0.0f32; ZONES]; 4];
+    let mut i = 0;
+    while i < 4 {
+        let mut d = 0;
+        while d < ZONES {
+            out[i][d] = s[i][d] as f32;
+            d += 1;
+        }
+        i += 1;
+    }
+    out
+};
 
 /// Rollouts from each start state.
 pub const ROLLOUTS: usize = 5;
@@ -247,8 +154,7 @@ fn log_sources<R: Rng>(
     logs: &mut [[Transition<[f32; ZONES], f32>; PER_SOURCE]; SOURCES],
     rng: &mut R,
 ) -> awfqi::Result<()> {
-    for (log, building) in logs.iter_mut().zip([Building::East, Building::West]) {
-        let plant = Zones { building };
+    for (log, plant) in logs.iter_mut().zip(Zones::<f32>::sources()) {
         for record in log.iter_mut() {
             let state = [(); ZONES].map(|_| awfqi::rng::uniform::<f32, R>(rng));
             let action = awfqi::rng::uniform_index(rng, ACTIONS);
@@ -319,9 +225,7 @@ pub fn learn_and_compare_with(
     // The kernel on our building: settings scaled from the logs (nothing tuned by hand but
     // the task's discount), each source's reward model and stored posteriors fitted in the
     // kernel's GP, the model sweep over [0, 1]³ and the spacing-0.1 grid of candidates.
-    let plant = Zones {
-        building: Building::Target,
-    };
+    let plant = Zones::<f32>::target();
     let bounds = SourceScales::measure(&logs)?.bounds();
     let fqi = FqiConfig::new(DISCOUNT, 60, EmptyCells::CappedNearest)?.with_min_weight(0.5)?;
     let rows = RowSet::grid(

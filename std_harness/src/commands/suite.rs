@@ -392,10 +392,9 @@ fn merge_cell(
     })
 }
 
-/// The hand-written controllers: the zones' and the thermal room's thermostats, the tanks'
-/// proportional controller, the Dam's standard operating rule (release the demand, 10, and
-/// the most, 30, above the flooding threshold), Acrobot's energy pumping (torque in the
-/// direction of the first link's velocity). Puddle World has none.
+/// The Dam's standard operating rule: release the demand, 10, and the most, 30, above the
+/// flooding threshold (the other plants' controllers are the core's: the zones' and the
+/// thermal room's thermostats, the tanks' proportional controller; Puddle World has none).
 pub fn dam_rule(s: &[f64; 2]) -> usize {
     if s[0] > awfqi::env::DAM_FLOODING {
         7
@@ -404,19 +403,19 @@ pub fn dam_rule(s: &[f64; 2]) -> usize {
     }
 }
 
-/// Acrobot's energy pumping (see [`dam_rule`]).
+/// Acrobot's energy pumping: torque in the direction of the first link's velocity.
 pub fn acrobot_pumping(s: &[f64; 4]) -> usize {
     usize::from(s[2] >= 0.0)
 }
 
-/// A hand-written controller and its name.
-type NamedController<'a, const D: usize> = (&'a str, fn(&[f64; D]) -> usize);
+/// A hand-written controller: its name and its policy.
+type Controller<'a, const D: usize> = (&'a str, fn(&[f64; D]) -> usize);
 
 /// Computes one plant's anchors.
 fn plant_anchors<const D: usize>(
     plant: SuitePlant,
     domain: &Domain<D>,
-    controller: Option<NamedController<'_, D>>,
+    controller: Option<Controller<'_, D>>,
     resolutions: &[[usize; D]],
     args: &Args,
 ) -> anyhow::Result<PlantAnchors> {

@@ -286,7 +286,6 @@ mod tests {
 
     #[test]
     fn interpolation_is_exact_on_a_linear_value() {
-        let domain = unit_box::zones();
         let mut plan = GridPlan::<3> {
             lower: [0.0; 3],
             upper: [1.0; 3],
@@ -303,7 +302,6 @@ mod tests {
         // Past the horizon (no layer): zero; outside the box: clamped.
         assert_eq!(plan.value(1, &s), 0.0);
         assert!((plan.value(0, &[2.0, 0.0, 0.0]) - 3.0).abs() < 1e-6);
-        let _ = domain;
     }
 
     #[test]

@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
 use crate::transfer::algorithms::embedded::{
     ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
-    EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
+    AnchorKnobs, EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
 };
 use crate::transfer::score_tables::Mode;
 
@@ -39,6 +39,10 @@ pub enum AdaptiveQArg {
     /// Value iteration on a grid model of the weighted records (the core's `SweepFqi`):
     /// `--adaptive-sweep-cells` cells per axis, nodes at their corners.
     Sweep,
+    /// The same model at representative states placed from the records (the core's
+    /// `AnchorFqi`): at most `--adaptive-anchors` nodes, a point read from its
+    /// `--adaptive-anchor-neighbours` nearest; the other `--adaptive-sweep-*` options apply.
+    Anchors,
 }
 
 /// Which records a model-sweep node's reward averages (the core's `RewardModel`).
@@ -108,6 +112,12 @@ pub struct AdaptiveArgs {
     /// `--iterations`), 400 on the Dam (chosen on the tuning runs).
     #[arg(long)]
     pub adaptive_sweeps: Option<usize>,
+    /// The node budget of `--adaptive-q anchors`.
+    #[arg(long, default_value_t = 256)]
+    pub adaptive_anchors: usize,
+    /// `--adaptive-q anchors`: the nodes a point is read from (1 to 4).
+    #[arg(long, default_value_t = 4)]
+    pub adaptive_anchor_neighbours: usize,
     /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
     #[arg(long, default_value_t = ADAPTIVE_TILES)]
     pub adaptive_tiles: usize,
@@ -287,7 +297,7 @@ impl AdaptiveArgs {
                 max_depth: self.adaptive_tree_max_depth,
                 streamed: self.adaptive_tree_streamed,
             })?,
-            AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
+            AdaptiveQArg::Sweep | AdaptiveQArg::Anchors => EmbeddedQ::sweep(SweepKnobs {
                 cells: self.adaptive_sweep_cells.unwrap_or(sweep.cells),
                 rewards: self
                     .adaptive_sweep_rewards
@@ -295,6 +305,10 @@ impl AdaptiveArgs {
                 min_mass: self.adaptive_sweep_min_mass,
                 lookahead: self.adaptive_sweep_lookahead,
                 sweeps: self.adaptive_sweeps.or(sweep.sweeps),
+                anchors: (self.adaptive_q == AdaptiveQArg::Anchors).then_some(AnchorKnobs {
+                    nodes: self.adaptive_anchors,
+                    neighbours: self.adaptive_anchor_neighbours,
+                }),
             })?,
         })
     }
@@ -342,7 +356,7 @@ impl SweepDefaults {
     /// backfilled rewards (their energy costs depend on the action).
     pub const UNIT_BOX: Self = Self {
         cells: 6,
-        rewards: awfqi::prelude::RewardModel::Backfilled,
+        rewards: awfqi::fqi::RewardModel::Backfilled,
         sweeps: None,
     };
 }
@@ -440,6 +454,44 @@ mod tests {
             60,
             "other approximators run FQI's iterations"
         );
+    }
+
+    #[test]
+    fn anchors_are_the_sweep_on_a_node_budget() {
+        let words = [
+            "--adaptive-q",
+            "anchors",
+            "--adaptive-anchors",
+            "64",
+            "--adaptive-anchor-neighbours",
+            "2",
+            "--adaptive-sweeps",
+            "7",
+        ];
+        let anchors = q(&words, SweepDefaults::ACROBOT).unwrap();
+        assert!(matches!(
+            anchors,
+            EmbeddedQ::Sweep(SweepKnobs {
+                anchors: Some(AnchorKnobs {
+                    nodes: 64,
+                    neighbours: 2
+                }),
+                sweeps: Some(7),
+                ..
+            })
+        ));
+        assert_eq!(iterations(anchors), 7);
+        assert!(matches!(
+            q(&[], SweepDefaults::ACROBOT).unwrap(),
+            EmbeddedQ::Sweep(SweepKnobs { anchors: None, .. })
+        ));
+        for bad in [
+            ["--adaptive-anchors", "0"],
+            ["--adaptive-anchor-neighbours", "5"],
+        ] {
+            let words = [&["--adaptive-q", "anchors"][..], &bad[..]].concat();
+            assert!(q(&words, SweepDefaults::ACROBOT).is_err(), "{bad:?}");
+        }
     }
 
     #[test]

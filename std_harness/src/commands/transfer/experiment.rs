@@ -66,6 +66,33 @@ where
     Ok(Arc::new(setup))
 }
 
+/// Source data generated earlier in this process, by what determines them (domain, seed,
+/// generation, GP options): the same data, so a process that runs one domain at several
+/// schedules (`awfqi-harness suite`) generates them once.
+static GENERATED: std::sync::Mutex<Vec<(String, Box<dyn std::any::Any + Send>)>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// The data generated under `key`, from the cache or by `generate`.
+fn generated<const D: usize>(
+    key: &str,
+    generate: impl FnOnce() -> anyhow::Result<SourceSet<D>>,
+) -> anyhow::Result<SourceSet<D>> {
+    let cached = |cache: &[(String, Box<dyn std::any::Any + Send>)]| {
+        cache
+            .iter()
+            .find(|(k, _)| k == key)
+            .and_then(|(_, set)| set.downcast_ref::<SourceSet<D>>().cloned())
+    };
+    if let Some(set) = GENERATED.lock().ok().and_then(|c| cached(&c)) {
+        return Ok(set);
+    }
+    let set = generate()?;
+    if let Ok(mut cache) = GENERATED.lock() {
+        cache.push((key.to_string(), Box::new(set.clone())));
+    }
+    Ok(set)
+}
+
 /// The source datasets `--sources` names.
 fn load_sources<const D: usize>(
     config: &Config,
@@ -79,14 +106,22 @@ fn load_sources<const D: usize>(
             let generation = data.generation.with_budget(config.iterations, config.trees);
             eprintln!("generating source data ({generation:?})…");
             let start = Instant::now();
-            let set = crate::transfer::sources::generate(
-                domain,
-                &data.weighting,
-                &data.layout,
-                &generation,
-                &config.gp(),
+            let key = format!(
+                "{} {} {generation:?} {:?}",
+                domain.name,
                 args.seed,
-            )?;
+                config.gp()
+            );
+            let set = generated(&key, || {
+                crate::transfer::sources::generate(
+                    domain,
+                    &data.weighting,
+                    &data.layout,
+                    &generation,
+                    &config.gp(),
+                    args.seed,
+                )
+            })?;
             let dir = config.out.join("sources");
             set.write_dir(&dir, &data.layout)?;
             eprintln!(
@@ -221,4 +256,29 @@ pub fn build_experiment<const D: usize>(
         experiment.ideal_weights = Some(Arc::new(weights));
     }
     Ok(experiment)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generated_sources_are_computed_once_per_key() {
+        let set = || SourceSet::<3> {
+            sources: Vec::new(),
+            origin: "generated (seed 7)".into(),
+        };
+        let mut calls = 0;
+        let mut get = |key: &str| {
+            generated(key, || {
+                calls += 1;
+                Ok(set())
+            })
+            .unwrap()
+        };
+        assert_eq!(get("test: a"), set());
+        assert_eq!(get("test: a"), set());
+        assert_eq!(get("test: b"), set());
+        assert_eq!(calls, 2);
+    }
 }

@@ -178,6 +178,9 @@ struct QMemory<const D: usize> {
     nodes: Vec<TreeNode<T>>,
     sweep_entries: Vec<awfqi::fqi::SweepEntry<T, D>>,
     sweep_nodes: Vec<awfqi::fqi::SweepNode<T>>,
+    anchor_entries: Vec<awfqi::fqi::AnchorEntry<T>>,
+    anchor_positions: Vec<[T; D]>,
+    anchor_landings: Vec<[T; D]>,
 }
 
 impl<const D: usize> QMemory<D> {
@@ -190,6 +193,9 @@ impl<const D: usize> QMemory<D> {
             nodes: &mut self.nodes,
             sweep_entries: &mut self.sweep_entries,
             sweep_nodes: &mut self.sweep_nodes,
+            anchor_entries: &mut self.anchor_entries,
+            anchor_positions: &mut self.anchor_positions,
+            anchor_landings: &mut self.anchor_landings,
         }
     }
 }
@@ -369,6 +375,16 @@ where
                 .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
             sweep.nodes(),
         ),
+        awfqi::prelude::Approximator::Anchors(anchors) => (0, anchors.nodes()),
+        _ => (0, 0),
+    };
+    let (anchor_entries, anchors) = match approximator {
+        awfqi::prelude::Approximator::Anchors(anchors) => (
+            anchors
+                .required_entries(actions)
+                .ok_or_else(|| anyhow::anyhow!("anchor entries overflow"))?,
+            anchors.nodes(),
+        ),
         _ => (0, 0),
     };
     let q = QMemory {
@@ -379,6 +395,9 @@ where
         nodes: vec![TreeNode::EMPTY; nodes],
         sweep_entries: vec![awfqi::fqi::SweepEntry::EMPTY; sweep_entries],
         sweep_nodes: vec![awfqi::fqi::SweepNode::EMPTY; sweep_nodes],
+        anchor_entries: vec![awfqi::fqi::AnchorEntry::EMPTY; anchor_entries],
+        anchor_positions: vec![[0.0; D]; anchors],
+        anchor_landings: vec![[0.0; D]; anchors],
     };
     let mut spare = experiment
         .adaptive_options
