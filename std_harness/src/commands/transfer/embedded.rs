@@ -163,12 +163,32 @@ pub struct AdaptiveArgs {
     /// Depth limit of `--adaptive-q trees` (absent: none; the root is at depth 0).
     #[arg(long)]
     pub adaptive_tree_max_depth: Option<usize>,
-    /// Sub-batches (re-planning points) per step.
-    #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
-    pub adaptive_sub_batches: usize,
-    /// Share of each sub-batch spent verifying the greedy policy.
-    #[arg(long, default_value_t = AdaptiveOptions::default().verify)]
-    pub adaptive_verify: f64,
+    /// Sub-batches (re-planning points) per step (absent: the core's schedule rule from the
+    /// budget per step, `awfqi::adaptive::Schedule::rule`).
+    #[arg(long)]
+    pub adaptive_sub_batches: Option<usize>,
+    /// Share of each sub-batch spent verifying the greedy policy (absent: the schedule
+    /// rule's).
+    #[arg(long)]
+    pub adaptive_verify: Option<f64>,
+    /// Where the verification rollouts start: `all` the domain's distinct evaluation start
+    /// states (each for an equal share of a step's verification), `middle` the middle one
+    /// alone.
+    #[arg(long, value_enum, default_value_t = AdaptiveStartsArg::Middle)]
+    pub adaptive_starts: AdaptiveStartsArg,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short
+    /// of its promise (`AdaptiveConfig::safeguard`).
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().safeguard)]
+    pub adaptive_safeguard: bool,
+    /// Fade the sources' reward weights where the target has records: in a region (a cell
+    /// of `--adaptive-fading-cells` per state coordinate, per action) where the target has
+    /// answered, the source records weigh at most this many records in all (absent: no
+    /// fading; `awfqi::adaptive::Fading`).
+    #[arg(long)]
+    pub adaptive_fading: Option<f64>,
+    /// Cells per state coordinate of the fading's regions.
+    #[arg(long, default_value_t = 10)]
+    pub adaptive_fading_cells: usize,
     /// Score rows by residual surprise.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise)]
     pub adaptive_surprise: bool,
@@ -209,12 +229,26 @@ pub struct AdaptiveArgs {
     pub adaptive_same_samples_fqi: bool,
 }
 
+/// Where `awfqi-adaptive`'s verification rollouts start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AdaptiveStartsArg {
+    /// Every distinct evaluation start state of the domain.
+    All,
+    /// The middle one of the evaluation start states alone.
+    Middle,
+}
+
 impl AdaptiveArgs {
     /// The adaptive loop's knobs.
     pub fn options(&self) -> AdaptiveOptions {
         AdaptiveOptions {
             sub_batches: self.adaptive_sub_batches,
             verify: self.adaptive_verify,
+            all_starts: self.adaptive_starts == AdaptiveStartsArg::All,
+            safeguard: self.adaptive_safeguard,
+            fading: self
+                .adaptive_fading
+                .map(|kappa| (kappa, self.adaptive_fading_cells)),
             surprise: self.adaptive_surprise,
             uncertainty: self.adaptive_uncertainty,
             decision: self.adaptive_decision,

@@ -30,10 +30,19 @@ use crate::transfer::protocol::{Diagnostics, Learner};
 /// the result files record them. The defaults are the core's recommended configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AdaptiveOptions {
-    /// Sub-batches per step (re-planning points), ≥ 1.
-    pub sub_batches: usize,
-    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1].
-    pub verify: f64,
+    /// Sub-batches per step (re-planning points), ≥ 1 (`None`: the core's schedule rule).
+    pub sub_batches: Option<usize>,
+    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1] (`None`:
+    /// the schedule rule's).
+    pub verify: Option<f64>,
+    /// Verify from every distinct evaluation start state of the domain (else from the
+    /// middle one alone).
+    pub all_starts: bool,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short.
+    pub safeguard: bool,
+    /// Fading source weights: the pseudo-records `κ` and the cells per state coordinate
+    /// (`None`: off).
+    pub fading: Option<(f64, usize)>,
     /// Score rows by residual surprise.
     pub surprise: bool,
     /// Scale scores by the residual GP's remaining variance.
@@ -157,8 +166,11 @@ impl Default for AdaptiveOptions {
     fn default() -> Self {
         let c = AdaptiveConfig::<f64, 2, 3>::recommended(1, [0.0; 2], 1, 0.0, [(0.0, 1.0); 2]);
         Self {
-            sub_batches: c.sub_batches,
-            verify: c.verify,
+            sub_batches: None,
+            verify: None,
+            all_starts: false,
+            safeguard: c.safeguard,
+            fading: None,
             surprise: c.surprise,
             uncertainty: c.uncertainty,
             decision: c.decision,
@@ -202,8 +214,13 @@ where
     );
     c.awfqi = setup.awfqi_config(budget);
     c.awfqi.fqi = setup.config.adaptive_q.fqi(c.awfqi.fqi)?;
-    c.sub_batches = o.sub_batches;
-    c.verify = o.verify as T;
+    if let Some(s) = o.sub_batches {
+        c.sub_batches = s;
+    }
+    if let Some(v) = o.verify {
+        c.verify = v as T;
+    }
+    c.safeguard = o.safeguard;
     c.surprise = o.surprise;
     c.uncertainty = o.uncertainty;
     c.decision = o.decision;
@@ -494,6 +511,19 @@ where
     };
     let means = means(setup, &sources)?;
     let means: &[MeanFunction<T, N, I>] = &means;
+    let starts = verification_starts(experiment, setup);
+    let fading = experiment.adaptive_options.fading.map(|(kappa, cells)| {
+        let f = awfqi::adaptive::Fading {
+            pseudo_records: kappa as T,
+            cells,
+        };
+        let len = cells
+            .saturating_pow(D as u32)
+            .saturating_mul(actions)
+            .min(1 << 20);
+        (f, vec![awfqi::adaptive::FadeCell::EMPTY; len.max(1)])
+    });
+    let mut fade_table = fading.as_ref().map(|(_, t)| t.clone()).unwrap_or_default();
     let adaptive = AdaptiveAwfqi::new(
         config,
         approximator,
@@ -502,11 +532,37 @@ where
         rows,
         plant,
         memory.buffers(),
-    )?;
+    )?
+    .with_starts(&starts)?;
+    let adaptive = match fading {
+        Some((f, _)) => adaptive.with_fading(f, &mut fade_table)?,
+        None => adaptive,
+    };
     let mut learner = AdaptiveLearner {
         adaptive,
         collected: Vec::new(),
         baseline,
     };
     f(&mut learner, rng)
+}
+
+/// Where the verification rollouts start: the domain's distinct evaluation start states
+/// ([`AdaptiveOptions::all_starts`]), else the set-up's start alone.
+fn verification_starts<const N: usize, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
+    setup: &EmbeddedSetup<N, D, I>,
+) -> Vec<[T; D]> {
+    let mut starts: Vec<[T; D]> = Vec::new();
+    if experiment.adaptive_options.all_starts {
+        for s in &experiment.domain.evaluation_starts {
+            let s = s.map(|x| x as T);
+            if !starts.contains(&s) {
+                starts.push(s);
+            }
+        }
+    }
+    if starts.is_empty() {
+        starts.push(setup.domain.start.map(|x| x as T));
+    }
+    starts
 }

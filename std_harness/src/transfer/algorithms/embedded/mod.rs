@@ -887,6 +887,9 @@ fn after_step<const D: usize, const I: usize>(
         ws_mean: transitions(report.ws_mean),
         ws_eff: transitions(report.ws_eff),
         reward_gp: Some(reward_gp_summary(report)),
+        plan_shortfall: (report.reward_std > 0.0)
+            .then(|| f64::from(report.plan_shortfall / report.reward_std)),
+        warnings: Some(report.warnings().map(|w| w.to_string()).collect()),
         ..Diagnostics::default()
     }
 }
