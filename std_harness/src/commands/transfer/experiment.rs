@@ -52,11 +52,13 @@ pub type SetupFn<const D: usize> = fn(
 /// generation, GP options): the same data, so a process that runs one domain at several
 /// schedules (`awfqi-harness suite`) generates them once. States are kept as slices, so one
 /// cache serves every state dimension and a set comes back only at the dimension it has.
-static GENERATED: std::sync::Mutex<Vec<(String, SourceSet<0>, Vec<Vec<StatePair>>)>> =
-    std::sync::Mutex::new(Vec::new());
+static GENERATED: std::sync::Mutex<Vec<Generated>> = std::sync::Mutex::new(Vec::new());
 
 /// A record's state and next state, whatever the dimension.
 type StatePair = (Vec<f64>, Vec<f64>);
+
+/// One cached set: its key, the set without states, and each source's states.
+type Generated = (String, SourceSet<0>, Vec<Vec<StatePair>>);
 
 /// `set` with its states moved out as slices (the records keep zero-length states).
 fn erase<const D: usize>(set: &SourceSet<D>) -> (SourceSet<0>, Vec<Vec<StatePair>>) {
