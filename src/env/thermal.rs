@@ -204,12 +204,12 @@ mod tests {
         let target = Thermal::<f64>::target();
         let tariff = Thermal::<f64>::new(Room::Tariff);
         let leaky = Thermal::<f64>::new(Room::Leaky);
-        for a in 0..THERMAL_ACTIONS {
+        for (a, u) in THERMAL_COMMANDS.iter().enumerate() {
             let (tn, tr) = target.mean_unchecked(s, a);
             let (n, r) = tariff.mean_unchecked(s, a);
             assert_eq!(tn, n);
             // Price 0.3 against 0.05 on command u.
-            assert!((r - (tr - 0.25 * THERMAL_COMMANDS[a])).abs() < 1e-12);
+            assert!((r - (tr - 0.25 * u)).abs() < 1e-12);
             let (n, r) = leaky.mean_unchecked(s, a);
             assert_eq!(r, tr);
             // Room: +0.1·0.3 from the stronger element, −0.07·0.4 from the larger loss.
