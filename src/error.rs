@@ -16,12 +16,12 @@ pub enum Error {
         /// The capacity (number of elements) of the container that is full.
         capacity: usize,
     },
-    /// A buffer lent to a kernel (a part of an [`AwfqiStorage`](crate::AwfqiStorage) or
-    /// [`AdaptiveStorage`](crate::AdaptiveStorage), or a set-up buffer) is shorter than the
-    /// set-up or the run needs: `buffer` names it and the const parameter that sizes it.
+    /// A buffer lent to a kernel (a part of a block of [`adaptive_storage!`](crate::adaptive_storage)
+    /// or [`awfqi_storage!`](crate::awfqi_storage), or a set-up buffer) is shorter than the
+    /// set-up or the run needs: `buffer` names it and the named capacity that sizes it.
     BufferTooSmall {
-        /// The buffer and its const parameter, e.g. ``"samples (`Q`: steps × budget target
-        /// records)"``.
+        /// The buffer and the capacity that sizes it, e.g. ``"samples (`steps` × `budget`
+        /// target records)"``.
         buffer: &'static str,
         /// Its length.
         capacity: usize,
@@ -256,13 +256,13 @@ mod tests {
         let e = Error::CapacityExceeded { capacity: 64 };
         assert!(e.to_string().contains("64"));
         let e = Error::BufferTooSmall {
-            buffer: "samples (`Q`: steps × budget target records)",
+            buffer: "samples (`steps` × `budget` target records)",
             capacity: 150,
             needed: 200,
         };
         assert_eq!(
             e.to_string(),
-            "buffer too small: samples (`Q`: steps × budget target records) holds 150, \
+            "buffer too small: samples (`steps` × `budget` target records) holds 150, \
              200 are needed"
         );
         let e = Error::InvalidParameter {

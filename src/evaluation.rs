@@ -250,8 +250,8 @@ where
     evaluate_multi_start(model, &mut greedy, protocol, rng)
 }
 
-/// [`evaluate`] for the greedy policy of a Q-function (a [`crate::TabularFqi`], a
-/// [`crate::TileFqi`] or the [`crate::QFunction`] of a learner; ties between actions as its
+/// [`evaluate`] for the greedy policy of a Q-function (a [`crate::fqi::TabularFqi`], a
+/// [`crate::fqi::TileFqi`] or the [`crate::fqi::QFunction`] of a learner; ties between actions as its
 /// `greedy_action` breaks them).
 ///
 /// Errors: those of [`evaluate`].

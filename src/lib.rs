@@ -101,17 +101,8 @@
 //! // All the memory the learner and its set-up write (a `static` in `.bss` on a device).
 //! awfqi::adaptive_storage! {
 //!     struct HeaterMemory {
-//!         scalar: f32,
-//!         state_dim: 1,
-//!         actions: 2,
-//!         gp_points: 16,
-//!         steps: 2,
-//!         budget: 10,
-//!         sources: 2,
-//!         source_records: 40,
-//!         source_posteriors: 40,
-//!         candidates: 40,
-//!         sweep_cells: 10,
+//!         scalar: f32, state_dim: 1, actions: 2, gp_points: 16, steps: 2, budget: 10,
+//!         sources: 2, source_records: 40, source_posteriors: 40, candidates: 40, sweep_cells: 10,
 //!     }
 //! }
 //!
@@ -226,10 +217,11 @@ pub mod prelude {
     };
     pub use crate::float::Real;
     pub use crate::fqi::{
+        ANCHOR_LINKS, AnchorEntry, AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep,
         Approximator, CellGrid, EmptyCells, ExtraTrees, FqiConfig, FqiEntry, Greedy, HybridFqi,
-        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelSweep, Neighbours, QFunction, QStorage,
-        RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
-        Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
+        Kernel, KnnFqi, KnnRecord, KnnStorage, ModelFqi, ModelSweep, Neighbours, QFunction,
+        QStorage, RewardModel, SampleSet, SweepEntry, SweepFqi, SweepNode, SweepStorage,
+        TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord, TreeStorage,
     };
     pub use crate::gp::{
         Conditioning, Gp, HyperparameterBounds, Hyperparameters, SearchOptions, WhenFull,

@@ -14,8 +14,8 @@
 //! 4. give every source record its **reward weight** (§7.3 estimator, `v_r`, `w_max`) from
 //!    the target GP's posterior at the record's `z`, noise-subtracted over each source's
 //!    batch, and the source GP posterior stored with the source data (§6 step 3);
-//! 5. run **weighted FQI** — the table ([`crate::TabularFqi`]) or tile coding
-//!    ([`crate::TileFqi`]), the builder's [`crate::fqi::Approximator`] — on `D₀` (weight 1)
+//! 5. run **weighted FQI** — the table ([`crate::fqi::TabularFqi`]) or tile coding
+//!    ([`crate::fqi::TileFqi`]), the builder's [`crate::fqi::Approximator`] — on `D₀` (weight 1)
 //!    followed by the sources in order; iteration 1 fits the reward model with the reward
 //!    weights, later iterations use transition weights. These are all 1 by default (the
 //!    shared-dynamics configuration of §7.6 that §12 prescribes: `weight_st = (off, off)`);
@@ -30,7 +30,7 @@
 //! **Set-up.** [`AwfqiBuilder`] performs the whole set-up once — source reward GPs, their
 //! stored posteriors, the score table over the caller's candidate set, the sampler, the
 //! source data, the FQI table — in one [`AwfqiStorage`] (or any [`AwfqiBuffers`]); the
-//! module [`builder`] shows it on a plant of its own.
+//! [`AwfqiBuilder`] shows it on a plant of its own.
 //!
 //! **Dimensions.** `D` is the state dimension, `I = D + 1` the GP input dimension (the state
 //! followed by the action; stable Rust cannot write `D + 1` in a type, so both are
@@ -220,7 +220,7 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
     /// The values: mean estimator with `v_r = 0.1`, `w_max = 1000`
     /// ([`WeightParams::reference_reward`]); reference noise subtraction; the reference GP
     /// training above ([`GpTraining::published`]); FQI with γ = 0.99, 60 iterations and,
-    /// for (cell, action) pairs without data, [`crate::EmptyCells::CappedNearest`] with a
+    /// for (cell, action) pairs without data, [`crate::fqi::EmptyCells::CappedNearest`] with a
     /// minimum total weight of 0.5 ([`FqiConfig::published`]); sampling on `V_r`
     /// ([`ScoreColumn::Reward`]) — and [`SubsetRule::Spread`] **\[CHOICE\]**: with a target
     /// GP far smaller than the reference's 4000, "the last N" would forget every earlier

@@ -1234,7 +1234,7 @@ fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
         };
         builder().build(target, buffers, &mut r).map(|_| ())
     };
-    // Each error names the buffer and the const parameter of `AwfqiStorage` that sizes it.
+    // Each error names the buffer and the named capacity (of `awfqi_storage!`) that sizes it.
     let named = |e: Option<Error>| match e {
         Some(Error::BufferTooSmall {
             buffer,
@@ -1248,13 +1248,16 @@ fn awfqi_rejects_bad_configuration_sources_and_storage_and_keeps_its_state() {
         _ => "",
     };
     let e = build(&mut samples, &mut weights[..5], &mut alias, &mut entries).err();
-    assert_eq!((named(e), param(e)), (("weights", 5, 6), "W"));
+    assert_eq!((named(e), param(e)), (("weights", 5, 6), "source_records"));
     let e = build(&mut samples[..3], &mut weights, &mut alias, &mut entries).err();
-    assert_eq!((named(e), param(e)), (("samples", 3, 4), "Q"));
+    assert_eq!((named(e), param(e)), (("samples", 3, 4), "steps"));
     let e = build(&mut samples, &mut weights, &mut alias[..2], &mut entries).err();
-    assert_eq!((named(e), param(e)), (("alias", 2, rows.len()), "R"));
+    assert_eq!(
+        (named(e), param(e)),
+        (("alias", 2, rows.len()), "candidate_rows")
+    );
     let e = build(&mut samples, &mut weights, &mut alias, &mut entries[..35]).err();
-    assert_eq!((named(e), param(e)), (("fqi", 35, 36), "E"));
+    assert_eq!((named(e), param(e)), (("fqi", 35, 36), "table_entries"));
     untouched(&mut r);
 
     // Two steps of 4 fill the 8-sample buffer; a third is refused before anything is drawn

@@ -399,7 +399,7 @@ fn bad_transition_set_ups_are_refused() {
     assert_eq!(
         result.err(),
         Some(Error::BufferTooSmall {
-            buffer: "fqi (`E`: the approximator's entries, cells × actions)",
+            buffer: "fqi (`table_entries` or the approximator's memory: cells × actions)",
             capacity: 256,
             needed: 41 * 8 * 2,
         })

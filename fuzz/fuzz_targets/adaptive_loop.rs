@@ -43,6 +43,7 @@ const ANY: &[Kind] = &[
     Kind::NonFinite,
     Kind::OutOfRange,
     Kind::Invalid,
+    Kind::Overflow,
     Kind::NotPd,
     Kind::Conditioning,
 ];
@@ -349,6 +350,7 @@ fn run<T: Real>(b: &mut Bytes) {
             nodes: &mut nodes,
             sweep_entries: &mut sweep_entries,
             sweep_nodes: &mut sweep_nodes,
+            ..QStorage::default()
         },
         path: &mut path,
         beliefs: &mut beliefs,

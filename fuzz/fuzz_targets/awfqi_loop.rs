@@ -37,6 +37,7 @@ const ANY: &[Kind] = &[
     Kind::NonFinite,
     Kind::OutOfRange,
     Kind::Invalid,
+    Kind::Overflow,
     Kind::NotPd,
     Kind::Conditioning,
 ];

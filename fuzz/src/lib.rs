@@ -149,6 +149,11 @@ pub enum Kind {
     NotPd,
     /// [`Error::JitterLimit`] or [`Error::IllConditioned`]: the GP's conditioning policy.
     Conditioning,
+    /// [`Error::Overflow`]: a value too large for the precision.
+    Overflow,
+    /// A variant this list does not know yet (`Error` is `#[non_exhaustive]`): never
+    /// documented, so [`expect_kind`] reports it.
+    Unknown,
 }
 
 /// The kind of an error.
@@ -161,6 +166,8 @@ pub fn kind(e: &Error) -> Kind {
         Error::EmptyData => Kind::Empty,
         Error::NotPositiveDefinite => Kind::NotPd,
         Error::JitterLimit { .. } | Error::IllConditioned { .. } => Kind::Conditioning,
+        Error::Overflow { .. } => Kind::Overflow,
+        _ => Kind::Unknown,
     }
 }
 

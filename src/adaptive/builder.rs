@@ -1,17 +1,3 @@
-//! Setting up the adaptive learner once: from the plant, the source records, the budget,
-//! the state ranges and the start state to a learner, in a block declared by
-//! [`adaptive_storage!`](crate::adaptive_storage).
-//!
-//! The builder derives every setting it is not given: the GP and weight settings from the
-//! source records ([`AdaptiveConfig::scaled`]), the candidates scored per sub-batch from
-//! the block's `candidates`, the rest as [`AdaptiveConfig::recommended`]; verification rollouts as long as a step's budget;
-//! FQI by a model sweep over the ranges on the block's cells; candidate rows on a grid
-//! over the ranges, four per sweep cell and axis. It fits each source's reward GP once in
-//! the learner's GP, keeps it as the source's mean function and as the posteriors at its
-//! records, and lends the rest of the block to the learner. Every setting can be read
-//! back from the learner ([`AdaptiveAwfqi::config`], [`AdaptiveAwfqi::q`],
-//! [`AdaptiveAwfqi::rows`]).
-
 use super::storage::{AdaptiveParts, AdaptiveStorage};
 use super::{AdaptiveAwfqi, AdaptiveConfig, Evidence, Lent};
 use crate::error::{Error, Result};
@@ -31,8 +17,22 @@ pub const ROWS_PER_CELL: usize = 4;
 /// Points per axis of the default candidate grid without a model sweep.
 pub const ROWS_PER_AXIS: usize = 21;
 
+/// Setting up the adaptive learner once: from the plant, the source records, the budget,
+/// the state ranges and the start state to a learner, in a block declared by
+/// [`adaptive_storage!`](crate::adaptive_storage).
+///
+/// The builder derives every setting it is not given: the GP and weight settings from the
+/// source records ([`AdaptiveConfig::scaled`]), the candidates scored per sub-batch from
+/// the block's `candidates`, the rest as [`AdaptiveConfig::recommended`]; verification rollouts as long as a step's budget;
+/// FQI by a model sweep over the ranges on the block's cells; candidate rows on a grid
+/// over the ranges, four per sweep cell and axis. It fits each source's reward GP once in
+/// the learner's GP, keeps it as the source's mean function and as the posteriors at its
+/// records, and lends the rest of the block to the learner. Every setting can be read
+/// back from the learner ([`AdaptiveAwfqi::config`], [`AdaptiveAwfqi::q`],
+/// [`AdaptiveAwfqi::rows`]).
+///
 /// The set-up of an [`AdaptiveAwfqi`], performed once by [`build`](Self::build)
-/// ([`AdaptiveAwfqi::builder`]; the [module docs](self) list what it derives).
+/// ([`AdaptiveAwfqi::builder`]; the list above says what it derives).
 #[derive(Debug)]
 pub struct AdaptiveBuilder<
     'a,

@@ -1,12 +1,3 @@
-//! A GP that only predicts its posterior mean: the inputs, the mean weights `α = K⁻¹y` and
-//! the hyperparameters, without the `N × N` factor.
-//!
-//! Adaptive AWFQI needs every source's reward-GP mean at every candidate row and at
-//! every target record, all the time; keeping one [`Gp`] per source would cost `N²` floats
-//! each (17 704 bytes for `Gp<f32, 64, 3>`), a mean function costs `N·(I + 1) + I + 2`
-//! floats (1 048 bytes for `f32`, `N = 64`, `I = 3`). It is set-up data, like the stored
-//! posteriors: computed once per source (on the device, or on a host and kept in flash).
-
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::gp::{Gp, Hyperparameters};
@@ -14,6 +5,15 @@ use crate::model::Transition;
 use crate::record_gp::{Dims, GpTraining, Output, StatePlusAction, SubsetRule, fit_gp};
 use rand_core::Rng;
 
+/// A GP that only predicts its posterior mean: the inputs, the mean weights `α = K⁻¹y` and
+/// the hyperparameters, without the `N × N` factor.
+///
+/// Adaptive AWFQI needs every source's reward-GP mean at every candidate row and at
+/// every target record, all the time; keeping one [`Gp`] per source would cost `N²` floats
+/// each (17 704 bytes for `Gp<f32, 64, 3>`), a mean function costs `N·(I + 1) + I + 2`
+/// floats (1 048 bytes for `f32`, `N = 64`, `I = 3`). It is set-up data, like the stored
+/// posteriors: computed once per source (on the device, or on a host and kept in flash).
+///
 /// The posterior mean `m(z) = Σᵢ k(z, xᵢ) αᵢ` of a fitted GP with room for `N` inputs of
 /// dimension `I`. Without points it is the zero function (the GP prior's mean).
 #[derive(Debug, Clone, PartialEq)]

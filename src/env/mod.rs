@@ -1,10 +1,10 @@
 //! Environments: the tasks the algorithms learn in. They implement the interfaces of
-//! [`crate::model`] (re-exported here): [`GenerativeModel`], the one door through which the
-//! algorithms touch a target task, and where known [`crate::model::SourceModel`] and
-//! [`FiniteMdp`].
+//! [`crate::model`]: [`GenerativeModel`](crate::model::GenerativeModel), the one door through
+//! which the algorithms touch a target task, and where known [`crate::model::SourceModel`]
+//! and [`FiniteMdp`](crate::model::FiniteMdp).
 //!
 //! - [`PuddleWorld`]: the continuous 10×10 Puddle World of spec §2 (both dynamics variants).
-//! - [`GridWorld`]: the finite 10×10 Grid World of spec §10.4, exposed as a [`FiniteMdp`]
+//! - [`GridWorld`]: the finite 10×10 Grid World of spec §10.4, exposed as a [`FiniteMdp`](crate::model::FiniteMdp)
 //!   whose exact transition probabilities and Gaussian reward models feed the
 //!   identification scores and beliefs.
 //! - [`Dam`]: the IWFQI paper's water reservoir (2-D state, eight releases).
@@ -20,7 +20,7 @@
 //! agree with it on part of the problem (rewards or dynamics), and a hand-written
 //! controller.
 //!
-//! A plant of your own joins the transfer path by implementing [`GenerativeModel`] with a
+//! A plant of your own joins the transfer path by implementing [`GenerativeModel`](crate::model::GenerativeModel) with a
 //! state `[T; D]` (and, optionally, [`crate::model::SourceModel`] with its noise-free mean
 //! functions, for oracle scores and ideal weights).
 

@@ -204,7 +204,7 @@ mod tests {
         let target = Thermal::<f64>::target();
         let tariff = Thermal::<f64>::new(Room::Tariff);
         let leaky = Thermal::<f64>::new(Room::Leaky);
-        for (a, u) in THERMAL_COMMANDS.iter().enumerate() {
+        for (a, u) in THERMAL_COMMANDS.iter().enumerate().take(THERMAL_ACTIONS) {
             let (tn, tr) = target.mean_unchecked(s, a);
             let (n, r) = tariff.mean_unchecked(s, a);
             assert_eq!(tn, n);

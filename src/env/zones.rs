@@ -99,27 +99,28 @@ impl<T: Real> Zones<T> {
     /// `action`; checks nothing.
     pub fn mean_unchecked(&self, s: [T; ZONES], action: usize) -> ([T; ZONES], T) {
         let c = T::from_f64;
-        let [s0, s1, s2] = s;
-        // One zone: its loss to the outside, its exchange with the neighbours on its left and
-        // its right (0 at a wall), the heater's gain when it heats this zone.
-        let zone = |t: T, left: T, right: T, zone: usize| {
-            let heat = if action == zone { c(GAIN) } else { T::ZERO };
-            t + c(LOSS) * (c(OUTSIDE) - t) + c(COUPLING) * (left + right) + heat
-        };
-        let next = [
-            zone(s0, T::ZERO, s1 - s0, 1),
-            zone(s1, s0 - s1, s2 - s1, 2),
-            zone(s2, s1 - s2, T::ZERO, 3),
-        ];
+        let mut next = s;
+        let at = |k: usize| s.get(k).copied().unwrap_or(T::ZERO);
+        for (i, t) in next.iter_mut().enumerate() {
+            let here = at(i);
+            let left = if i > 0 { at(i - 1) - here } else { T::ZERO };
+            let right = if i + 1 < ZONES {
+                at(i + 1) - here
+            } else {
+                T::ZERO
+            };
+            let heat = if action == i + 1 { c(GAIN) } else { T::ZERO };
+            *t = here + c(LOSS) * (c(OUTSIDE) - here) + c(COUPLING) * (left + right) + heat;
+        }
         let (mut third, mut energy) = (c(ZONES_SETPOINT), c(0.05));
         match self.building {
             Building::Target => {}
-            Building::East if s0 >= c(0.5) => third = c(0.3),
-            Building::West if s0 < c(0.5) => energy = c(0.4),
+            Building::East if s[0] >= c(0.5) => third = c(0.3),
+            Building::West if s[0] < c(0.5) => energy = c(0.4),
             _ => {}
         }
         let setpoint = c(ZONES_SETPOINT);
-        let discomfort = (s0 - setpoint).abs() + (s1 - setpoint).abs() + (s2 - third).abs();
+        let discomfort = (s[0] - setpoint).abs() + (s[1] - setpoint).abs() + (s[2] - third).abs();
         let cost = if action == 0 { T::ZERO } else { energy };
         (next, -discomfort - cost)
     }

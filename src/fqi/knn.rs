@@ -1,42 +1,3 @@
-//! Weighted FQI with a kernel-averaging Q-function over the records themselves: the
-//! `k`-nearest-neighbour form of Ormoneit and Sen's kernel-based reinforcement learning
-//! (Machine Learning 49, 2002), in caller-lent fixed memory.
-//!
-//! Tiles average a record with everything in its tile; here the prediction at `(s, a)` is
-//! a weighted mean over the `k` records of action `a` nearest to `s`, so where the target's
-//! records are dense (a verified greedy path, a narrow passage) they decide the value
-//! alone, and where the data are sparse the neighbourhood widens by itself. Like the tiles
-//! it is an averager (every prediction a convex combination of regression targets), so FQI
-//! is a contraction and cannot diverge. The IWFQI structure is the loop's ([module
-//! docs](super)):
-//!
-//! 1. **Reward model** `R̂` at every record `i`: the reward-weighted mean of the rewards of
-//!    the records of action `aᵢ` within radius `ρᵢ` of `sᵢ`, where `ρᵢ` is the distance to
-//!    the `k`-th nearest record whose own reward weight reaches
-//!    [`FqiConfig::min_weight`] (the "has data" threshold of the table, per record). A
-//!    source record the weights all but discard (where the target has a puddle that no
-//!    source has) therefore neither counts towards `k` nor outweighs the trusted records
-//!    around it; with no trusted record of the action, the `k` nearest of positive weight
-//!    are used, and with none at all `R̂ = 0`.
-//! 2. **Iterations 2..N**: `yᵢ = R̂ᵢ + γ (1 − ωᵢ) maxₐ′ Q_{k−1}(s′ᵢ, a′)`, with
-//!    `Q_{k−1}(s, a)` the transition-weighted kernel mean of `y_{k−1}` over the `k` nearest
-//!    records of action `a` with positive transition weight (at least the minimum weight).
-//!    The neighbours of every next state are found once per fit and kept as `u16` links,
-//!    so an iteration costs `O(records · actions · k)`.
-//!
-//! Distances are Euclidean in units of each coordinate's range ([`Neighbours::new`]);
-//! [`Kernel::Uniform`] weighs the `k` neighbours equally, [`Kernel::Gaussian`] by
-//! `exp(−(d² − d²₀)/2h²)`, `d₀` the nearest neighbour's distance (so the nearest has weight
-//! 1 and no weight underflows to a 0/0). An action without any eligible record has the
-//! value 0 (as the table's nearest filling and the reference's empty forest); greedy ties
-//! go to an action with records, then to the smallest index.
-//!
-//! **Memory.** One [`KnnRecord`] per record (`2D + 4` scalars and 4 bytes: 36 bytes for
-//! `f32`, `D = 2`) and `records · actions · k` links of 2 bytes; at most 65 534 records.
-//! Puddle World's adaptive AWFQI (300 target + 1 033 source records, 4 actions, `k = 4`):
-//! 47 988 + 42 656 bytes. Fit cost: `O(records² · actions)` for the links (once), then
-//! `O(records · actions · k)` per iteration; a prediction scans the records, `O(records)`.
-
 use super::argmax::ArgMax;
 use super::iteration::{self, NoDraws, Regressor};
 use super::samples::load;
@@ -325,6 +286,45 @@ fn reward_radius<T: Real, const D: usize>(
     })
 }
 
+/// Weighted FQI with a kernel-averaging Q-function over the records themselves: the
+/// `k`-nearest-neighbour form of Ormoneit and Sen's kernel-based reinforcement learning
+/// (Machine Learning 49, 2002), in caller-lent fixed memory.
+///
+/// Tiles average a record with everything in its tile; here the prediction at `(s, a)` is
+/// a weighted mean over the `k` records of action `a` nearest to `s`, so where the target's
+/// records are dense (a verified greedy path, a narrow passage) they decide the value
+/// alone, and where the data are sparse the neighbourhood widens by itself. Like the tiles
+/// it is an averager (every prediction a convex combination of regression targets), so FQI
+/// is a contraction and cannot diverge. The IWFQI structure is the loop's ([module
+/// docs](super)):
+///
+/// 1. **Reward model** `R̂` at every record `i`: the reward-weighted mean of the rewards of
+///    the records of action `aᵢ` within radius `ρᵢ` of `sᵢ`, where `ρᵢ` is the distance to
+///    the `k`-th nearest record whose own reward weight reaches
+///    [`FqiConfig::min_weight`] (the "has data" threshold of the table, per record). A
+///    source record the weights all but discard (where the target has a puddle that no
+///    source has) therefore neither counts towards `k` nor outweighs the trusted records
+///    around it; with no trusted record of the action, the `k` nearest of positive weight
+///    are used, and with none at all `R̂ = 0`.
+/// 2. **Iterations 2..N**: `yᵢ = R̂ᵢ + γ (1 − ωᵢ) maxₐ′ Q_{k−1}(s′ᵢ, a′)`, with
+///    `Q_{k−1}(s, a)` the transition-weighted kernel mean of `y_{k−1}` over the `k` nearest
+///    records of action `a` with positive transition weight (at least the minimum weight).
+///    The neighbours of every next state are found once per fit and kept as `u16` links,
+///    so an iteration costs `O(records · actions · k)`.
+///
+/// Distances are Euclidean in units of each coordinate's range ([`Neighbours::new`]);
+/// [`Kernel::Uniform`] weighs the `k` neighbours equally, [`Kernel::Gaussian`] by
+/// `exp(−(d² − d²₀)/2h²)`, `d₀` the nearest neighbour's distance (so the nearest has weight
+/// 1 and no weight underflows to a 0/0). An action without any eligible record has the
+/// value 0 (as the table's nearest filling and the reference's empty forest); greedy ties
+/// go to an action with records, then to the smallest index.
+///
+/// **Memory.** One [`KnnRecord`] per record (`2D + 4` scalars and 4 bytes: 36 bytes for
+/// `f32`, `D = 2`) and `records · actions · k` links of 2 bytes; at most 65 534 records.
+/// Puddle World's adaptive AWFQI (300 target + 1 033 source records, 4 actions, `k = 4`):
+/// 47 988 + 42 656 bytes. Fit cost: `O(records² · actions)` for the links (once), then
+/// `O(records · actions · k)` per iteration; a prediction scans the records, `O(records)`.
+///
 /// A Q-function by kernel averaging over the records (module docs), over caller-lent
 /// records and links.
 #[derive(Debug)]

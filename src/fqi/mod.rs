@@ -27,6 +27,7 @@
 //! | [`HybridFqi`] | [`Approximator::Hybrid`] | both of the above | the mean of tiles and kNN |
 //! | [`TreeFqi`] | [`ExtraTrees`] | [`TreeRecord`] per sample, [`TreeNode`]s | Extra-Trees forests, stored or streamed |
 //! | [`SweepFqi`] | [`ModelSweep`] | [`SweepEntry`] per (node, action), [`SweepNode`] per node | none: value iteration on a grid model fitted once per fit |
+//! | [`AnchorFqi`] | [`AnchorSweep`] | [`AnchorEntry`] per (node, action), [`SweepNode`], position and landing per node | none: the same on representative states placed from the records, within a node budget |
 //!
 //! [`Approximator`] is the choice before storage exists; [`Approximator::build`] makes the
 //! [`QFunction`] that AWFQI and adaptive AWFQI hold. Only the trees draw random numbers,
@@ -84,6 +85,7 @@
 //! ```
 //!
 
+mod anchors;
 mod argmax;
 mod config;
 mod entry;
@@ -99,6 +101,9 @@ mod table;
 mod tiles;
 mod trees;
 
+pub use anchors::{
+    ANCHOR_LINKS, AnchorEntry, AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Anchors,
+};
 pub use config::{EmptyCells, FqiConfig};
 pub use entry::FqiEntry;
 pub use grid::CellGrid;
@@ -107,8 +112,8 @@ pub use knn::{Kernel, KnnFqi, KnnRecord, KnnStorage, MAX_NEIGHBOURS, NO_LINK, Ne
 pub use q_function::{Approximator, Greedy, QFunction, QStorage};
 pub use samples::SampleSet;
 pub use sweep::{
-    ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage, sweep_entries,
-    sweep_nodes,
+    ModelFqi, ModelSweep, RewardModel, SweepEntry, SweepFqi, SweepNode, SweepStorage,
+    sweep_entries, sweep_nodes,
 };
 pub use table::{TableStorage, TabularFqi};
 pub use tiles::{TileFqi, Tilings};

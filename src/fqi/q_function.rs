@@ -9,9 +9,9 @@
 
 use super::iteration;
 use super::{
-    CellGrid, ExtraTrees, FqiConfig, FqiEntry, HybridFqi, KnnFqi, KnnRecord, ModelSweep,
-    Neighbours, SampleSet, SweepEntry, SweepFqi, SweepNode, TabularFqi, TileFqi, Tilings, TreeFqi,
-    TreeNode, TreeRecord,
+    AnchorEntry, AnchorFqi, AnchorParts, AnchorSweep, CellGrid, ExtraTrees, FqiConfig, FqiEntry,
+    HybridFqi, KnnFqi, KnnRecord, ModelSweep, Neighbours, SampleSet, SweepEntry, SweepFqi,
+    SweepNode, TabularFqi, TileFqi, Tilings, TreeFqi, TreeNode, TreeRecord,
 };
 use crate::error::Result;
 use crate::float::Real;
@@ -34,8 +34,14 @@ pub struct QStorage<'a, T, const D: usize> {
     pub nodes: &'a mut [TreeNode<T>],
     /// A model sweep's entries ([`ModelSweep::required_entries`]).
     pub sweep_entries: &'a mut [SweepEntry<T, D>],
-    /// A model sweep's nodes ([`ModelSweep::nodes`]).
+    /// A model sweep's nodes ([`ModelSweep::nodes`], [`AnchorSweep::nodes`]).
     pub sweep_nodes: &'a mut [SweepNode<T>],
+    /// A sweep on anchors' entries ([`AnchorSweep::required_entries`]).
+    pub anchor_entries: &'a mut [AnchorEntry<T>],
+    /// Its node positions ([`AnchorSweep::nodes`]).
+    pub anchor_positions: &'a mut [[T; D]],
+    /// Its landing scratch ([`AnchorSweep::nodes`]).
+    pub anchor_landings: &'a mut [[T; D]],
 }
 
 impl<T, const D: usize> Default for QStorage<'_, T, D> {
@@ -49,6 +55,9 @@ impl<T, const D: usize> Default for QStorage<'_, T, D> {
             nodes: &mut [],
             sweep_entries: &mut [],
             sweep_nodes: &mut [],
+            anchor_entries: &mut [],
+            anchor_positions: &mut [],
+            anchor_landings: &mut [],
         }
     }
 }
@@ -99,6 +108,16 @@ impl<'a, T: Real, const D: usize, const E: usize, const K: usize>
     }
 }
 
+/// A sweep on anchors' storage block lends itself as
+/// [`AnchorStorage::storage`](super::AnchorStorage::storage) does.
+impl<'a, T: Real, const D: usize, const E: usize, const M: usize>
+    From<&'a mut super::AnchorStorage<T, D, E, M>> for QStorage<'a, T, D>
+{
+    fn from(storage: &'a mut super::AnchorStorage<T, D, E, M>) -> Self {
+        storage.storage()
+    }
+}
+
 /// Which approximator, and its geometry: what a caller chooses before storage exists.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -117,6 +136,15 @@ pub enum Approximator<T, const D: usize> {
     Trees(ExtraTrees),
     /// Value iteration on a grid model of the records ([`SweepFqi`]).
     Sweep(ModelSweep<T, D>),
+    /// Value iteration on a model of the records at representative states placed from
+    /// them, within a node budget ([`AnchorFqi`]).
+    Anchors(AnchorSweep<T, D>),
+}
+
+impl<T: Real, const D: usize> From<AnchorSweep<T, D>> for Approximator<T, D> {
+    fn from(anchors: AnchorSweep<T, D>) -> Self {
+        Approximator::Anchors(anchors)
+    }
 }
 
 impl<T: Real, const D: usize> From<ModelSweep<T, D>> for Approximator<T, D> {
@@ -158,7 +186,7 @@ impl<T: Real, const D: usize> Approximator<T, D> {
             Approximator::Tiles(tilings) => TileFqi::required_entries(tilings, actions),
             Approximator::Knn(_) => Some(0),
             Approximator::Hybrid(tilings, _) => TileFqi::required_entries(tilings, actions),
-            Approximator::Trees(_) | Approximator::Sweep(_) => Some(0),
+            Approximator::Trees(_) | Approximator::Sweep(_) | Approximator::Anchors(_) => Some(0),
         }
     }
 
@@ -216,6 +244,16 @@ impl<T: Real, const D: usize> Approximator<T, D> {
                 storage.sweep_entries,
                 storage.sweep_nodes,
             )?),
+            Approximator::Anchors(anchors) => QFunction::Anchors(AnchorFqi::new(
+                anchors,
+                actions,
+                AnchorParts {
+                    entries: storage.anchor_entries,
+                    nodes: storage.sweep_nodes,
+                    positions: storage.anchor_positions,
+                    landings: storage.anchor_landings,
+                },
+            )?),
         })
     }
 }
@@ -232,6 +270,7 @@ macro_rules! each {
             QFunction::Hybrid($q) => $body,
             QFunction::Trees($q) => $body,
             QFunction::Sweep($q) => $body,
+            QFunction::Anchors($q) => $body,
         }
     };
 }
@@ -251,6 +290,8 @@ pub enum QFunction<'a, T, const D: usize> {
     Trees(TreeFqi<'a, T, D>),
     /// A model sweep.
     Sweep(SweepFqi<'a, T, D>),
+    /// A model sweep on anchors.
+    Anchors(AnchorFqi<'a, T, D>),
 }
 
 impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
@@ -267,7 +308,10 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             QFunction::Tabular(q) => q.entries(),
             QFunction::Tiles(q) => q.entries(),
             QFunction::Hybrid(q) => q.tiles().entries(),
-            QFunction::Knn(_) | QFunction::Trees(_) | QFunction::Sweep(_) => &[],
+            QFunction::Knn(_)
+            | QFunction::Trees(_)
+            | QFunction::Sweep(_)
+            | QFunction::Anchors(_) => &[],
         }
     }
 
@@ -279,7 +323,8 @@ impl<'a, T: Real, const D: usize> QFunction<'a, T, D> {
             | QFunction::Knn(_)
             | QFunction::Hybrid(_)
             | QFunction::Trees(_)
-            | QFunction::Sweep(_) => None,
+            | QFunction::Sweep(_)
+            | QFunction::Anchors(_) => None,
         }
     }
 
@@ -359,5 +404,5 @@ macro_rules! greedy_by_greedy_action {
 }
 
 greedy_by_greedy_action!(
-    TabularFqi, TileFqi, KnnFqi, HybridFqi, TreeFqi, SweepFqi, QFunction
+    TabularFqi, TileFqi, KnnFqi, HybridFqi, TreeFqi, SweepFqi, AnchorFqi, QFunction
 );

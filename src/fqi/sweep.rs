@@ -1,41 +1,3 @@
-//! Weighted FQI as a **model sweep**: value iteration on a grid of nodes over a model
-//! fitted from the weighted records, so an iteration costs `O(nodes · actions)` whatever
-//! the number of records, and the memory is a few scalars per node and action.
-//!
-//! Trees and averagers fit every iteration's regression from the records; a model sweep
-//! fits from the records once per fit, then iterates on the grid. The model, per node `x`
-//! (the corners of a [`CellGrid`]'s cells: `cells + 1` per axis) and action `a`, is made
-//! of multilinear ("hat") averages of the records around `x` — each record spreads its
-//! value over the `2^D` corners of its cell with the interpolation weights `φ`:
-//!
-//! - **reward** `R̂(x, a) = Σ φ w_r r / Σ φ w_r` over the action's records, or over every
-//!   action's ([`RewardModel`]: for plants whose reward depends on the state only, so an
-//!   action never tried at `x` still meets the penalty the others found there);
-//! - **step** `d̂(x, a) = Σ φ w_s (s′ − s) / Σ φ w_s`: the mean displacement, so an action
-//!   tried elsewhere moves the same way at `x` (a locally translation-invariant plant);
-//! - **absorption** `Ω(y) = Σ φ(s′) w_s ω / Σ φ(s′) w_s`, spread at the records' *next*
-//!   states: the chance that landing at `y` ends the episode.
-//!
-//! A node whose total weight is below [`ModelSweep::with_min_mass`] (reward) or 0 (step,
-//! absorption) has no data and takes the value of the nearest node that has (Euclidean in
-//! node units, ties to the smallest index, as the table's [`super::EmptyCells::Nearest`]);
-//! a quantity without data anywhere is 0. Then, with `y = clamp(x + d̂(x, a))` in the box
-//! and `V₀ = 0`:
-//!
-//! ```text
-//! Q_k(x, a) = R̂(x, a) + γ (1 − Ω(y)) V_{k−1}(y),   V_k(x) = maxₐ Q_k(x, a),
-//! ```
-//!
-//! `V` and `Ω` interpolated multilinearly at `y`, for [`FqiConfig::iterations`] iterations
-//! (iteration 1 is `R̂`, as FQI's first). A decision at a state `s` interpolates the node
-//! Q-values of `s`'s cell (or, with [`ModelSweep::with_lookahead`], takes `R̂`, `d̂` at
-//! `s` and looks one step ahead). Reward weights enter `R̂` only, transition weights `d̂`
-//! and `Ω`, as in IWFQI.
-//!
-//! **Memory.** One [`SweepEntry`] per node and action (`1 + D` scalars: 12 bytes for `f32`,
-//! `D = 2`) and one [`SweepNode`] per node (3 scalars). A 21 × 21 node grid (20 cells per
-//! axis) with 4 actions: 21 168 + 5 292 bytes. No randomness.
-
 use super::iteration::{self, NoDraws, Regressor};
 use super::{CellGrid, FqiConfig, SampleSet};
 use crate::error::{Error, Result};
@@ -43,9 +5,48 @@ use crate::float::Real;
 use crate::model::Transition;
 
 mod interpolation;
+mod nodes;
 
-use interpolation::{Corners, ahead};
+pub(crate) use nodes::{Layout, Nodes};
 
+/// Weighted FQI as a **model sweep**: value iteration on a grid of nodes over a model
+/// fitted from the weighted records, so an iteration costs `O(nodes · actions)` whatever
+/// the number of records, and the memory is a few scalars per node and action.
+///
+/// Trees and averagers fit every iteration's regression from the records; a model sweep
+/// fits from the records once per fit, then iterates on the grid. The model, per node `x`
+/// (the corners of a [`CellGrid`]'s cells: `cells + 1` per axis) and action `a`, is made
+/// of multilinear ("hat") averages of the records around `x` — each record spreads its
+/// value over the `2^D` corners of its cell with the interpolation weights `φ`:
+///
+/// - **reward** `R̂(x, a) = Σ φ w_r r / Σ φ w_r` over the action's records, or over every
+///   action's ([`RewardModel`]: for plants whose reward depends on the state only, so an
+///   action never tried at `x` still meets the penalty the others found there);
+/// - **step** `d̂(x, a) = Σ φ w_s (s′ − s) / Σ φ w_s`: the mean displacement, so an action
+///   tried elsewhere moves the same way at `x` (a locally translation-invariant plant);
+/// - **absorption** `Ω(y) = Σ φ(s′) w_s ω / Σ φ(s′) w_s`, spread at the records' *next*
+///   states: the chance that landing at `y` ends the episode.
+///
+/// A node whose total weight is below [`ModelSweep::with_min_mass`] (reward) or 0 (step,
+/// absorption) has no data and takes the value of the nearest node that has (Euclidean in
+/// node units, ties to the smallest index, as the table's [`super::EmptyCells::Nearest`]);
+/// a quantity without data anywhere is 0. Then, with `y = clamp(x + d̂(x, a))` in the box
+/// and `V₀ = 0`:
+///
+/// ```text
+/// Q_k(x, a) = R̂(x, a) + γ (1 − Ω(y)) V_{k−1}(y),   V_k(x) = maxₐ Q_k(x, a),
+/// ```
+///
+/// `V` and `Ω` interpolated multilinearly at `y`, for [`FqiConfig::iterations`] iterations
+/// (iteration 1 is `R̂`, as FQI's first). A decision at a state `s` interpolates the node
+/// Q-values of `s`'s cell (or, with [`ModelSweep::with_lookahead`], takes `R̂`, `d̂` at
+/// `s` and looks one step ahead). Reward weights enter `R̂` only, transition weights `d̂`
+/// and `Ω`, as in IWFQI.
+///
+/// **Memory.** One [`SweepEntry`] per node and action (`1 + D` scalars: 12 bytes for `f32`,
+/// `D = 2`) and one [`SweepNode`] per node (3 scalars). A 21 × 21 node grid (20 cells per
+/// axis) with 4 actions: 21 168 + 5 292 bytes. No randomness.
+///
 /// The settings of a model sweep: the grid and the model's options. What a caller chooses
 /// before storage exists.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,6 +55,8 @@ pub struct ModelSweep<T, const D: usize> {
     cells: CellGrid<T, D>,
     /// The nodes as a grid of `cells + 1` per axis (index arithmetic and donor search).
     nodes: CellGrid<T, D>,
+    /// Node index steps per axis.
+    strides: [usize; D],
     rewards: RewardModel,
     min_mass: T,
     lookahead: bool,
@@ -66,9 +69,16 @@ impl<T: Real, const D: usize> ModelSweep<T, D> {
     /// Errors: more nodes than `u32::MAX − 1` ([`Error::CapacityExceeded`]).
     pub fn new(cells: CellGrid<T, D>) -> Result<Self> {
         let nodes = CellGrid::new(cells.lower(), cells.upper(), cells.cells().map(|n| n + 1))?;
+        let mut strides = [0usize; D];
+        let mut stride = 1;
+        for (s, &n) in strides.iter_mut().zip(&nodes.cells()) {
+            *s = stride;
+            stride *= n;
+        }
         Ok(Self {
             cells,
             nodes,
+            strides,
             rewards: RewardModel::PerAction,
             min_mass: T::ZERO,
             lookahead: false,
@@ -216,6 +226,11 @@ impl<T: Real> SweepNode<T> {
     pub fn absorbing(&self) -> T {
         self.absorbing
     }
+
+    /// `V` of the iteration before the last (what the last iteration looked ahead to).
+    pub(crate) fn previous(&self) -> T {
+        self.previous
+    }
 }
 
 impl<T: Real> Default for SweepNode<T> {
@@ -224,15 +239,20 @@ impl<T: Real> Default for SweepNode<T> {
     }
 }
 
-/// A Q-function fitted by a model sweep, over caller-lent entries and nodes.
+/// A Q-function fitted by a model sweep on a node layout `N` (the grid of
+/// [`ModelSweep`], or the representative states of [`crate::fqi::AnchorSweep`]), over
+/// caller-lent entries and nodes.
 #[derive(Debug)]
-pub struct SweepFqi<'a, T, const D: usize> {
-    sweep: ModelSweep<T, D>,
+pub struct ModelFqi<'a, T, const D: usize, N: Layout<T, D>> {
+    layout: N,
     actions: usize,
     discount: T,
-    entries: &'a mut [SweepEntry<T, D>],
+    entries: &'a mut [N::Entry],
     nodes: &'a mut [SweepNode<T>],
 }
+
+/// A Q-function fitted by a model sweep on a grid.
+pub type SweepFqi<'a, T, const D: usize> = ModelFqi<'a, T, D, ModelSweep<T, D>>;
 
 impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
     /// A Q-function that is 0 everywhere, in the first [`ModelSweep::required_entries`]
@@ -246,26 +266,47 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         entries: &'a mut [SweepEntry<T, D>],
         nodes: &'a mut [SweepNode<T>],
     ) -> Result<Self> {
+        let count = sweep.nodes();
+        ModelFqi::with_layout(sweep, count, actions, entries, nodes)
+    }
+
+    /// The settings.
+    pub fn sweep(&self) -> &ModelSweep<T, D> {
+        &self.layout
+    }
+}
+
+impl<'a, T: Real, const D: usize, N: Nodes<T, D>> ModelFqi<'a, T, D, N> {
+    /// A Q-function that is 0 everywhere on `layout`'s `count` nodes, in the first
+    /// `count · actions` entries and `count` nodes of the storage.
+    ///
+    /// Errors: `actions == 0` ([`Error::InvalidParameter`]); `entries` or `nodes` too
+    /// short ([`Error::CapacityExceeded`] with its length).
+    pub(crate) fn with_layout(
+        layout: N,
+        count: usize,
+        actions: usize,
+        entries: &'a mut [N::Entry],
+        nodes: &'a mut [SweepNode<T>],
+    ) -> Result<Self> {
         if actions == 0 {
             return Err(Error::InvalidParameter {
                 parameter: "actions",
             });
         }
-        let needed = sweep
-            .required_entries(actions)
-            .ok_or(Error::CapacityExceeded {
-                capacity: usize::MAX,
-            })?;
+        let needed = count.checked_mul(actions).ok_or(Error::CapacityExceeded {
+            capacity: usize::MAX,
+        })?;
         let capacity = entries.len();
         let entries = entries
             .get_mut(..needed)
             .ok_or(Error::CapacityExceeded { capacity })?;
         let capacity = nodes.len();
         let nodes = nodes
-            .get_mut(..sweep.nodes())
+            .get_mut(..count)
             .ok_or(Error::CapacityExceeded { capacity })?;
         let mut q = Self {
-            sweep,
+            layout,
             actions,
             discount: T::ZERO,
             entries,
@@ -275,9 +316,9 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         Ok(q)
     }
 
-    /// The settings.
-    pub fn sweep(&self) -> &ModelSweep<T, D> {
-        &self.sweep
+    /// The node layout.
+    pub(crate) fn layout(&self) -> &N {
+        &self.layout
     }
 
     /// Number of actions.
@@ -286,7 +327,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
     }
 
     /// The model, `node·actions + action` → entry.
-    pub fn entries(&self) -> &[SweepEntry<T, D>] {
+    pub fn entries(&self) -> &[N::Entry] {
         self.entries
     }
 
@@ -297,7 +338,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
 
     /// Resets Q to 0 everywhere.
     pub fn clear(&mut self) {
-        self.entries.fill(SweepEntry::EMPTY);
+        self.entries.fill(N::EMPTY_ENTRY);
         self.nodes.fill(SweepNode::EMPTY);
         self.discount = T::ZERO;
     }
@@ -322,61 +363,10 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         iteration::fit(self, sets, config, &mut NoDraws)
     }
 
-    /// The interpolation corners of `state` (clamped into the box).
-    #[inline]
-    fn corners(&self, state: &[T; D]) -> Corners<T, D> {
-        let mut base = [0usize; D];
-        let mut frac = [T::ZERO; D];
-        let (lower, upper, cells) = (
-            self.sweep.cells.lower(),
-            self.sweep.cells.upper(),
-            self.sweep.cells.cells(),
-        );
-        for (((((b, f), &x), &lo), &hi), &n) in base
-            .iter_mut()
-            .zip(frac.iter_mut())
-            .zip(state)
-            .zip(&lower)
-            .zip(&upper)
-            .zip(&cells)
-        {
-            let t = (x - lo) / (hi - lo) * T::from_usize(n);
-            // Truncation saturates (negative and NaN give 0), as `CellGrid` does.
-            let i = t.to_usize_saturating().min(n.saturating_sub(1));
-            *b = i;
-            *f = (t - T::from_usize(i)).clamp_to(T::ZERO, T::ONE);
-        }
-        Corners { base, frac }
-    }
-
-    /// Node coordinates of node `index`.
-    fn position(&self, index: usize) -> [T; D] {
-        let coordinates = self.sweep.nodes.coordinates(index).unwrap_or([0; D]);
-        let (lower, upper, cells) = (
-            self.sweep.cells.lower(),
-            self.sweep.cells.upper(),
-            self.sweep.cells.cells(),
-        );
-        let mut out = lower;
-        for ((((o, &k), &lo), &hi), &n) in out
-            .iter_mut()
-            .zip(&coordinates)
-            .zip(&lower)
-            .zip(&upper)
-            .zip(&cells)
-        {
-            *o = lo + (hi - lo) * (T::from_usize(k) / T::from_usize(n));
-        }
-        out
-    }
-
     /// `state` clamped into the box.
     fn clamp(&self, mut state: [T; D]) -> [T; D] {
-        for ((x, &lo), &hi) in state
-            .iter_mut()
-            .zip(&self.sweep.cells.lower())
-            .zip(&self.sweep.cells.upper())
-        {
+        let (lower, upper) = self.layout.bounds();
+        for ((x, &lo), &hi) in state.iter_mut().zip(&lower).zip(&upper) {
             *x = x.clamp_to(lo, hi);
         }
         state
@@ -408,10 +398,11 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let model = self.sweep.rewards;
+        let model = self.layout.rewards();
+        let min_mass = self.layout.min_mass();
         if model != RewardModel::PerAction {
             self.spread_rewards(sets.clone(), None);
-            self.fill(self.sweep.min_mass, false);
+            self.fill(min_mass, false);
             self.write_rewards(None, |_| true);
         }
         if model == RewardModel::Pooled {
@@ -420,12 +411,11 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         for action in 0..self.actions {
             self.spread_rewards(sets.clone(), Some(action));
             if model == RewardModel::PerAction {
-                self.fill(self.sweep.min_mass, false);
+                self.fill(min_mass, false);
                 self.write_rewards(Some(action), |_| true);
             } else {
                 // Only where the action has data of its own; the pooled value stays elsewhere.
-                let min = self.sweep.min_mass;
-                let has = |n: &SweepNode<T>| n.value > T::ZERO && n.value >= min;
+                let has = |n: &SweepNode<T>| n.value > T::ZERO && n.value >= min_mass;
                 for n in self.nodes.iter_mut() {
                     if has(n) {
                         n.previous /= n.value;
@@ -442,7 +432,6 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>>,
         T: 's,
     {
-        let dims = self.sweep.nodes.cells();
         self.reset_scratch();
         self.spread(
             sets,
@@ -451,14 +440,13 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                 if w_r <= T::ZERO {
                     return;
                 }
-                let c = q.corners(&s.state);
-                for k in 0..Corners::<T, D>::COUNT {
-                    let (i, phi) = c.corner(k, &dims);
-                    if let Some(n) = q.nodes.get_mut(i) {
+                let nodes = &mut *q.nodes;
+                q.layout.weights(&s.state, |i, phi| {
+                    if let Some(n) = nodes.get_mut(i) {
                         n.value += phi * w_r;
                         n.previous += phi * w_r * reward;
                     }
-                }
+                });
             },
         );
     }
@@ -474,7 +462,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         {
             if take(n) {
                 for e in row.get_mut(range.clone()).unwrap_or_default() {
-                    e.reward = n.previous;
+                    N::set_reward(e, n.previous);
                 }
             }
         }
@@ -487,10 +475,11 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
 
     /// Turns the scratch sums into means: `previous ← previous / value` (and `absorbing`
     /// alike when `pair`) at every node whose mass `value` is positive and at least
-    /// `min_mass` (it has data); every other node takes the mean of its axis neighbours
-    /// that have data, then of those filled in the round before, round after round (a
-    /// dilation: the nearest data in grid steps, ties averaged). No data anywhere: 0
-    /// everywhere. `value` is left 1 at every node.
+    /// `min_mass` (it has data); every other node takes the mean of its layout neighbours
+    /// ([`Nodes::neighbours`]: a grid's axis neighbours) that have data, then of those
+    /// filled in the round before, round after round (a dilation: the nearest data in
+    /// neighbour steps, ties averaged). No data anywhere: 0 everywhere. `value` is left 1
+    /// at every node.
     fn fill(&mut self, min_mass: T, pair: bool) {
         let half = T::from_f64(0.5);
         let mut any = false;
@@ -514,25 +503,19 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
             }
             return;
         }
-        let dims = self.sweep.nodes.cells();
-        let strides = self.strides();
         loop {
             let mut changed = false;
-            let mut at = [0usize; D];
             for i in 0..self.nodes.len() {
                 if self.nodes.get(i).is_some_and(|n| n.value == T::ZERO) {
                     let (mut sum, mut other, mut count) = (T::ZERO, T::ZERO, T::ZERO);
-                    for ((&c, &n), &stride) in at.iter().zip(&dims).zip(&strides) {
-                        let below = (c > 0).then(|| i - stride);
-                        let above = (c + 1 < n).then(|| i + stride);
-                        for j in [below, above].into_iter().flatten() {
-                            if let Some(m) = self.nodes.get(j).filter(|m| m.value == T::ONE) {
-                                sum += m.previous;
-                                other += m.absorbing;
-                                count += T::ONE;
-                            }
+                    let nodes = &*self.nodes;
+                    self.layout.neighbours(i, |j| {
+                        if let Some(m) = nodes.get(j).filter(|m| m.value == T::ONE) {
+                            sum += m.previous;
+                            other += m.absorbing;
+                            count += T::ONE;
                         }
-                    }
+                    });
                     if count > T::ZERO {
                         if let Some(node) = self.nodes.get_mut(i) {
                             node.previous = sum / count;
@@ -543,14 +526,6 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                             changed = true;
                         }
                     }
-                }
-                // The odometer of node coordinates, first axis fastest.
-                for (c, &n) in at.iter_mut().zip(&dims) {
-                    *c += 1;
-                    if *c < n {
-                        break;
-                    }
-                    *c = 0;
                 }
             }
             for n in self.nodes.iter_mut() {
@@ -565,15 +540,14 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
     }
 
     /// Where `action`'s mean step lands from every node, two axes at a time: on axis `d`,
-    /// the mean displacement `Σφw_s(s′_d − s_d)/Σφw_s` ([`SweepFqi::fill`]ed where a node
-    /// has no data), added to the node's coordinate and clamped into the box, gives the
-    /// landing cell's coordinate (into `base`) and the position in it (into `frac[d]`).
+    /// the mean displacement `Σφw_s(s′_d − s_d)/Σφw_s` ([`ModelFqi::fill`]ed where a node
+    /// has no data), added to the node's coordinate and clamped into the box, is handed to
+    /// the layout ([`Nodes::land`]).
     fn fit_steps<'s, I>(&mut self, sets: I, action: usize)
     where
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
     {
-        let dims = self.sweep.nodes.cells();
         let actions = self.actions;
         for (e, _) in self
             .entries
@@ -582,7 +556,7 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
             .step_by(actions.max(1))
             .zip(0..self.nodes.len())
         {
-            e.base = 0;
+            self.layout.start_landing(e);
         }
         for first in (0..D).step_by(2) {
             let second = first + 1;
@@ -600,16 +574,15 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                             - from.get(axis).copied().unwrap_or(T::ZERO)
                     };
                     let (d0, d1) = (delta(first), delta(second));
-                    let c = q.corners(&s.state);
-                    for k in 0..Corners::<T, D>::COUNT {
-                        let (i, phi) = c.corner(k, &dims);
-                        if let Some(n) = q.nodes.get_mut(i) {
+                    let nodes = &mut *q.nodes;
+                    q.layout.weights(&s.state, |i, phi| {
+                        if let Some(n) = nodes.get_mut(i) {
                             let w = phi * w_s;
                             n.value += w;
                             n.previous += w * d0;
                             n.absorbing += w * d1;
                         }
-                    }
+                    });
                 },
             );
             self.fill(T::ZERO, second < D);
@@ -618,56 +591,21 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                 self.land(action, second, |n| n.absorbing);
             }
         }
+        let rows = self.entries.chunks_exact_mut(actions.max(1));
+        for (i, row) in rows.enumerate().take(self.nodes.len()) {
+            if let Some(e) = row.get_mut(action) {
+                self.layout.finish_landing(e, i);
+            }
+        }
     }
 
     /// Axis `axis` of `action`'s landing points from the filled mean displacements
-    /// `step(node)` (module docs): the cell coordinate into `base`, the position into
-    /// `frac[axis]`.
+    /// `step(node)` (module docs), handed to the layout.
     fn land(&mut self, action: usize, axis: usize, step: impl Fn(&SweepNode<T>) -> T) {
-        let dims = self.sweep.nodes.cells();
-        let strides = self.strides();
-        let stride = strides.get(axis).copied().unwrap_or(0);
-        let (lo, hi, n_cells) = (
-            self.sweep
-                .cells
-                .lower()
-                .get(axis)
-                .copied()
-                .unwrap_or(T::ZERO),
-            self.sweep
-                .cells
-                .upper()
-                .get(axis)
-                .copied()
-                .unwrap_or(T::ONE),
-            self.sweep.cells.cells().get(axis).copied().unwrap_or(1),
-        );
-        let scale = T::from_usize(usize::from(FRAC_ONE));
-        let width = (hi - lo) / T::from_usize(n_cells);
-        let mut at = [0usize; D];
         let rows = self.entries.chunks_exact_mut(self.actions.max(1));
-        for (row, n) in rows.zip(&*self.nodes) {
-            let k = at.get(axis).copied().unwrap_or(0);
-            let y = (lo + width * T::from_usize(k) + step(n)).clamp_to(lo, hi);
-            let t = (y - lo) / (hi - lo) * T::from_usize(n_cells);
-            let cell = t.to_usize_saturating().min(n_cells.saturating_sub(1));
-            let f = (t - T::from_usize(cell)).clamp_to(T::ZERO, T::ONE);
-            // Rounded to the nearest step of the fixed point, within [0, 1].
-            let fixed = (f * scale + T::from_f64(0.5))
-                .to_usize_saturating()
-                .min(usize::from(FRAC_ONE));
+        for (i, (row, n)) in rows.zip(&*self.nodes).enumerate() {
             if let Some(e) = row.get_mut(action) {
-                e.base += (cell * stride) as u32;
-                if let Some(slot) = e.frac.get_mut(axis) {
-                    *slot = fixed as u16;
-                }
-            }
-            for (c, &n) in at.iter_mut().zip(&dims) {
-                *c += 1;
-                if *c < n {
-                    break;
-                }
-                *c = 0;
+                self.layout.land(e, i, axis, step(n));
             }
         }
     }
@@ -678,7 +616,6 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         I: Iterator<Item = SampleSet<'s, T, D>>,
         T: 's,
     {
-        let dims = self.sweep.nodes.cells();
         self.reset_scratch();
         self.spread(
             sets,
@@ -687,15 +624,14 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
                 if w_s <= T::ZERO {
                     return;
                 }
-                let c = q.corners(&s.next_state);
                 let omega = if s.absorbing { T::ONE } else { T::ZERO };
-                for k in 0..Corners::<T, D>::COUNT {
-                    let (i, phi) = c.corner(k, &dims);
-                    if let Some(n) = q.nodes.get_mut(i) {
+                let nodes = &mut *q.nodes;
+                q.layout.weights(&s.next_state, |i, phi| {
+                    if let Some(n) = nodes.get_mut(i) {
                         n.value += phi * w_s;
                         n.previous += phi * w_s * omega;
                     }
-                }
+                });
             },
         );
         self.fill(T::ZERO, false);
@@ -706,57 +642,28 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         }
     }
 
-    /// Node index steps per axis.
-    fn strides(&self) -> [usize; D] {
-        let mut strides = [0usize; D];
-        let mut stride = 1;
-        for (s, &n) in strides.iter_mut().zip(&self.sweep.nodes.cells()) {
-            *s = stride;
-            stride *= n;
-        }
-        strides
-    }
-
     /// `R̂ + γ(1 − Ω(y))V_{k−1}(y)` for `entry`.
-    fn backup(&self, entry: &SweepEntry<T, D>, strides: &[usize; D]) -> T {
-        let (v, omega) = ahead(entry, self.nodes, strides);
-        entry.reward + self.discount * (T::ONE - omega) * v
+    fn backup(&self, entry: &N::Entry) -> T {
+        let (v, omega) = self.layout.ahead(entry, self.nodes);
+        N::reward(entry) + self.discount * (T::ONE - omega) * v
     }
 
     /// The node Q-value of the last iteration.
-    fn node_q(&self, node: usize, action: usize, strides: &[usize; D]) -> T {
+    fn node_q(&self, node: usize, action: usize) -> T {
         self.entries
             .get(node * self.actions + action)
-            .map_or(T::ZERO, |e| self.backup(e, strides))
+            .map_or(T::ZERO, |e| self.backup(e))
     }
 
     /// Where `action`'s mean step lands from node `node` (`None` out of range).
     pub fn next_state(&self, node: usize, action: usize) -> Option<[T; D]> {
         let e = self.entries.get(node * self.actions + action)?;
-        let base = self.sweep.nodes.coordinates(e.base as usize)?;
-        let lower = self.sweep.cells.lower();
-        let upper = self.sweep.cells.upper();
-        let cells = self.sweep.cells.cells();
-        let scale = T::from_usize(usize::from(FRAC_ONE));
-        let mut out = lower;
-        for (d, o) in out.iter_mut().enumerate() {
-            let (b, f, lo, hi, n) = (
-                *base.get(d)?,
-                *e.frac.get(d)?,
-                *lower.get(d)?,
-                *upper.get(d)?,
-                *cells.get(d)?,
-            );
-            let t = T::from_usize(b) + T::from_usize(usize::from(f)) / scale;
-            *o = lo + (hi - lo) * (t / T::from_usize(n));
-        }
-        Some(out)
+        self.layout.landing(e)
     }
 
     /// One iteration: `V_{k−1}` into `previous`, then `V_k(x) = maxₐ Q_k(x, a)` into
     /// `value` (iteration 1, from `V₀ = 0`: `maxₐ R̂`).
     fn iterate(&mut self) {
-        let strides = self.strides();
         let gamma = self.discount;
         for n in self.nodes.iter_mut() {
             n.previous = n.value;
@@ -764,8 +671,8 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
         for (i, row) in self.entries.chunks_exact(self.actions.max(1)).enumerate() {
             let mut best = T::NEG_INFINITY;
             for e in row {
-                let (v, omega) = ahead(e, self.nodes, &strides);
-                best = best.max(e.reward + gamma * (T::ONE - omega) * v);
+                let (v, omega) = self.layout.ahead(e, self.nodes);
+                best = best.max(N::reward(e) + gamma * (T::ONE - omega) * v);
             }
             if let Some(n) = self.nodes.get_mut(i) {
                 n.value = best;
@@ -775,41 +682,35 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
 
     /// `Q(state, action)` for a finite state.
     fn value_finite(&self, state: [T; D], action: usize) -> T {
-        let dims = self.sweep.nodes.cells();
-        let strides = self.strides();
-        let c = self.corners(&state);
-        if !self.sweep.lookahead {
+        let state = self.clamp(state);
+        if !self.layout.lookahead() {
             let mut q = T::ZERO;
-            for k in 0..Corners::<T, D>::COUNT {
-                let (i, phi) = c.corner(k, &dims);
-                q += phi * self.node_q(i, action, &strides);
-            }
+            self.layout.weights(&state, |i, phi| {
+                q += phi * self.node_q(i, action);
+            });
             return q;
         }
         // R̂ and the step interpolated at the state, then one backup from there.
-        let (mut reward, mut y) = (T::ZERO, self.clamp(state));
-        for k in 0..Corners::<T, D>::COUNT {
-            let (i, phi) = c.corner(k, &dims);
+        let (mut reward, mut y) = (T::ZERO, state);
+        self.layout.weights(&state, |i, phi| {
             let (Some(e), Some(next)) = (
                 self.entries.get(i * self.actions + action),
                 self.next_state(i, action),
             ) else {
-                continue;
+                return;
             };
-            reward += phi * e.reward;
-            for ((s, &n), &x) in y.iter_mut().zip(&next).zip(&self.position(i)) {
+            reward += phi * N::reward(e);
+            for ((s, &n), &x) in y.iter_mut().zip(&next).zip(&self.layout.position(i)) {
                 *s += phi * (n - x);
             }
-        }
-        let landing = self.corners(&self.clamp(y));
+        });
         let (mut v, mut omega) = (T::ZERO, T::ZERO);
-        for k in 0..Corners::<T, D>::COUNT {
-            let (i, phi) = landing.corner(k, &dims);
+        self.layout.weights(&self.clamp(y), |i, phi| {
             if let Some(n) = self.nodes.get(i) {
                 v += phi * n.previous;
                 omega += phi * n.absorbing;
             }
-        }
+        });
         reward + self.discount * (T::ONE - omega) * v
     }
 
@@ -855,18 +756,20 @@ impl<'a, T: Real, const D: usize> SweepFqi<'a, T, D> {
     }
 }
 
-impl<T: Real, const D: usize> Regressor<T, D> for SweepFqi<'_, T, D> {
+impl<T: Real, const D: usize, N: Nodes<T, D>> Regressor<T, D> for ModelFqi<'_, T, D, N> {
     fn actions(&self) -> usize {
         self.actions
     }
 
-    /// The model (rewards, steps, absorption), then iteration 1 (`V₁ = maxₐ R̂`).
+    /// The layout's nodes, the model (rewards, steps, absorption), then iteration 1
+    /// (`V₁ = maxₐ R̂`).
     fn fit_reward_model<'s, I, R>(&mut self, sets: I, _: usize, config: &FqiConfig<T>, _: &mut R)
     where
         I: Iterator<Item = SampleSet<'s, T, D>> + Clone,
         T: 's,
         R: rand_core::Rng + ?Sized,
     {
+        self.layout.place(sets.clone());
         self.fit_rewards(sets.clone());
         for action in 0..self.actions {
             self.fit_steps(sets.clone(), action);

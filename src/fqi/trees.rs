@@ -1,65 +1,3 @@
-//! Weighted FQI with an Extra-Trees Q-function in caller-lent fixed memory: the regressor
-//! of the reference (spec §4.1, the harness's `trees.rs`), either stored with a node budget
-//! per tree or **streamed** so that the memory does not depend on the number of trees.
-//!
-//! Tiles and kernel averaging fix their resolution in advance; a regression tree places
-//! its splits where the regression targets change, so the values around a verified greedy
-//! path, a narrow passage or a puddle edge are separated from the rest by the data
-//! themselves, which is what adaptive AWFQI's verified greedy paths need
-//! (`docs/active-budget.md`).
-//!
-//! **The regressor** (per action, as the harness's `ActionForests`): `M` trees, each grown
-//! on every record of the action (no bootstrap). At a node the `D` features are tried in a
-//! random order; for each, `lo, hi` = the node's range, skipped when `hi ≤ lo + 10⁻⁷`,
-//! else a threshold `τ ~ U[lo, hi)` (`lo` when rounding reaches `hi`), records with
-//! `x ≤ τ` going left. A candidate is valid when both children keep at least
-//! `min_samples_leaf` records and a total weight that is positive and at least
-//! [`FqiConfig::min_weight`] (0: any positive weight, the reference's rule); the valid
-//! candidate of largest `S_L²/W_L + S_R²/W_R` (weighted variance reduction; `S = Σ w y`,
-//! `W = Σ w`; first in trial order on ties) is chosen. A node is a leaf when it holds fewer
-//! than `max(min_samples_split, 2·min_samples_leaf)` records, when its weighted impurity is
-//! at most 10⁻⁷, when no candidate is valid, when it is at the depth limit
-//! ([`ExtraTrees::with_max_depth`]; none by default), or when its tree has no room for two
-//! more nodes ([`ExtraTrees::max_nodes`]). Leaf value `Σwy/Σw`; the forest predicts the mean
-//! of its trees; an action whose records have total weight 0 (or that has none) predicts 0.
-//! The sums are taken relative to the node's first target (the same choice, and a leaf of
-//! equal targets is exactly constant in `f32` too).
-//!
-//! **Growth order.** Breadth first, with the tree's node slots as the queue (a node not yet
-//! grown keeps its records' range), so a tree that hits its node budget is cut at a depth,
-//! not down one branch, and growth needs no stack. Records are partitioned in place.
-//!
-//! **FQI** (IWFQI's structure, as the other approximators): iteration 1 fits the rewards
-//! (the replacement rewards when a [`SampleSet`] has them) with the reward weights; every
-//! record's reward becomes the model's `R̂(sᵢ, aᵢ)`; iterations 2..N fit
-//! `yᵢ = R̂ᵢ + γ(1 − ωᵢ) maxₐ′ Q_{k−1}(s′ᵢ, a′)` with the transition weights. Every `y` is
-//! computed before the forests are regrown, so one set of forests is held at a time.
-//!
-//! **Stored or streamed.** [`ExtraTrees::new`] keeps every tree of every action
-//! (`actions · trees · max_nodes` nodes): fast predictions, memory growing with the trees.
-//! [`ExtraTrees::streamed`] needs FQI's forests only where it evaluates them: in iterations
-//! 1..N−1 each tree is grown in one scratch tree, evaluated at every record's next state
-//! (and, in iteration 1, at its own records' states for `R̂`), added to the records' sums
-//! and discarded; iteration N is only a seed. A query grows the final trees along its own
-//! path: a node's records are those of its action inside the node's box (a scan), and its
-//! split is drawn from a stream of its own (SplitMix64 from a seed chained from the tree's
-//! seed, which the caller's generator drew), so the path is the one a full growth would
-//! take. Memory: the records and one scratch tree, whatever the number of trees; the price
-//! is a prediction that grows `trees` paths per action (`O(records · depth)` each) instead
-//! of walking them. Statistically the two are the same forests (tested).
-//!
-//! **Randomness**: only the caller's generator (for streamed final trees, through the seed
-//! it drew): `D − 1` index draws for the trial order and one uniform per non-constant
-//! feature at every node that is tried.
-//!
-//! **Memory.** One [`TreeRecord`] per record (`2D + 6` scalars and 3 bytes: 44 bytes for
-//! `f32`, `D = 2`) and [`ExtraTrees::required_nodes`] [`TreeNode`]s (one scalar and two
-//! `u16`: 8 bytes for `f32`). At most 65 534 records and 65 535 nodes per tree. Fit cost per
-//! iteration: `O(records · depth · D · trees)` to grow, `O(records · actions · trees ·
-//! depth)` for the next states' values. Measured on the host at Puddle World's size (1 333
-//! records, 60 iterations, `examples/core_tree_timing.rs`): 50 streamed trees fit in about
-//! 2.5 s and decide in about 6 ms; 10 stored trees fit in 0.6 s and decide in 2 µs.
-
 use super::argmax::ArgMax;
 use super::iteration::{self, Regressor};
 use super::samples::load;
@@ -85,6 +23,68 @@ pub const CONSTANT_FEATURE_TOLERANCE: f64 = 1e-7;
 /// is the leaf 0 and node storage can live in `.bss`).
 const LEAF: u16 = 0;
 
+/// Weighted FQI with an Extra-Trees Q-function in caller-lent fixed memory: the regressor
+/// of the reference (spec §4.1, the harness's `trees.rs`), either stored with a node budget
+/// per tree or **streamed** so that the memory does not depend on the number of trees.
+///
+/// Tiles and kernel averaging fix their resolution in advance; a regression tree places
+/// its splits where the regression targets change, so the values around a verified greedy
+/// path, a narrow passage or a puddle edge are separated from the rest by the data
+/// themselves, which is what adaptive AWFQI's verified greedy paths need
+/// (`docs/active-budget.md`).
+///
+/// **The regressor** (per action, as the harness's `ActionForests`): `M` trees, each grown
+/// on every record of the action (no bootstrap). At a node the `D` features are tried in a
+/// random order; for each, `lo, hi` = the node's range, skipped when `hi ≤ lo + 10⁻⁷`,
+/// else a threshold `τ ~ U[lo, hi)` (`lo` when rounding reaches `hi`), records with
+/// `x ≤ τ` going left. A candidate is valid when both children keep at least
+/// `min_samples_leaf` records and a total weight that is positive and at least
+/// [`FqiConfig::min_weight`] (0: any positive weight, the reference's rule); the valid
+/// candidate of largest `S_L²/W_L + S_R²/W_R` (weighted variance reduction; `S = Σ w y`,
+/// `W = Σ w`; first in trial order on ties) is chosen. A node is a leaf when it holds fewer
+/// than `max(min_samples_split, 2·min_samples_leaf)` records, when its weighted impurity is
+/// at most 10⁻⁷, when no candidate is valid, when it is at the depth limit
+/// ([`ExtraTrees::with_max_depth`]; none by default), or when its tree has no room for two
+/// more nodes ([`ExtraTrees::max_nodes`]). Leaf value `Σwy/Σw`; the forest predicts the mean
+/// of its trees; an action whose records have total weight 0 (or that has none) predicts 0.
+/// The sums are taken relative to the node's first target (the same choice, and a leaf of
+/// equal targets is exactly constant in `f32` too).
+///
+/// **Growth order.** Breadth first, with the tree's node slots as the queue (a node not yet
+/// grown keeps its records' range), so a tree that hits its node budget is cut at a depth,
+/// not down one branch, and growth needs no stack. Records are partitioned in place.
+///
+/// **FQI** (IWFQI's structure, as the other approximators): iteration 1 fits the rewards
+/// (the replacement rewards when a [`SampleSet`] has them) with the reward weights; every
+/// record's reward becomes the model's `R̂(sᵢ, aᵢ)`; iterations 2..N fit
+/// `yᵢ = R̂ᵢ + γ(1 − ωᵢ) maxₐ′ Q_{k−1}(s′ᵢ, a′)` with the transition weights. Every `y` is
+/// computed before the forests are regrown, so one set of forests is held at a time.
+///
+/// **Stored or streamed.** [`ExtraTrees::new`] keeps every tree of every action
+/// (`actions · trees · max_nodes` nodes): fast predictions, memory growing with the trees.
+/// [`ExtraTrees::streamed`] needs FQI's forests only where it evaluates them: in iterations
+/// 1..N−1 each tree is grown in one scratch tree, evaluated at every record's next state
+/// (and, in iteration 1, at its own records' states for `R̂`), added to the records' sums
+/// and discarded; iteration N is only a seed. A query grows the final trees along its own
+/// path: a node's records are those of its action inside the node's box (a scan), and its
+/// split is drawn from a stream of its own (SplitMix64 from a seed chained from the tree's
+/// seed, which the caller's generator drew), so the path is the one a full growth would
+/// take. Memory: the records and one scratch tree, whatever the number of trees; the price
+/// is a prediction that grows `trees` paths per action (`O(records · depth)` each) instead
+/// of walking them. Statistically the two are the same forests (tested).
+///
+/// **Randomness**: only the caller's generator (for streamed final trees, through the seed
+/// it drew): `D − 1` index draws for the trial order and one uniform per non-constant
+/// feature at every node that is tried.
+///
+/// **Memory.** One [`TreeRecord`] per record (`2D + 6` scalars and 3 bytes: 44 bytes for
+/// `f32`, `D = 2`) and [`ExtraTrees::required_nodes`] [`TreeNode`]s (one scalar and two
+/// `u16`: 8 bytes for `f32`). At most 65 534 records and 65 535 nodes per tree. Fit cost per
+/// iteration: `O(records · depth · D · trees)` to grow, `O(records · actions · trees ·
+/// depth)` for the next states' values. Measured on the host at Puddle World's size (1 333
+/// records, 60 iterations, `examples/core_tree_timing.rs`): 50 streamed trees fit in about
+/// 2.5 s and decide in about 6 ms; 10 stored trees fit in 0.6 s and decide in 2 µs.
+///
 /// The size of the forests: trees per action, the node budget of a tree, and the growth
 /// limits. What a caller chooses before storage exists.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

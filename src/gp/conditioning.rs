@@ -1,27 +1,3 @@
-//! The conditioning policy of a [`Gp`](super::Gp): how much diagonal jitter it may add to
-//! factorise an ill-conditioned Gram matrix, and which condition it still trusts (spec §4.2).
-//!
-//! A jitter `j` on the diagonal turns the model with noise variance `σ²ₙ` into one with
-//! `σ²ₙ + j`. In the eigenbasis of the Gram matrix each term of the predictive mean is scaled
-//! by at most `j / (σ²ₙ + j)`, so (Cauchy–Schwarz over the terms)
-//! `|Δμ(x)| ≤ (j / σ²ₙ) · √c · ‖L⁻¹y‖`, where `‖L⁻¹y‖² = yᵀK⁻¹y` is the data-fit term of the
-//! log marginal likelihood (about `n` for a model that fits its data). The log marginal
-//! likelihood moves by at most `(j / σ²ₙ) · (n + yᵀK⁻¹y) / 2`. The policy therefore bounds the
-//! escalated jitter **relative to the noise variance**: `j ≤ ρ · (σ²ₙ + base jitter)`.
-//! The default `ρ = √ε` (`3.5·10⁻⁴` in `f32`, `1.5·10⁻⁸` in `f64`) keeps the mean within
-//! `√ε · √128 · √c` — `3.9·10⁻³·√c` in `f32`, `1.7·10⁻⁷·√c` in `f64` for `n ≤ 128` — inside
-//! the tolerance table of `crosscheck/tests/gp_differential.rs` (hard cases: 10⁻² in `f32`, 10⁻⁶ in
-//! `f64`, relative to the data scale). A fit that would need more returns
-//! [`Error::JitterLimit`] naming the jitter it needed.
-//!
-//! After a factorisation the GP estimates the spectral condition number from the factor's
-//! diagonal, `κ̂ = (max Lᵢᵢ / min Lᵢᵢ)²` (O(n), a lower bound on `κ₂`: `Lᵢᵢ²` are Schur
-//! complements, between `λ_min` and `λ_max`). A forward error of order `ε·κ` is what a
-//! backward-stable solve promises, so when `ε·κ̂` exceeds `10⁻²` (`κ̂ > 8.4·10⁴` in `f32`,
-//! `4.5·10¹³` in `f64`) the GP refuses with [`Error::IllConditioned`]
-//! (after trying the jitters the policy allows). Together with the Cholesky pivot guard this is
-//! what keeps a wrong `f32` answer from being returned as a success.
-
 use crate::error::{Error, Result};
 
 use crate::float::Real;
@@ -41,8 +17,32 @@ const OWN_RATIO: u8 = 1;
 const OWN_CONDITION: u8 = 2;
 const NO_BASE_JITTER: u8 = 4;
 
+/// The conditioning policy of a [`Gp`](super::Gp): how much diagonal jitter it may add to
+/// factorise an ill-conditioned Gram matrix, and which condition it still trusts (spec §4.2).
+///
+/// A jitter `j` on the diagonal turns the model with noise variance `σ²ₙ` into one with
+/// `σ²ₙ + j`. In the eigenbasis of the Gram matrix each term of the predictive mean is scaled
+/// by at most `j / (σ²ₙ + j)`, so (Cauchy–Schwarz over the terms)
+/// `|Δμ(x)| ≤ (j / σ²ₙ) · √c · ‖L⁻¹y‖`, where `‖L⁻¹y‖² = yᵀK⁻¹y` is the data-fit term of the
+/// log marginal likelihood (about `n` for a model that fits its data). The log marginal
+/// likelihood moves by at most `(j / σ²ₙ) · (n + yᵀK⁻¹y) / 2`. The policy therefore bounds the
+/// escalated jitter **relative to the noise variance**: `j ≤ ρ · (σ²ₙ + base jitter)`.
+/// The default `ρ = √ε` (`3.5·10⁻⁴` in `f32`, `1.5·10⁻⁸` in `f64`) keeps the mean within
+/// `√ε · √128 · √c` — `3.9·10⁻³·√c` in `f32`, `1.7·10⁻⁷·√c` in `f64` for `n ≤ 128` — inside
+/// the tolerance table of `crosscheck/tests/gp_differential.rs` (hard cases: 10⁻² in `f32`, 10⁻⁶ in
+/// `f64`, relative to the data scale). A fit that would need more returns
+/// [`Error::JitterLimit`] naming the jitter it needed.
+///
+/// After a factorisation the GP estimates the spectral condition number from the factor's
+/// diagonal, `κ̂ = (max Lᵢᵢ / min Lᵢᵢ)²` (O(n), a lower bound on `κ₂`: `Lᵢᵢ²` are Schur
+/// complements, between `λ_min` and `λ_max`). A forward error of order `ε·κ` is what a
+/// backward-stable solve promises, so when `ε·κ̂` exceeds `10⁻²` (`κ̂ > 8.4·10⁴` in `f32`,
+/// `4.5·10¹³` in `f64`) the GP refuses with [`Error::IllConditioned`]
+/// (after trying the jitters the policy allows). Together with the Cholesky pivot guard this is
+/// what keeps a wrong `f32` answer from being returned as a success.
+///
 /// How a GP may condition its Gram matrix: base jitter, largest escalated jitter relative to
-/// the noise variance, largest trusted condition estimate. See the [module docs](self).
+/// the noise variance, largest trusted condition estimate. See above.
 ///
 /// The default (every bit zero, so a GP in a zero-initialised `static` carries it): base
 /// jitter [`BASE_JITTER`], jitter ratio `√ε`, condition limit `10⁻²/ε`.

@@ -342,8 +342,8 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     /// Sets the conditioning policy and refactorises the data held (O(n³/6)).
     ///
     /// Errors: those of the factorisation ([`Error::JitterLimit`],
-    /// [`Error::IllConditioned`], [`Error::NotPositiveDefinite`]); on error the previous
-    /// policy is kept.
+    /// [`Error::IllConditioned`], [`Error::Overflow`] naming `y`,
+    /// [`Error::NotPositiveDefinite`]); on error the previous policy is kept.
     pub fn set_conditioning(&mut self, conditioning: Conditioning<T>) -> Result<()> {
         let previous = self.conditioning;
         self.conditioning = conditioning;
@@ -491,8 +491,9 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
 
     /// Sets the hyperparameters and refactorises the data held (O(n³/6)).
     ///
-    /// Errors: those of [`Hyperparameters::validate`] and [`Error::NotPositiveDefinite`];
-    /// on error the previous hyperparameters are kept.
+    /// Errors: those of [`Hyperparameters::validate`] and of the factorisation
+    /// ([`Error::JitterLimit`], [`Error::IllConditioned`], [`Error::Overflow`] naming `y`,
+    /// [`Error::NotPositiveDefinite`]); on error the previous hyperparameters are kept.
     pub fn set_hyperparameters(&mut self, hyper: Hyperparameters<T, D>) -> Result<()> {
         hyper.validate()?;
         let previous = self.hyper;
@@ -677,7 +678,7 @@ impl<T: Real, const N: usize, const D: usize> Gp<T, N, D> {
     }
 
     /// Searches the box `bounds` for the hyperparameters that maximise the log marginal
-    /// likelihood (spec §4.2; see [`search`](super::search) for the method), leaves the GP
+    /// likelihood (spec §4.2; see [`SearchOptions`](super::SearchOptions) for the method), leaves the GP
     /// fitted with the best ones and returns their log marginal likelihood.
     ///
     /// Cost: `options.max_evaluations + 1` factorisations of O(n³/6) and no allocation; the

@@ -1,15 +1,3 @@
-//! Bounded, allocation-free search for the hyperparameters that maximise the log marginal
-//! likelihood (spec §4.2).
-//!
-//! Spec §4.2's reference uses L-BFGS-B with the analytic gradient. The gradient needs `K⁻¹`,
-//! a second `N × N` matrix, so this core uses a gradient-free Nelder–Mead simplex instead, in
-//! the natural-log space of the hyperparameters, with every trial point clamped into the box
-//! (projection). The search starts from spec §4.2's initial values (clipped into the box),
-//! then from `restarts` points drawn uniformly in the log box from the caller's generator,
-//! and keeps the best point seen. The evaluation budget is fixed: each start receives an
-//! equal share of what is left, and a start that converges early passes its unused
-//! evaluations on to the next one.
-
 use crate::error::{Error, Result};
 use crate::float::Real;
 use crate::gp::covariance::Hyperparameters;
@@ -77,6 +65,18 @@ fn check_pair<T: Real>((lo, hi): (T, T), parameter: &'static str) -> Result<()> 
     Ok(())
 }
 
+/// Bounded, allocation-free search for the hyperparameters that maximise the log marginal
+/// likelihood (spec §4.2).
+///
+/// Spec §4.2's reference uses L-BFGS-B with the analytic gradient. The gradient needs `K⁻¹`,
+/// a second `N × N` matrix, so this core uses a gradient-free Nelder–Mead simplex instead, in
+/// the natural-log space of the hyperparameters, with every trial point clamped into the box
+/// (projection). The search starts from spec §4.2's initial values (clipped into the box),
+/// then from `restarts` points drawn uniformly in the log box from the caller's generator,
+/// and keeps the best point seen. The evaluation budget is fixed: each start receives an
+/// equal share of what is left, and a start that converges early passes its unused
+/// evaluations on to the next one.
+///
 /// Settings of the hyperparameter search.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

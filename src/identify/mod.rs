@@ -3,7 +3,7 @@
 //!
 //! The pieces, each in its own module:
 //! - [`Belief`]: the posterior over the candidates, in log space (fixed capacity `K`).
-//! - [`query_score`](mod@query_score): where to query — the uniform, inter-MDP-variance and
+//! - [`Criterion`]: where to query — the uniform, inter-MDP-variance and
 //!   mutual-information scores of §10.3, written into caller storage, one weight per
 //!   state-action pair at index `s·|𝒜| + a`.
 //! - [`draw_pair`] / [`draw_pairs`]: i.i.d. state-action pairs from a score.

@@ -1,16 +1,3 @@
-//! The score functions of spec §10.3: a distribution over state-action pairs that says
-//! where querying the target is most useful for telling the candidates apart.
-//!
-//! Every score is written into caller storage `out` with one entry per pair, index
-//! `s·|𝒜| + a`, and is a distribution: non-negative and summing to 1 (up to rounding).
-//! When a criterion finds no pair informative (all raw scores 0) the score is uniform,
-//! spec §10.3's fall-back. The belief is passed as probabilities (one per candidate, not
-//! necessarily normalised): the prior b⁰ for the thesis's one-shot design, the current
-//! belief for adaptive scoring.
-//!
-//! Storage: `out` only (|𝒮|·|𝒜| entries), plus a [`MAX_BINS`]-entry `u32` histogram on
-//! the stack for the mutual-information score.
-
 use super::belief::positive_variance;
 use super::{belief_total, dimensions};
 use crate::error::{Error, Result};
@@ -23,6 +10,19 @@ use rand_core::Rng;
 /// on the stack: `4·MAX_BINS` = 512 bytes).
 pub const MAX_BINS: usize = 128;
 
+/// The score functions of spec §10.3: a distribution over state-action pairs that says
+/// where querying the target is most useful for telling the candidates apart.
+///
+/// Every score is written into caller storage `out` with one entry per pair, index
+/// `s·|𝒜| + a`, and is a distribution: non-negative and summing to 1 (up to rounding).
+/// When a criterion finds no pair informative (all raw scores 0) the score is uniform,
+/// spec §10.3's fall-back. The belief is passed as probabilities (one per candidate, not
+/// necessarily normalised): the prior b⁰ for the thesis's one-shot design, the current
+/// belief for adaptive scoring.
+///
+/// Storage: `out` only (|𝒮|·|𝒜| entries), plus a [`MAX_BINS`]-entry `u32` histogram on
+/// the stack for the mutual-information score.
+///
 /// Which score to compute.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

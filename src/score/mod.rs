@@ -2,7 +2,7 @@
 //! worth its price?
 //!
 //! A score table is a list of state-action rows — a **candidate set** the caller chooses.
-//! For each row and each source `j` a [`SourceModel`] gives the source's mean reward `ρʲ_r`
+//! For each row and each source `j` a [`SourceModel`](crate::model::SourceModel) gives the source's mean reward `ρʲ_r`
 //! and mean next state `ρʲ_s′` (one value per state coordinate), and the row's scores are the
 //! population variances over the sources (division by `m`): `V_r` and one `V_k` per
 //! next-state coordinate, and their sum.
@@ -12,7 +12,7 @@
 //!   the `(s, a)` of every source record, source by source, duplicates kept ("source-data
 //!   mode"); or a grid followed by source rows ("both"). Puddle World's thesis grids are
 //!   [`crate::env::PuddleWorld::score_grid`].
-//! - **Value sources** ([`SourceModel`]): the sources' noise-free mean functions give the
+//! - **Value sources** ([`SourceModel`](crate::model::SourceModel)): the sources' noise-free mean functions give the
 //!   *oracle* table (a plant's noise-free mean functions, e.g. Puddle World's); the
 //!   posterior means of one GP per source and output give the *realistic* table
 //!   ([`GpSourceModel`], or [`ScoreTable::realistic`] with a single GP in memory at a time).
@@ -29,6 +29,8 @@
 //! Variances are computed on values shifted by the first source's value, so a row where all
 //! sources agree exactly has score exactly 0 (and the shift keeps the computation accurate
 //! when the values are large and close).
+//!
+//! [`SourceModel`]: crate::model::SourceModel
 
 mod points;
 mod rows;

@@ -1,15 +1,3 @@
-//! Setting up AWFQI once: one storage block and a builder.
-//!
-//! The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
-//! records, the score table over a candidate set, its sampler, the source data, the FQI
-//! table — is the same for every plant, so it lives here once. The memory is one owned
-//! block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
-//! (all-zero: `.bss`, no flash image); anything that can lend the same slices
-//! ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
-//! optional stage (posteriors fitted on the device, score values) is lent to that stage.
-//!
-//! The [crate docs](crate) show the whole loop on a plant of their own.
-
 use super::{Awfqi, SourceData, TransitionWeighting, ValidAwfqiConfig};
 use crate::alias::AliasEntry;
 use crate::error::{Error, Result};
@@ -262,6 +250,18 @@ enum ScoreValues<'a, T, const D: usize> {
     Realistic(&'a mut [Scores<T, D>]),
 }
 
+/// Setting up AWFQI once: one storage block and a builder.
+///
+/// The set-up of §6 and §11–§12 — source reward GPs, the posteriors stored with the source
+/// records, the score table over a candidate set, its sampler, the source data, the FQI
+/// table — is the same for every plant, so it lives here once. The memory is one owned
+/// block, [`AwfqiStorage`], whose capacities are const generics so it fits in a `static`
+/// (all-zero: `.bss`, no flash image); anything that can lend the same slices
+/// ([`AwfqiBuffers`], e.g. the harness's heap vectors) works too. Memory needed only by an
+/// optional stage (posteriors fitted on the device, score values) is lent to that stage.
+///
+/// The [crate docs](crate) show the whole loop on a plant of their own.
+///
 /// The set-up of an AWFQI learner, performed once by [`AwfqiBuilder::build`] (the
 /// [crate docs](crate) show it on a plant of their own).
 ///
@@ -292,7 +292,7 @@ where
     Dims<D, I>: StatePlusAction,
 {
     /// A set-up from its required parts (also [`Awfqi::builder`]): the configuration, the
-    /// Q-function approximator over the state space (a [`crate::CellGrid`] for the table,
+    /// Q-function approximator over the state space (a [`crate::fqi::CellGrid`] for the table,
     /// [`crate::fqi::Tilings`] for tile coding), the source records and the candidate rows.
     pub fn new(
         config: ValidAwfqiConfig<T, I>,
@@ -617,15 +617,16 @@ pub(crate) fn room_for(len: usize, more: usize, capacity: usize) -> Result<()> {
 /// The names of the lent buffers in errors ([`Error::BufferTooSmall`]), with the const
 /// parameter of [`AwfqiStorage`] and [`crate::AdaptiveStorage`] that sizes each.
 pub(crate) mod buffer {
-    pub(crate) const SAMPLES: &str = "samples (`Q`: steps × budget target records)";
-    pub(crate) const WEIGHTS: &str = "weights (`W`: one per source record)";
-    pub(crate) const ALIAS: &str = "alias (`R`: one entry per candidate row)";
-    pub(crate) const FQI: &str = "fqi (`E`: the approximator's entries, cells × actions)";
+    pub(crate) const SAMPLES: &str = "samples (`steps` × `budget` target records)";
+    pub(crate) const WEIGHTS: &str = "weights (`source_records`: one per source record)";
+    pub(crate) const ALIAS: &str = "alias (`candidate_rows`: one entry per candidate row)";
+    pub(crate) const FQI: &str =
+        "fqi (`table_entries` or the approximator's memory: cells × actions)";
     pub(crate) const POSTERIORS: &str = "posteriors (one per source record)";
     pub(crate) const MEANS: &str = "means (one mean function per source)";
     pub(crate) const SCORES: &str = "scores (one per candidate row)";
     pub(crate) const TRANSITION_WEIGHTS: &str = "transition weights (one per source record)";
-    pub(crate) const CANDIDATES: &str = "candidates (`C`: min(candidates, rows))";
-    pub(crate) const PATH: &str = "path (`B`: the budget)";
-    pub(crate) const BELIEFS: &str = "beliefs (`M`: one per source)";
+    pub(crate) const CANDIDATES: &str = "candidates (`candidates`: min(candidates, rows))";
+    pub(crate) const PATH: &str = "path (`budget`: one step's verified states)";
+    pub(crate) const BELIEFS: &str = "beliefs (`sources`: one per source)";
 }

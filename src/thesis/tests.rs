@@ -224,7 +224,7 @@ fn a_step_queries_weighs_and_fits_as_specified() {
     assert_eq!(
         kernel.step(&mut rng).err(),
         Some(Error::BufferTooSmall {
-            buffer: "samples (`Q`: steps × budget target records)",
+            buffer: "samples (`steps` × `budget` target records)",
             capacity: 2 * budget,
             needed: 3 * budget,
         })
@@ -370,7 +370,7 @@ fn a_target_buffer_one_sample_short_of_the_run_is_refused_before_the_first_step(
     assert_eq!(
         build(99),
         Err(Error::BufferTooSmall {
-            buffer: "samples (`Q`: steps × budget target records)",
+            buffer: "samples (`steps` × `budget` target records)",
             capacity: 99,
             needed: 100,
         })
@@ -415,19 +415,19 @@ fn the_builder_checks_sizes_and_stages_before_fitting() {
         (
             Heap::new(10, n_source - 1, rows.len(), 36),
             too_small(
-                "weights (`W`: one per source record)",
+                "weights (`source_records`: one per source record)",
                 n_source - 1,
                 n_source,
             ),
         ),
         (
             Heap::new(9, n_source, rows.len(), 36),
-            too_small("samples (`Q`: steps × budget target records)", 9, 10),
+            too_small("samples (`steps` × `budget` target records)", 9, 10),
         ),
         (
             Heap::new(10, n_source, rows.len() - 1, 36),
             too_small(
-                "alias (`R`: one entry per candidate row)",
+                "alias (`candidate_rows`: one entry per candidate row)",
                 rows.len() - 1,
                 rows.len(),
             ),
@@ -435,7 +435,7 @@ fn the_builder_checks_sizes_and_stages_before_fitting() {
         (
             Heap::new(10, n_source, rows.len(), 35),
             too_small(
-                "fqi (`E`: the approximator's entries, cells × actions)",
+                "fqi (`table_entries` or the approximator's memory: cells × actions)",
                 35,
                 36,
             ),

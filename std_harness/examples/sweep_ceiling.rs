@@ -17,8 +17,11 @@
 //! ```sh
 //! cargo run --release -p awfqi-harness --example sweep_ceiling -- [--domain dam|acrobot] \
 //!     [--cells 12,24,48] [--states 2000,20000] [--repeats 5] [--rollouts 100] [--sweeps N] \
-//!     [--no-wrap] [--lookahead]
+//!     [--no-wrap] [--lookahead] [--anchors 256,1024 [--neighbours 4]]
 //! ```
+//!
+//! `--anchors` fits the sweep on representative states placed from the records
+//! (`AnchorFqi`, one line per node budget) instead of the grid.
 //!
 //! Each repeat `i` draws its data from `ChaCha8Rng::seed_from_u64(2000 + i)` and evaluates
 //! with `seed_from_u64(3000 + i)` (a diagnostic, not the harness's streams). Prints one line
@@ -48,6 +51,8 @@ struct Args {
     wrap: bool,
     lookahead: bool,
     sweeps: Option<usize>,
+    anchors: Vec<usize>,
+    neighbours: usize,
 }
 
 fn list(v: &str) -> anyhow::Result<Vec<usize>> {
@@ -66,6 +71,8 @@ fn args() -> anyhow::Result<Args> {
         wrap: true,
         lookahead: false,
         sweeps: None,
+        anchors: Vec::new(),
+        neighbours: awfqi::fqi::ANCHOR_LINKS,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -82,6 +89,8 @@ fn args() -> anyhow::Result<Args> {
             "--sweeps" => a.sweeps = Some(value()?.parse()?),
             "--no-wrap" => a.wrap = false,
             "--lookahead" => a.lookahead = true,
+            "--anchors" => a.anchors = list(&value()?)?,
+            "--neighbours" => a.neighbours = value()?.parse()?,
             other => anyhow::bail!("unknown argument {other}"),
         }
     }
@@ -130,6 +139,9 @@ where
         a.wrap,
         a.lookahead
     );
+    if !a.anchors.is_empty() {
+        return anchor_ceiling(a, s, &config, &protocol);
+    }
     for &n in &a.states {
         for &c in &a.cells {
             let grid = CellGrid::new(s.lower, s.upper, [c; D])?;
@@ -166,6 +178,83 @@ where
                 f64::NAN
             };
             println!("{c:5}  {n:6}  {:7}  {m:9.2} ± {se:.2}", n * s.actions);
+        }
+    }
+    Ok(())
+}
+
+/// The records of repeat `i`: `n` uniform states, every action at each.
+fn draw<G, const D: usize>(
+    a: &Args,
+    s: &Setting<G, D>,
+    n: usize,
+    i: u64,
+) -> anyhow::Result<Vec<Transition<[f32; D], f32>>>
+where
+    G: GenerativeModel<f32, State = [f32; D]>,
+{
+    let mut rng = ChaCha8Rng::seed_from_u64(2000 + i);
+    let mut records = Vec::with_capacity(n * s.actions);
+    for _ in 0..n {
+        let state = (s.draw)(&mut rng, a.wrap);
+        for action in 0..s.actions {
+            records.push(s.target.query(state, action, &mut rng)?);
+        }
+    }
+    Ok(records)
+}
+
+/// [`ceiling`] on anchors: one line per (node budget, states).
+fn anchor_ceiling<G, const D: usize>(
+    a: &Args,
+    s: &Setting<G, D>,
+    config: &FqiConfig<f32>,
+    protocol: &MultiStartProtocol<'_, f32, D>,
+) -> anyhow::Result<()>
+where
+    G: GenerativeModel<f32, State = [f32; D]>,
+{
+    for &n in &a.states {
+        for &m in &a.anchors {
+            let anchors = awfqi::fqi::AnchorSweep::new(s.lower, s.upper, m)?
+                .with_neighbours(a.neighbours)?
+                .with_rewards(s.rewards)
+                .with_lookahead(a.lookahead);
+            let mut entries = vec![awfqi::fqi::AnchorEntry::EMPTY; m * s.actions];
+            let mut nodes = vec![SweepNode::EMPTY; m];
+            let mut positions = vec![[0.0f32; D]; m];
+            let mut landings = vec![[0.0f32; D]; m];
+            let mut returns = Vec::new();
+            for i in 0..a.repeats {
+                let records = draw(a, s, n, i)?;
+                let mut q = awfqi::fqi::AnchorFqi::new(
+                    anchors,
+                    s.actions,
+                    awfqi::fqi::AnchorParts {
+                        entries: &mut entries,
+                        nodes: &mut nodes,
+                        positions: &mut positions,
+                        landings: &mut landings,
+                    },
+                )?;
+                q.fit(&[SampleSet::unweighted(&records)], config)?;
+                let mut eval_rng = ChaCha8Rng::seed_from_u64(3000 + i);
+                let e = evaluate_greedy_multi_start(&s.target, &q, protocol, &mut eval_rng)?;
+                returns.push(f64::from(e.mean_return));
+            }
+            let mean = returns.iter().sum::<f64>() / returns.len() as f64;
+            let se = if returns.len() > 1 {
+                let v = returns.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
+                    / (returns.len() - 1) as f64;
+                (v / returns.len() as f64).sqrt()
+            } else {
+                f64::NAN
+            };
+            println!(
+                "anchors {m:5} k {}  {n:6}  {:7}  {mean:9.2} ± {se:.2}",
+                a.neighbours,
+                n * s.actions
+            );
         }
     }
     Ok(())

@@ -408,14 +408,14 @@ pub fn acrobot_pumping(s: &[f64; 4]) -> usize {
     usize::from(s[2] >= 0.0)
 }
 
-/// A hand-written controller: its name and its rule.
-type Controller<const D: usize> = (&'static str, fn(&[f64; D]) -> usize);
+/// A hand-written controller: its name and its policy.
+type Controller<'a, const D: usize> = (&'a str, fn(&[f64; D]) -> usize);
 
 /// Computes one plant's anchors.
 fn plant_anchors<const D: usize>(
     plant: SuitePlant,
     domain: &Domain<D>,
-    controller: Option<Controller<D>>,
+    controller: Option<Controller<'_, D>>,
     resolutions: &[[usize; D]],
     args: &Args,
 ) -> anyhow::Result<PlantAnchors> {

@@ -367,7 +367,7 @@ pub fn student_two_sided(t: f64, df: f64) -> f64 {
 }
 
 /// The regularised incomplete beta function `I_x(a, b)` (continued fraction, modified
-/// Lentz; Numerical Recipes §6.4).
+/// Lentz; Numerical Recipes, section 6.4).
 fn incomplete_beta(x: f64, a: f64, b: f64) -> f64 {
     if x <= 0.0 {
         return 0.0;

@@ -1178,6 +1178,63 @@ mod tests {
         }
     }
 
+    /// A model sweep on anchors (f32): on a 5-state chain whose last state is absorbing,
+    /// with one neighbour, every record state is a node and nothing else, so the sweep is
+    /// value iteration on them and Q is the closed-form Q* at the states; a state between
+    /// two nodes reads the nearer one.
+    #[test]
+    fn anchor_sweep_q_on_a_chain() {
+        use awfqi::prelude::{
+            AnchorEntry, AnchorFqi, AnchorParts, AnchorSweep, EmptyCells, FqiConfig, SampleSet,
+            SweepNode, Transition,
+        };
+        let mut samples = [Transition::<[f32; 1], f32>::EMPTY; 10];
+        for c in 0..5 {
+            let right = (c + 1).min(4);
+            samples[2 * c] = Transition {
+                state: [c as f32],
+                action: 0,
+                reward: -1.0,
+                next_state: [right as f32],
+                absorbing: right == 4,
+            };
+            samples[2 * c + 1] = Transition {
+                state: [c as f32],
+                action: 1,
+                reward: -1.0,
+                next_state: [c.saturating_sub(1) as f32],
+                absorbing: false,
+            };
+        }
+        let config = FqiConfig::new(0.9f32, 60, EmptyCells::Nearest).unwrap();
+        let v = |c: usize| -(1.0 - libm::pow(0.9, (4 - c) as f64)) / 0.1;
+        let anchors = AnchorSweep::new([0.0f32], [4.0], 8)
+            .unwrap()
+            .with_neighbours(1)
+            .unwrap();
+        let mut entries = [AnchorEntry::<f32>::EMPTY; 8 * 2];
+        let mut nodes = [SweepNode::<f32>::EMPTY; 8];
+        let mut positions = [[0.0f32; 1]; 8];
+        let mut landings = [[0.0f32; 1]; 8];
+        let parts = AnchorParts {
+            entries: &mut entries,
+            nodes: &mut nodes,
+            positions: &mut positions,
+            landings: &mut landings,
+        };
+        let mut fqi = AnchorFqi::new(anchors, 2, parts).unwrap();
+        fqi.fit(&[SampleSet::unweighted(&samples)], &config)
+            .unwrap();
+        assert!(fqi.placed() == 5);
+        for c in 0..4 {
+            let right = fqi.value([c as f32], 0).unwrap() as f64;
+            assert!(close(right, v(c), 1e-5, 1e-5), "Q({}, right) {}", c, right);
+            assert!(fqi.greedy_action([c as f32]) == Ok(0));
+        }
+        assert!(fqi.value([1.4], 0) == fqi.value([1.0], 0));
+        assert!(fqi.value([f32::NAN], 0).is_err());
+    }
+
     /// Adaptive AWFQI on the target with FQI by a model sweep (f32), small: as
     /// `adaptive_awfqi_with_streamed_trees` with a 6 × 6-cell sweep of pooled rewards and
     /// warm refits. Checks the run's sizes, the weights, and that the greedy policy acts.

@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
 use crate::transfer::algorithms::embedded::{
     ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
-    EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
+    AnchorKnobs, EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
 };
 use crate::transfer::score_tables::Mode;
 
@@ -39,6 +39,10 @@ pub enum AdaptiveQArg {
     /// Value iteration on a grid model of the weighted records (the core's `SweepFqi`):
     /// `--adaptive-sweep-cells` cells per axis, nodes at their corners.
     Sweep,
+    /// The same model at representative states placed from the records (the core's
+    /// `AnchorFqi`): at most `--adaptive-anchors` nodes, a point read from its
+    /// `--adaptive-anchor-neighbours` nearest; the other `--adaptive-sweep-*` options apply.
+    Anchors,
 }
 
 /// Which records a model-sweep node's reward averages (the core's `RewardModel`).
@@ -108,6 +112,12 @@ pub struct AdaptiveArgs {
     /// `--iterations`), 400 on the Dam (chosen on the tuning runs).
     #[arg(long)]
     pub adaptive_sweeps: Option<usize>,
+    /// The node budget of `--adaptive-q anchors`.
+    #[arg(long, default_value_t = 256)]
+    pub adaptive_anchors: usize,
+    /// `--adaptive-q anchors`: the nodes a point is read from (1 to 4).
+    #[arg(long, default_value_t = 4)]
+    pub adaptive_anchor_neighbours: usize,
     /// Tiles per axis of `--adaptive-q tiles` or `hybrid`.
     #[arg(long, default_value_t = ADAPTIVE_TILES)]
     pub adaptive_tiles: usize,
@@ -153,12 +163,32 @@ pub struct AdaptiveArgs {
     /// Depth limit of `--adaptive-q trees` (absent: none; the root is at depth 0).
     #[arg(long)]
     pub adaptive_tree_max_depth: Option<usize>,
-    /// Sub-batches (re-planning points) per step.
-    #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
-    pub adaptive_sub_batches: usize,
-    /// Share of each sub-batch spent verifying the greedy policy.
-    #[arg(long, default_value_t = AdaptiveOptions::default().verify)]
-    pub adaptive_verify: f64,
+    /// Sub-batches (re-planning points) per step (absent: the core's schedule rule from the
+    /// budget per step, `awfqi::adaptive::Schedule::rule`).
+    #[arg(long)]
+    pub adaptive_sub_batches: Option<usize>,
+    /// Share of each sub-batch spent verifying the greedy policy (absent: the schedule
+    /// rule's).
+    #[arg(long)]
+    pub adaptive_verify: Option<f64>,
+    /// Where the verification rollouts start: `all` the domain's distinct evaluation start
+    /// states (each for an equal share of a step's verification), `middle` the middle one
+    /// alone.
+    #[arg(long, value_enum, default_value_t = AdaptiveStartsArg::Middle)]
+    pub adaptive_starts: AdaptiveStartsArg,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short
+    /// of its promise (`AdaptiveConfig::safeguard`).
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().safeguard)]
+    pub adaptive_safeguard: bool,
+    /// Fade the sources' reward weights where the target has records: in a region (a cell
+    /// of `--adaptive-fading-cells` per state coordinate, per action) where the target has
+    /// answered, the source records weigh at most this many records in all (absent: no
+    /// fading; `awfqi::adaptive::Fading`).
+    #[arg(long)]
+    pub adaptive_fading: Option<f64>,
+    /// Cells per state coordinate of the fading's regions.
+    #[arg(long, default_value_t = 10)]
+    pub adaptive_fading_cells: usize,
     /// Score rows by residual surprise.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise)]
     pub adaptive_surprise: bool,
@@ -199,12 +229,26 @@ pub struct AdaptiveArgs {
     pub adaptive_same_samples_fqi: bool,
 }
 
+/// Where `awfqi-adaptive`'s verification rollouts start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AdaptiveStartsArg {
+    /// Every distinct evaluation start state of the domain.
+    All,
+    /// The middle one of the evaluation start states alone.
+    Middle,
+}
+
 impl AdaptiveArgs {
     /// The adaptive loop's knobs.
     pub fn options(&self) -> AdaptiveOptions {
         AdaptiveOptions {
             sub_batches: self.adaptive_sub_batches,
             verify: self.adaptive_verify,
+            all_starts: self.adaptive_starts == AdaptiveStartsArg::All,
+            safeguard: self.adaptive_safeguard,
+            fading: self
+                .adaptive_fading
+                .map(|kappa| (kappa, self.adaptive_fading_cells)),
             surprise: self.adaptive_surprise,
             uncertainty: self.adaptive_uncertainty,
             decision: self.adaptive_decision,
@@ -253,7 +297,7 @@ impl AdaptiveArgs {
                 max_depth: self.adaptive_tree_max_depth,
                 streamed: self.adaptive_tree_streamed,
             })?,
-            AdaptiveQArg::Sweep => EmbeddedQ::sweep(SweepKnobs {
+            AdaptiveQArg::Sweep | AdaptiveQArg::Anchors => EmbeddedQ::sweep(SweepKnobs {
                 cells: self.adaptive_sweep_cells.unwrap_or(sweep.cells),
                 rewards: self
                     .adaptive_sweep_rewards
@@ -261,6 +305,10 @@ impl AdaptiveArgs {
                 min_mass: self.adaptive_sweep_min_mass,
                 lookahead: self.adaptive_sweep_lookahead,
                 sweeps: self.adaptive_sweeps.or(sweep.sweeps),
+                anchors: (self.adaptive_q == AdaptiveQArg::Anchors).then_some(AnchorKnobs {
+                    nodes: self.adaptive_anchors,
+                    neighbours: self.adaptive_anchor_neighbours,
+                }),
             })?,
         })
     }
@@ -406,6 +454,44 @@ mod tests {
             60,
             "other approximators run FQI's iterations"
         );
+    }
+
+    #[test]
+    fn anchors_are_the_sweep_on_a_node_budget() {
+        let words = [
+            "--adaptive-q",
+            "anchors",
+            "--adaptive-anchors",
+            "64",
+            "--adaptive-anchor-neighbours",
+            "2",
+            "--adaptive-sweeps",
+            "7",
+        ];
+        let anchors = q(&words, SweepDefaults::ACROBOT).unwrap();
+        assert!(matches!(
+            anchors,
+            EmbeddedQ::Sweep(SweepKnobs {
+                anchors: Some(AnchorKnobs {
+                    nodes: 64,
+                    neighbours: 2
+                }),
+                sweeps: Some(7),
+                ..
+            })
+        ));
+        assert_eq!(iterations(anchors), 7);
+        assert!(matches!(
+            q(&[], SweepDefaults::ACROBOT).unwrap(),
+            EmbeddedQ::Sweep(SweepKnobs { anchors: None, .. })
+        ));
+        for bad in [
+            ["--adaptive-anchors", "0"],
+            ["--adaptive-anchor-neighbours", "5"],
+        ] {
+            let words = [&["--adaptive-q", "anchors"][..], &bad[..]].concat();
+            assert!(q(&words, SweepDefaults::ACROBOT).is_err(), "{bad:?}");
+        }
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::adaptive::AdaptiveAwfqi`]; not
+//! `awfqi-adaptive`: the adaptive AWFQI as the core runs it ([`awfqi::prelude::AdaptiveAwfqi`]; not
 //! a thesis algorithm — the thesis's `awfqi` and `awfqi-oracle` stay as they are): the
 //! query distribution is recomputed from what the target has answered, several times per
 //! step, and aims at what decides the greedy policy.
@@ -30,10 +30,19 @@ use crate::transfer::protocol::{Diagnostics, Learner};
 /// the result files record them. The defaults are the core's recommended configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AdaptiveOptions {
-    /// Sub-batches per step (re-planning points), ≥ 1.
-    pub sub_batches: usize,
-    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1].
-    pub verify: f64,
+    /// Sub-batches per step (re-planning points), ≥ 1 (`None`: the core's schedule rule).
+    pub sub_batches: Option<usize>,
+    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1] (`None`:
+    /// the schedule rule's).
+    pub verify: Option<f64>,
+    /// Verify from every distinct evaluation start state of the domain (else from the
+    /// middle one alone).
+    pub all_starts: bool,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short.
+    pub safeguard: bool,
+    /// Fading source weights: the pseudo-records `κ` and the cells per state coordinate
+    /// (`None`: off).
+    pub fading: Option<(f64, usize)>,
     /// Score rows by residual surprise.
     pub surprise: bool,
     /// Scale scores by the residual GP's remaining variance.
@@ -71,8 +80,11 @@ impl Default for AdaptiveOptions {
     fn default() -> Self {
         let c = AdaptiveConfig::<f64, 2, 3>::recommended(1, [0.0; 2], 1, 0.0, [(0.0, 1.0); 2]);
         Self {
-            sub_batches: c.sub_batches,
-            verify: c.verify,
+            sub_batches: None,
+            verify: None,
+            all_starts: false,
+            safeguard: c.safeguard,
+            fading: None,
             surprise: c.surprise,
             uncertainty: c.uncertainty,
             decision: c.decision,
@@ -116,8 +128,13 @@ where
     );
     c.awfqi = setup.awfqi_config(budget);
     c.awfqi.fqi = setup.config.adaptive_q.fqi(c.awfqi.fqi)?;
-    c.sub_batches = o.sub_batches;
-    c.verify = o.verify as T;
+    if let Some(s) = o.sub_batches {
+        c.sub_batches = s;
+    }
+    if let Some(v) = o.verify {
+        c.verify = v as T;
+    }
+    c.safeguard = o.safeguard;
     c.surprise = o.surprise;
     c.uncertainty = o.uncertainty;
     c.decision = o.decision;
@@ -127,7 +144,7 @@ where
     c.relabel = o.relabel;
     c.refit = match o.refit {
         Some((max_evaluations, restarts)) => {
-            awfqi::adaptive::Refit::Warm(awfqi::gp::SearchOptions {
+            awfqi::adaptive::Refit::Warm(awfqi::prelude::SearchOptions {
                 max_evaluations,
                 restarts,
                 isotropic: c.awfqi.gp_training.search.isotropic,
@@ -139,7 +156,7 @@ where
 }
 
 /// The memory one run writes, on the heap and sized at run time: what a firmware holds in
-/// an [`awfqi::adaptive::AdaptiveStorage`].
+/// an [`awfqi::prelude::AdaptiveStorage`].
 #[derive(Debug)]
 struct Memory<const N: usize, const D: usize, const I: usize> {
     gp: Box<Gp<T, N, I>>,
@@ -161,6 +178,9 @@ struct QMemory<const D: usize> {
     nodes: Vec<TreeNode<T>>,
     sweep_entries: Vec<awfqi::fqi::SweepEntry<T, D>>,
     sweep_nodes: Vec<awfqi::fqi::SweepNode<T>>,
+    anchor_entries: Vec<awfqi::fqi::AnchorEntry<T>>,
+    anchor_positions: Vec<[T; D]>,
+    anchor_landings: Vec<[T; D]>,
 }
 
 impl<const D: usize> QMemory<D> {
@@ -173,6 +193,9 @@ impl<const D: usize> QMemory<D> {
             nodes: &mut self.nodes,
             sweep_entries: &mut self.sweep_entries,
             sweep_nodes: &mut self.sweep_nodes,
+            anchor_entries: &mut self.anchor_entries,
+            anchor_positions: &mut self.anchor_positions,
+            anchor_landings: &mut self.anchor_landings,
         }
     }
 }
@@ -297,7 +320,7 @@ where
             &mut gp,
             source,
             &training,
-            awfqi::record_gp::SubsetRule::Spread,
+            awfqi::prelude::SubsetRule::Spread,
             &mut rng,
         )?;
     }
@@ -328,7 +351,7 @@ where
     // Kernel averaging and trees hold every target and source record of a fit.
     let n = experiment.protocol.steps * budget + setup.posteriors().len();
     let (records, links) = match approximator {
-        awfqi::fqi::Approximator::Knn(nb) | awfqi::fqi::Approximator::Hybrid(_, nb) => {
+        awfqi::prelude::Approximator::Knn(nb) | awfqi::prelude::Approximator::Hybrid(_, nb) => {
             let links = nb
                 .required_links(n, actions)
                 .ok_or_else(|| anyhow::anyhow!("kNN links overflow"))?;
@@ -337,7 +360,7 @@ where
         _ => (0, 0),
     };
     let (tree_records, nodes) = match approximator {
-        awfqi::fqi::Approximator::Trees(forests) => {
+        awfqi::prelude::Approximator::Trees(forests) => {
             let nodes = forests
                 .required_nodes(actions)
                 .ok_or_else(|| anyhow::anyhow!("tree nodes overflow"))?;
@@ -346,11 +369,21 @@ where
         _ => (0, 0),
     };
     let (sweep_entries, sweep_nodes) = match approximator {
-        awfqi::fqi::Approximator::Sweep(sweep) => (
+        awfqi::prelude::Approximator::Sweep(sweep) => (
             sweep
                 .required_entries(actions)
                 .ok_or_else(|| anyhow::anyhow!("sweep entries overflow"))?,
             sweep.nodes(),
+        ),
+        awfqi::prelude::Approximator::Anchors(anchors) => (0, anchors.nodes()),
+        _ => (0, 0),
+    };
+    let (anchor_entries, anchors) = match approximator {
+        awfqi::prelude::Approximator::Anchors(anchors) => (
+            anchors
+                .required_entries(actions)
+                .ok_or_else(|| anyhow::anyhow!("anchor entries overflow"))?,
+            anchors.nodes(),
         ),
         _ => (0, 0),
     };
@@ -362,6 +395,9 @@ where
         nodes: vec![TreeNode::EMPTY; nodes],
         sweep_entries: vec![awfqi::fqi::SweepEntry::EMPTY; sweep_entries],
         sweep_nodes: vec![awfqi::fqi::SweepNode::EMPTY; sweep_nodes],
+        anchor_entries: vec![awfqi::fqi::AnchorEntry::EMPTY; anchor_entries],
+        anchor_positions: vec![[0.0; D]; anchors],
+        anchor_landings: vec![[0.0; D]; anchors],
     };
     let mut spare = experiment
         .adaptive_options
@@ -383,6 +419,19 @@ where
     };
     let means = means_of::<N, D, I>(setup, &sources)?;
     let means: &[MeanFunction<T, N, I>] = &means;
+    let starts = verification_starts(experiment, setup);
+    let fading = experiment.adaptive_options.fading.map(|(kappa, cells)| {
+        let f = awfqi::adaptive::Fading {
+            pseudo_records: kappa as T,
+            cells,
+        };
+        let len = cells
+            .saturating_pow(D as u32)
+            .saturating_mul(actions)
+            .min(1 << 20);
+        (f, vec![awfqi::adaptive::FadeCell::EMPTY; len.max(1)])
+    });
+    let mut fade_table = fading.as_ref().map(|(_, t)| t.clone()).unwrap_or_default();
     let adaptive = AdaptiveAwfqi::new(
         config,
         approximator,
@@ -391,11 +440,37 @@ where
         rows,
         plant,
         memory.buffers(),
-    )?;
+    )?
+    .with_starts(&starts)?;
+    let adaptive = match fading {
+        Some((f, _)) => adaptive.with_fading(f, &mut fade_table)?,
+        None => adaptive,
+    };
     let mut learner = AdaptiveLearner {
         adaptive,
         collected: Vec::new(),
         baseline,
     };
     f(&mut learner, rng)
+}
+
+/// Where the verification rollouts start: the domain's distinct evaluation start states
+/// ([`AdaptiveOptions::all_starts`]), else the set-up's start alone.
+fn verification_starts<const N: usize, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
+    setup: &EmbeddedSetup<N, D, I>,
+) -> Vec<[T; D]> {
+    let mut starts: Vec<[T; D]> = Vec::new();
+    if experiment.adaptive_options.all_starts {
+        for s in &experiment.domain.evaluation_starts {
+            let s = s.map(|x| x as T);
+            if !starts.contains(&s) {
+                starts.push(s);
+            }
+        }
+    }
+    if starts.is_empty() {
+        starts.push(setup.domain.start.map(|x| x as T));
+    }
+    starts
 }

@@ -70,6 +70,7 @@ pub const ADAPTIVE_Q: EmbeddedQ = EmbeddedQ::Sweep(SweepKnobs {
     min_mass: 0.0,
     lookahead: false,
     sweeps: None,
+    anchors: None,
 });
 /// Tiles per axis of `awfqi-adaptive`'s tile coding by default: chosen on the tuning runs
 /// (`--seed 100`, 6 runs each: 6 × 4, 8 × 8, 10 × 8, 10 × 16, 12 × 8, 12 × 16, 14 × 8,
@@ -112,6 +113,18 @@ pub struct SweepKnobs {
     /// Value-iteration sweeps of its own (`None`: FQI's iterations): at a discount near 1
     /// the protocol's iterations value too short a horizon.
     pub sweeps: Option<usize>,
+    /// Nodes at representative states placed from the records instead of the grid
+    /// (`cells` then unused).
+    pub anchors: Option<AnchorKnobs>,
+}
+
+/// The knobs of a model sweep on anchors ([`SweepKnobs::anchors`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AnchorKnobs {
+    /// The node budget.
+    pub nodes: usize,
+    /// The nodes a point is read from.
+    pub neighbours: usize,
 }
 
 /// The knobs of [`EmbeddedQ::Trees`].
@@ -234,13 +247,19 @@ impl EmbeddedQ {
                     .map_or(forests, |d| forests.with_max_depth(d))
                     .into()
             }
-            Self::Sweep(k) => {
-                awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
+            Self::Sweep(k) => match k.anchors {
+                Some(a) => awfqi::fqi::AnchorSweep::new(lower, upper, a.nodes)?
+                    .with_neighbours(a.neighbours)?
                     .with_rewards(k.rewards)
                     .with_min_mass(k.min_mass as T)?
                     .with_lookahead(k.lookahead)
-                    .into()
-            }
+                    .into(),
+                None => awfqi::fqi::ModelSweep::new(CellGrid::new(lower, upper, [k.cells; D])?)?
+                    .with_rewards(k.rewards)
+                    .with_min_mass(k.min_mass as T)?
+                    .with_lookahead(k.lookahead)
+                    .into(),
+            },
         })
     }
 }
@@ -794,6 +813,9 @@ fn after_step<const D: usize, const I: usize>(
         ws_mean: transitions(report.ws_mean),
         ws_eff: transitions(report.ws_eff),
         reward_gp: Some(reward_gp_summary(report)),
+        plan_shortfall: (report.reward_std > 0.0)
+            .then(|| f64::from(report.plan_shortfall / report.reward_std)),
+        warnings: Some(report.warnings().map(|w| w.to_string()).collect()),
         ..Diagnostics::default()
     }
 }

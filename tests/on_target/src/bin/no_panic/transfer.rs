@@ -574,6 +574,71 @@ pub(super) fn transfer_path<T, G, const D: usize, const I: usize>(
         }
     }
 
+    // fqi: the sweep on anchors, directly and behind QFunction
+    let anchors = AnchorSweep::<T, D>::new([num(0.0); D], [high; D], index(16))
+        .and_then(|a| a.with_neighbours(index(3)))
+        .and_then(|a| a.with_min_mass(num(0.25)))
+        .map(|a| {
+            a.with_rewards(rewards[index(1) % 3])
+                .with_lookahead(opaque(true))
+        });
+    if let Ok(anchors) = anchors {
+        keep((
+            anchors.nodes(),
+            anchors.neighbours(),
+            anchors.required_entries(actions),
+            anchors.bounds(),
+        ));
+        let config = FqiConfig::new(num::<T>(0.9), index(5), EmptyCells::CappedNearest)
+            .unwrap_or_else(|_| FqiConfig::published());
+        let w = [num::<T>(0.5); 12];
+        let sets = [
+            SampleSet::unweighted(&records[..6]),
+            SampleSet::weighted(&records[6..], Some(&w[6..]), Some(&w[..6])),
+        ];
+        let mut entries = [AnchorEntry::<T>::EMPTY; 16 * 4];
+        let mut nodes = [SweepNode::<T>::EMPTY; 16];
+        let mut positions = [[T::ZERO; D]; 16];
+        let mut landings = [[T::ZERO; D]; 16];
+        let parts = AnchorParts {
+            entries: &mut entries,
+            nodes: &mut nodes,
+            positions: &mut positions,
+            landings: &mut landings,
+        };
+        if let Ok(mut fqi) = AnchorFqi::new(anchors, actions, parts) {
+            keep(fqi.fit(&sets, &config));
+            keep(fqi.fit_sets(sets.iter().copied(), &config));
+            let s = [num::<T>(0.2); D];
+            keep((
+                fqi.value(s, index(1)),
+                fqi.max_value(s),
+                fqi.greedy_action(s),
+                fqi.greedy(s),
+                fqi.next_state(index(3), index(1)),
+                fqi.actions(),
+                fqi.placed(),
+                fqi.anchor(index(2)),
+                *fqi.settings(),
+            ));
+            if let Some(e) = fqi.entries().get(index(2)) {
+                keep(e.reward());
+            }
+            fqi.clear();
+        }
+        let mut block = AnchorStorage::<T, D, { 16 * 4 }, 16>::new();
+        let approximator: Approximator<T, D> = anchors.into();
+        if let Ok(mut q) = approximator.build(actions, &mut block) {
+            keep(q.fit(&sets, &config, rng));
+            keep((
+                q.value([num(0.7); D], 0),
+                q.max_value([num(0.7); D]),
+                q.greedy_action([num(0.7); D]),
+            ));
+            q.clear();
+        }
+    }
+
     // score
     let point_grid = PointGrid::<T, D>::new([num(0.0); D], [num(0.5); D], [index(3); D])
         .or_else(|_| PointGrid::spanning([num(0.0); D], [high; D], num(0.5)));
