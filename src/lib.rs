@@ -177,6 +177,7 @@ pub mod float;
 pub mod fqi;
 pub mod gp;
 pub mod identify;
+pub mod interop;
 pub mod model;
 pub mod planning;
 pub mod policy;
