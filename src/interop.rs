@@ -1,10 +1,10 @@
 //! Types of other crates in and out of the core, each behind its Cargo feature (none is a
 //! dependency without it).
 //!
-//! - [`nalgebra`](mod@nalgebra) (feature `nalgebra`): a controller whose states are
+//! - `nalgebra` (feature `nalgebra`): a controller whose states are
 //!   `nalgebra::SVector`s reads all Q-values of a state as one vector, asks the greedy
 //!   action or a value with its own state type, and hands its `SVector` plant to a learner.
-//! - [`heapless`](mod@heapless) (feature `heapless`): a step report's warnings as a
+//! - `heapless` (feature `heapless`): a step report's warnings as a
 //!   `heapless::Vec` to keep, queue or send, refused with a typed error rather than cut
 //!   short when the vector is too small.
 
