@@ -143,20 +143,26 @@ impl fmt::Display for Number {
                 let scale = 10u32.pow(e.unsigned_abs() - 2);
                 write!(f, "{sign}{}", u64::from(digits) * u64::from(scale))
             }
-            // Plain, with 2 − e decimal places, trailing zeros dropped.
+            // Plain, with 2 − e decimal places (1 to 5), trailing zeros dropped. The
+            // decimals are split off digit by digit and written one by one: a division by a
+            // computed power of ten or a computed width (`{:0w$}`) would keep a panic path.
             -3..=1 => {
-                let mut places = (2 - e).unsigned_abs() as usize;
-                let scale = 10u32.pow(places as u32);
-                let (whole, mut fraction) = (digits / scale, digits % scale);
-                while places > 0 && fraction % 10 == 0 {
-                    fraction /= 10;
-                    places -= 1;
+                let places = (2 - e).unsigned_abs() as usize;
+                let mut whole = digits;
+                // decimals[i]: the decimal at 10^(i − places), the last one first.
+                let mut decimals = [0u8; 5];
+                for d in decimals.iter_mut().take(places) {
+                    *d = (whole % 10) as u8;
+                    whole /= 10;
                 }
-                if places == 0 {
-                    write!(f, "{sign}{whole}")
-                } else {
-                    write!(f, "{sign}{whole}.{fraction:0places$}")
+                write!(f, "{sign}{whole}")?;
+                if let Some(zeros) = decimals.iter().take(places).position(|&d| d != 0) {
+                    fmt::Write::write_char(f, '.')?;
+                    for &d in decimals.iter().take(places).skip(zeros).rev() {
+                        fmt::Write::write_char(f, char::from(b'0' + d))?;
+                    }
                 }
+                Ok(())
             }
             _ => {
                 let (whole, fraction) = (digits / 100, digits % 100);
@@ -304,6 +310,10 @@ mod tests {
         assert_eq!(shown(123_456.0), "123000");
         assert_eq!(shown(0.001_234_5), "0.00123");
         assert_eq!(shown(0.000_999_9), "0.001");
+        assert_eq!(shown(0.010_5), "0.0105");
+        assert_eq!(shown(12.5), "12.5");
+        assert_eq!(shown(1.0), "1");
+        assert_eq!(shown(-0.5), "-0.5");
         assert_eq!(shown(0.000_123), "1.23e-4");
         assert_eq!(shown(-40.0), "-40");
         assert_eq!(shown(5e-324), "4.94e-324");

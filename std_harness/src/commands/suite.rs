@@ -1,5 +1,5 @@
 //! `awfqi-harness suite`: the plant suite — every plant of
-//! [`SuitePlant`](crate::transfer::suite::SuitePlant) at its two budget schedules of the
+//! [`SuitePlant`] at its two budget schedules of the
 //! same total, each cell an ordinary transfer experiment (`<out>/<plant>/<K>x<Q>`, the
 //! result files of `puddle`, `dam` and `acrobot`, so `--runs A..B` shards and `merge`
 //! work per cell), then one page, `<out>/suite.md` (and `suite.csv`), of raw and

@@ -110,7 +110,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
         |i, r, p| Ok(p.mean + p.std + r.reward + T::from_usize(i)),
     ));
     // The pieces on their own.
-    let mut beliefs = [adaptive::SourceBelief::<T>::EMPTY; 3];
+    let mut beliefs = [adaptive::plausibility::SourceBelief::<T>::EMPTY; 3];
     adaptive::plausibility::reset(&mut beliefs);
     beliefs[index(1) % 3].squared_errors = num(2.0);
     keep(adaptive::plausibility::update(&mut beliefs, num(0.1)));
@@ -136,7 +136,7 @@ pub(super) fn adaptive<T, G, const D: usize, const I: usize>(
     keep(adaptive::candidates::weighted_spread(
         [Ok((num::<T>(-1.0), num(0.5))), Ok((num(-2.0), num(0.5)))].into_iter(),
     ));
-    let mut slots = [adaptive::Candidate::<T>::EMPTY; 4];
+    let mut slots = [adaptive::candidates::Candidate::<T>::EMPTY; 4];
     let u = |v: T| v.min(T::ONE);
     let totals =
         adaptive::candidates::finish_scores(slots.get_mut(..index(3)).unwrap_or(&mut []), Some(&u));

@@ -30,16 +30,16 @@ use awfqi::planning::{
 };
 use awfqi::policy::{EpsilonGreedyPolicy, Policy, UniformPolicy};
 use awfqi::prelude::{
-    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AdaptiveStorage, AliasEntry, AnchorEntry,
-    AnchorFqi, AnchorParts, AnchorStorage, AnchorSweep, Approximator, Awfqi, AwfqiBuffers,
-    AwfqiConfig, AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, ExtraTrees, FqiConfig,
-    FqiEntry, GenerativeModel, Gp, GpTraining, Greedy, HybridFqi, HyperparameterBounds,
-    Hyperparameters, Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, ModelSweep,
-    MultiStartProtocol, Neighbours, Output, QFunction, Real, RewardModel, RowSet, SampleSet,
-    ScoreColumn, ScoreTable, Scores, SearchOptions, SourceData, SourceMeans, SourceModel,
-    SourceScales, SubsetRule, SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi,
-    Tilings, Transition, TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate,
-    evaluate_greedy, evaluate_greedy_multi_start, evaluate_multi_start, rollout,
+    AdaptiveAwfqi, AdaptiveBuffers, AdaptiveConfig, AliasEntry, AnchorEntry, AnchorFqi,
+    AnchorParts, AnchorStorage, AnchorSweep, Approximator, Awfqi, AwfqiBuffers, AwfqiConfig,
+    AwfqiStorage, CellGrid, EmptyCells, EvaluationProtocol, ExtraTrees, FqiConfig, FqiEntry,
+    GenerativeModel, Gp, GpTraining, Greedy, HybridFqi, HyperparameterBounds, Hyperparameters,
+    Kernel, KnnFqi, KnnRecord, KnnStorage, MeanFunction, ModelSweep, MultiStartProtocol,
+    Neighbours, Output, QFunction, Real, RewardModel, RowSet, SampleSet, ScoreColumn, ScoreTable,
+    Scores, SearchOptions, SourceData, SourceMeans, SourceModel, SourceScales, SubsetRule,
+    SweepEntry, SweepFqi, SweepNode, SweepStorage, TabularFqi, TileFqi, Tilings, Transition,
+    TreeFqi, TreeNode, TreeRecord, TreeStorage, WhenFull, evaluate, evaluate_greedy,
+    evaluate_greedy_multi_start, evaluate_multi_start, rollout,
 };
 use awfqi::record_gp::{
     batch_transform, fit_gp, fit_gp_on, input, map_posteriors, predict_posteriors,
