@@ -23,12 +23,59 @@ fn main() -> awfqi::Result<()> {
         .iter()
         .position(|a| a == "--out")
         .and_then(|i| args.get(i + 1));
+    // Host-only variations (ablations and budget schedules): `--schedule STEPSxBUDGET`,
+    // `--all-starts` (verify from every start state), `--sub-batches S` and `--verify V`
+    // (instead of the schedule rule's), `--safeguard`.
+    let flag = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+    };
+    let mut variant = zones::RECOMMENDED;
+    if let Some((steps, budget)) = flag("--schedule").and_then(|s| s.split_once('x')) {
+        variant.steps = steps.parse().unwrap_or(variant.steps);
+        variant.budget = budget.parse().unwrap_or(variant.budget);
+    }
+    variant.all_starts = args.iter().any(|a| a == "--all-starts");
+    let sub_batches: Option<usize> = flag("--sub-batches").and_then(|s| s.parse().ok());
+    let verify: Option<f32> = flag("--verify").and_then(|s| s.parse().ok());
+    // `--k K`: the reward weights' noise variance K·ν_r instead of the scaled rule's.
+    let k: Option<f32> = flag("--k").and_then(|s| s.parse().ok());
+    let safeguard = args.iter().any(|a| a == "--safeguard");
+    // `--fading KAPPA` (with `--fading-cells C`, default 10): fading source weights.
+    let fading: Option<f32> = flag("--fading").and_then(|s| s.parse().ok());
+    let fading_cells: usize = flag("--fading-cells")
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10);
+    let mut table = vec![awfqi::adaptive::FadeCell::EMPTY; fading_cells.pow(3) * zones::ACTIONS];
+    let default = variant == zones::RECOMMENDED
+        && sub_batches.is_none()
+        && verify.is_none()
+        && k.is_none()
+        && fading.is_none()
+        && !safeguard;
     let mut memory = Box::new(zones::Memory::new());
     let mut rows: Vec<(u64, [f32; 3])> = Vec::new();
     for seed in first..end {
         let mut warnings = 0;
         let verbose = std::env::var_os("ZONES_VERBOSE").is_some();
-        let outcome = zones::learn_and_compare(&mut memory, seed, |report| {
+        let configure = |c: &mut awfqi::prelude::AdaptiveConfig<f32, 3, 4>| {
+            if let Some(s) = sub_batches {
+                c.sub_batches = s;
+            }
+            if let Some(v) = verify {
+                c.verify = v;
+            }
+            if let Some(k) = k {
+                let w = c.awfqi.weights;
+                let v = w.noise_variance() * k / awfqi::thesis::NOISE_MULTIPLIER as f32;
+                if let Ok(p) = awfqi::prelude::WeightParams::new(w.estimator(), v, w.max_weight()) {
+                    c.awfqi.weights = p;
+                }
+            }
+            c.safeguard = safeguard;
+        };
+        let on_step = |report: &awfqi::prelude::StepReport<f32, 4>| {
             if verbose {
                 eprintln!(
                     "seed {seed}, step {}: source ESS {:.1}, discarded {}, capped {}, GP {:?}, jitter {:.2e}, condition {:.2e}",
@@ -45,7 +92,39 @@ fn main() -> awfqi::Result<()> {
                 eprintln!("seed {seed}, step {}: warning: {w}", report.step);
                 warnings += 1;
             }
-        })?;
+            eprintln!(
+                "seed {seed}, step {}: shortfall {:.4}, reward std {:.4}",
+                report.step, report.plan_shortfall, report.reward_std
+            );
+        };
+        let outcome = if default {
+            zones::learn_and_compare(&mut memory, seed, on_step)?
+        } else {
+            let fade = fading.map(|kappa| {
+                let f = awfqi::adaptive::Fading {
+                    pseudo_records: kappa,
+                    cells: fading_cells,
+                };
+                (f, &mut table[..])
+            });
+            zones::learn_and_compare_with(&mut memory, seed, variant, configure, fade, on_step)?
+        };
+        // The uniform random policy over the same protocol (from its own stream).
+        let random = {
+            use awfqi::rand_core::SeedableRng;
+            let plant = awfqi::env::Zones::<f32>::target();
+            let protocol = awfqi::prelude::MultiStartProtocol {
+                starts: &zones::STARTS,
+                rollouts: zones::ROLLOUTS,
+                horizon: zones::HORIZON,
+                discount: zones::DISCOUNT,
+            };
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let mut policy = awfqi::prelude::UniformPolicy::new(zones::ACTIONS)?;
+            awfqi::prelude::evaluate_multi_start(&plant, &mut policy, &protocol, &mut rng)?
+                .mean_return
+        };
+        println!("seed {seed}: random {random:.2}");
         let r = [
             outcome.awfqi.mean_return,
             outcome.fqi.mean_return,

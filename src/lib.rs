@@ -54,9 +54,11 @@
 //!   indexing are denied by lint, and the repository's `scripts/no-panic` links every public
 //!   entry point for a Cortex-M4F with a panic handler that does not exist.
 //! - Dependencies: `libm` (the float functions a `no_std` target lacks) and `rand_core` (the
-//!   generator trait every randomised call takes), nothing else.
+//!   generator trait every randomised call takes), nothing else without a feature.
 //! - Cargo features: `defmt` (`defmt::Format` for [`Error`] and the public data types);
-//!   `rand_core_06`, `rand_core_09` (generators of older `rand_core` versions, [`rng::compat`]).
+//!   `rand_core_06`, `rand_core_09` (generators of older `rand_core` versions, [`rng::compat`]);
+//!   `nalgebra` (Q-values, states and plants as `nalgebra::SVector`s) and `heapless` (a step's
+//!   warnings as a `heapless::Vec`), both in [`interop`].
 //!
 //! ## Example: a room heater learned from two other heaters
 //!
@@ -177,6 +179,7 @@ pub mod float;
 pub mod fqi;
 pub mod gp;
 pub mod identify;
+pub mod interop;
 pub mod model;
 pub mod planning;
 pub mod policy;

@@ -47,15 +47,21 @@ mod builder;
 pub mod candidates;
 mod draw;
 mod evidence;
+pub mod fading;
 mod mean_function;
 pub mod plausibility;
 mod replan;
+pub mod safeguard;
+pub mod schedule;
 mod storage;
 mod verify;
 
 pub use builder::{AdaptiveBuilder, ROWS_PER_AXIS, ROWS_PER_CELL};
+pub use fading::{FadeCell, Fading};
 pub use mean_function::MeanFunction;
 pub use replan::relabelled_reward;
+pub use safeguard::PlanCheck;
+pub use schedule::Schedule;
 pub use storage::{AdaptiveBuffers, AdaptiveCapacities, AdaptiveParts, AdaptiveStorage};
 
 use draw::Draw;
@@ -121,6 +127,9 @@ pub struct AdaptiveConfig<T, const D: usize, const I: usize> {
     pub bounds: [(T, T); D],
     /// How the target GPs' hyperparameters are searched after their first fit of a run.
     pub refit: Refit,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short
+    /// of its promise ([`safeguard`]).
+    pub safeguard: bool,
 }
 
 /// How a re-plan searches the hyperparameters of the weights' reward GP and of the residual
@@ -139,7 +148,10 @@ pub enum Refit {
 
 impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// The recommended configuration (`docs/embedded-adaptive.md`, the harness's
-    /// `awfqi-adaptive`): 3 sub-batches, 70 % verification, surprise, uncertainty
+    /// `awfqi-adaptive`): sub-batches and verification share by the budget schedule's rule
+    /// ([`Schedule::rule`]: 3 sub-batches and 70 % verification at 50 queries a step;
+    /// rollouts from several start states with [`AdaptiveAwfqi::with_starts`]), surprise,
+    /// uncertainty
     /// and decision relevance on, floor 0.1, 250 candidates, relevance width 0.1,
     /// relabelling off, warm refits of the GPs (30 likelihood evaluations, no restart, after
     /// each GP's first fit), on the thesis's AWFQI settings for `budget`
@@ -164,10 +176,11 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     where
         Dims<D, I>: StatePlusAction,
     {
+        let schedule = Schedule::<T>::rule(budget, horizon, 1);
         Self {
             awfqi: AwfqiConfig::thesis(budget),
-            sub_batches: 3,
-            verify: T::from_f64(0.7),
+            sub_batches: schedule.sub_batches,
+            verify: schedule.verify,
             surprise: true,
             uncertainty: true,
             decision: true,
@@ -184,6 +197,7 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
                 restarts: 0,
                 isotropic: true,
             }),
+            safeguard: false,
         }
     }
 
@@ -346,6 +360,9 @@ pub struct AdaptiveAwfqi<'a, T, G, const D: usize, const I: usize, const N: usiz
     verification: Verification<'a, T, D>,
     draw: Draw<'a, T>,
     replan: Replan<T, I>,
+    /// Source weights that fade where the target has records ([`AdaptiveAwfqi::with_fading`])
+    /// and the regions' sums.
+    fading: Option<(Fading<T>, &'a mut [FadeCell<T>])>,
     /// `D₀`, the sources, the weights, the GP, the Q-function, the step count.
     run: Transfer<'a, T, G, D, I, N>,
 }
@@ -395,11 +412,50 @@ where
         Ok(lent.assemble(config, sources, rows, target, evidence))
     }
 
+    /// Verifies from every state of `starts` (the start states the plant declares) instead
+    /// of [`AdaptiveConfig::start`] alone: the rollouts of a sub-batch start from successive
+    /// states of `starts` (cycling over the run), the first from each greedy, and each runs
+    /// at most [`schedule::rollout_length`] steps, so a step verifies every start state for
+    /// an equal share of its verification queries.
+    ///
+    /// Errors: `starts` empty ([`Error::EmptyData`]) or with a non-finite coordinate
+    /// ([`Error::NonFinite`] `start`); the learner is unchanged then.
+    pub fn with_starts(mut self, starts: &'a [[T; D]]) -> Result<Self> {
+        self.verification.set_starts(starts)?;
+        Ok(self)
+    }
+
+    /// The verification rollouts' start states.
+    pub fn starts(&self) -> &[[T; D]] {
+        self.verification.starts(&self.config.config.start)
+    }
+
+    /// Fades the sources' reward weights where the target has records ([`fading`]): after
+    /// each re-plan's reward weights, the source records of a region where the target has
+    /// answered weigh at most `fading.pseudo_records` in all; `table` holds the regions'
+    /// sums (`fading.cells^D × actions` entries make them exact). Without relabelling only
+    /// ([`AdaptiveConfig::relabel`] keeps every weight 1).
+    ///
+    /// Errors: those of [`Fading::validate`]; `table` empty ([`Error::BufferTooSmall`]
+    /// `fading`); the learner is unchanged then.
+    pub fn with_fading(mut self, fading: Fading<T>, table: &'a mut [FadeCell<T>]) -> Result<Self> {
+        let fading = fading.validate()?;
+        if table.is_empty() {
+            return Err(Error::BufferTooSmall {
+                buffer: "fading (the regions' sums)",
+                capacity: 0,
+                needed: 1,
+            });
+        }
+        self.fading = Some((fading, table));
+        Ok(self)
+    }
+
     /// Starts a new run on the same set-up: empties `D₀`, resets Q, the beliefs and the
     /// step count.
     pub fn reset(&mut self) {
         self.run.reset();
-        self.verification.clear();
+        self.verification.reset();
         self.replan = Replan::new();
         self.evidence.reset();
     }
@@ -485,8 +541,9 @@ where
     /// Errors: those of FQI; the learner is unchanged then.
     pub fn plan<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<()> {
         if !self.replan.planned() {
+            let fading = self.fading.as_mut().map(|(f, t)| (&*f, &mut **t));
             self.replan
-                .run(&self.config, &mut self.run, &mut self.evidence, rng)?;
+                .run(&self.config, &mut self.run, &mut self.evidence, fading, rng)?;
         }
         Ok(())
     }
@@ -515,9 +572,22 @@ where
                 .to_f64() as usize;
             let verify = verify.min(quota);
             let (config, run, evidence) = (&self.config, &mut self.run, &mut self.evidence);
-            self.verification.run(verify, config, run, evidence, rng)?;
+            self.verification.start_check();
+            let planned = self.replan.planned();
+            self.verification
+                .run(verify, planned, config, run, evidence, rng)?;
+            // The safeguard: a plan that verified short of its promise gets the sub-batch's
+            // drawn queries as more verification.
+            let short = config.safeguard && self.verification.check().is_short(reward_std(run));
+            let (more, drawn) = if short {
+                (quota - verify, 0)
+            } else {
+                (0, quota - verify)
+            };
+            self.verification
+                .run(more, planned, config, run, evidence, rng)?;
             self.draw.run(
-                quota - verify,
+                drawn,
                 config,
                 &self.rows,
                 self.verification.states(),
@@ -526,7 +596,12 @@ where
                 evidence,
                 rng,
             )?;
-            report = Some(self.replan.run(config, run, evidence, rng)?);
+            let check = *self.verification.check();
+            let fading = self.fading.as_mut().map(|(f, t)| (&*f, &mut **t));
+            let mut r = self.replan.run(config, run, evidence, fading, rng)?;
+            r.plan_shortfall = check.shortfall();
+            r.reward_std = reward_std(run);
+            report = Some(r);
         }
         self.run.steps += 1;
         let mut report = report.ok_or(Error::InvalidParameter {
@@ -536,6 +611,19 @@ where
         report.queries = n;
         Ok(report)
     }
+}
+
+/// The standard deviation of the target's rewards in `run`'s `D₀`.
+fn reward_std<
+    T: Real,
+    G: GenerativeModel<T, State = [T; D]>,
+    const D: usize,
+    const I: usize,
+    const N: usize,
+>(
+    run: &Transfer<'_, T, G, D, I, N>,
+) -> T {
+    safeguard::reward_std(run.target_samples().iter().map(|r| r.reward))
 }
 
 /// The learner's buffers, checked against the set-up before anything is fitted: each
@@ -634,6 +722,7 @@ where
             verification: self.verification,
             draw: self.draw,
             replan: Replan::new(),
+            fading: None,
             run: Transfer::new(
                 target,
                 sources,

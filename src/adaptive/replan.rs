@@ -3,6 +3,7 @@
 //! residual GP that scores the next sub-batch.
 
 use super::evidence::Evidence;
+use super::fading::{FadeCell, Fading};
 use super::{Refit, ValidAdaptiveConfig};
 use crate::error::Result;
 use crate::float::Real;
@@ -71,14 +72,15 @@ impl<T: Real, const I: usize> Replan<T, I> {
         self.relabelled
     }
 
-    /// Re-plans: reward GP, reward weights and weighted FQI on `D₀` and the sources (the
-    /// sources unweighted before any target data), then the plausibilities and the
-    /// residual GP.
+    /// Re-plans: reward GP, reward weights (faded where the target has records with
+    /// `fading`) and weighted FQI on `D₀` and the sources (the sources unweighted before
+    /// any target data), then the plausibilities and the residual GP.
     pub(super) fn run<G, R, const D: usize, const N: usize>(
         &mut self,
         adaptive: &ValidAdaptiveConfig<T, D, I>,
         run: &mut Transfer<'_, T, G, D, I, N>,
         evidence: &mut Evidence<'_, T, N, I>,
+        fading: Option<(&Fading<T>, &mut [FadeCell<T>])>,
         rng: &mut R,
     ) -> Result<StepReport<T, I>>
     where
@@ -143,6 +145,16 @@ impl<T: Real, const I: usize> Replan<T, I> {
                 &mut tally,
                 true,
             )?;
+            if let Some((f, table)) = fading {
+                super::fading::fade(
+                    f,
+                    run.weights,
+                    run.sources.records().iter().copied(),
+                    run.samples.get(..run.len).unwrap_or(&[]),
+                    &adaptive.bounds,
+                    table,
+                )?;
+            }
             SourceValues::Weights
         };
         run.fit_q(values, None, &config.fqi, rng)?;

@@ -47,6 +47,8 @@ fn config(budget: usize) -> AdaptiveConfig<f64, 2, 3> {
     c.awfqi.gp_training = training();
     c.awfqi.fqi = FqiConfig::new(0.99, 20, EmptyCells::Nearest).unwrap();
     c.verify = 0.5;
+    // Three sub-batches whatever the budget (the schedule rule gives one below 16 queries).
+    c.sub_batches = 3;
     c.candidates = 40;
     c
 }
@@ -833,4 +835,118 @@ fn a_target_buffer_with_room_for_99_of_100_samples_is_refused_before_the_first_s
         .configure(|c| c.awfqi.gp_training = training())
         .build(&mut *memory, &mut rng);
     assert_eq!(built.map(|k| k.steps()), Ok(0));
+}
+
+#[test]
+fn verification_cycles_over_the_declared_starts_with_rollouts_of_the_rules_length() {
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
+    let valid = config(12).validate().unwrap();
+    let target = PuddleWorld::target(Dynamics::Shared);
+    let mut storage = std::boxed::Box::new(Storage::new());
+    let kernel = AdaptiveAwfqi::new(
+        valid,
+        grid(),
+        sources,
+        &fx.means,
+        rows(),
+        target,
+        &mut *storage,
+    )
+    .unwrap();
+    let starts = [[0.5, 0.5], [7.5, 2.5], [2.5, 7.5]];
+    assert_eq!(
+        AdaptiveAwfqi::new(
+            valid,
+            grid(),
+            SourceData::new(&slices, &fx.posteriors).unwrap(),
+            &fx.means,
+            rows(),
+            PuddleWorld::target(Dynamics::Shared),
+            &mut *std::boxed::Box::new(Storage::new()),
+        )
+        .unwrap()
+        .with_starts(&[])
+        .err(),
+        Some(Error::EmptyData)
+    );
+    let mut kernel = kernel.with_starts(&starts).unwrap();
+    assert_eq!(kernel.starts(), &starts[..]);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let report = kernel.step(&mut rng).unwrap();
+    // 6 verification queries a step over 3 starts: rollouts of at most 2 steps; quotas of
+    // 4 with 2 verified: sub-batch b verifies from start b.
+    let d0 = kernel.target_samples().to_vec();
+    for (b, start) in starts.iter().enumerate() {
+        assert_eq!(&d0[4 * b].state, start);
+        if !d0[4 * b].absorbing {
+            assert_eq!(d0[4 * b + 1].state, d0[4 * b].next_state);
+        }
+    }
+    // The next step starts again from the first start state.
+    kernel.step(&mut rng).unwrap();
+    assert_eq!(kernel.target_samples()[12].state, starts[0]);
+    // The report carries the plan check: the target rewards' spread, a finite shortfall.
+    assert!(report.reward_std > 0.0 && report.plan_shortfall.is_finite());
+}
+
+#[test]
+fn fading_bounds_the_sources_weight_where_the_target_answered() {
+    use super::fading::{FadeCell, Fading};
+    let fx = Fixture::new(&PuddleWorld::sources(Dynamics::Shared));
+    let slices = fx.slices();
+    let valid = config(12).validate().unwrap();
+    let run = |fading: Option<f64>| {
+        let sources = SourceData::new(&slices, &fx.posteriors).unwrap();
+        let mut storage = std::boxed::Box::new(Storage::new());
+        let mut table = vec![FadeCell::EMPTY; 5 * 5 * 4];
+        let kernel = AdaptiveAwfqi::new(
+            valid,
+            grid(),
+            sources,
+            &fx.means,
+            rows(),
+            PuddleWorld::target(Dynamics::Shared),
+            &mut *storage,
+        )
+        .unwrap();
+        let mut kernel = match fading {
+            Some(k) => kernel
+                .with_fading(
+                    Fading {
+                        pseudo_records: k,
+                        cells: 5,
+                    },
+                    &mut table,
+                )
+                .unwrap(),
+            None => kernel,
+        };
+        kernel.step(&mut ChaCha8Rng::seed_from_u64(5)).unwrap();
+        (
+            kernel.target_samples().to_vec(),
+            kernel.reward_weights().to_vec(),
+        )
+    };
+    let (_, plain) = run(None);
+    let (d0, faded) = run(Some(0.5));
+    // In every cell (5 per axis, per action) with a target record, the source weights of
+    // the last re-plan sum to at most 0.5.
+    let axis = |x: f64| ((x / 2.0) as usize).min(4);
+    let cell = |s: [f64; 2], a: usize| (a * 5 + axis(s[0])) * 5 + axis(s[1]);
+    let records: Vec<_> = slices.iter().flat_map(|s| s.iter()).collect();
+    let mut answered_with_sources = 0;
+    for r in &d0 {
+        let c = cell(r.state, r.action);
+        let mine: Vec<usize> = (0..records.len())
+            .filter(|&i| cell(records[i].state, records[i].action) == c)
+            .collect();
+        let sum: f64 = mine.iter().map(|&i| faded[i]).sum();
+        assert!(sum <= 0.5 + 1e-9, "cell {c}: {sum}");
+        answered_with_sources += usize::from(!mine.is_empty());
+    }
+    assert!(answered_with_sources > 0);
+    // Fading only lowers weights: in all, the sources weigh less than without it.
+    assert!(faded.iter().sum::<f64>() < plain.iter().sum::<f64>());
 }

@@ -63,6 +63,13 @@ pub struct StepReport<T, const I: usize> {
     pub ws_discarded: usize,
     /// Source records whose transition weight reached the cap `w_max`.
     pub ws_capped: usize,
+    /// How far the greedy verification rollouts of the step's last verified plan fell
+    /// short of what its Q-function promised, per discounted rollout step
+    /// ([`crate::adaptive::PlanCheck::shortfall`]; 0 for learners that do not verify).
+    pub plan_shortfall: T,
+    /// The standard deviation of the target's rewards in `D₀` (the shortfall's unit; 0 for
+    /// learners that do not verify).
+    pub reward_std: T,
 }
 
 /// Below this share of the source records, a weights' effective sample size counts as
@@ -119,6 +126,17 @@ pub enum Warning<T> {
         /// How many fits of the step.
         fits: usize,
     },
+    /// The step's last verified plan delivered, along its greedy verification rollouts,
+    /// less than its Q-function promised by more than
+    /// [`SHORTFALL_LIMIT`](crate::adaptive::safeguard::SHORTFALL_LIMIT) standard deviations
+    /// of the target's rewards per step: it valued where it went from records the target
+    /// contradicts, and its greedy policy may be poor.
+    PlanVerifiedShort {
+        /// The shortfall per discounted rollout step.
+        shortfall: T,
+        /// The standard deviation of the target's rewards.
+        reward_std: T,
+    },
 }
 
 impl<T: Real> fmt::Display for Warning<T> {
@@ -159,13 +177,25 @@ impl<T: Real> fmt::Display for Warning<T> {
                  a worse condition than the conditioning policy trusts; a larger noise \
                  floor (the noise variance's lower bound) avoids it"
             ),
+            Warning::PlanVerifiedShort {
+                shortfall,
+                reward_std,
+            } => write!(
+                f,
+                "the greedy policy verified short of its promise: {} per step below its \
+                 Q-function's values (target reward std {}); it relies on source records \
+                 the target contradicts where it goes: more queries a step, or more \
+                 verification (AdaptiveConfig::safeguard), may be needed",
+                crate::error::Number(shortfall.to_f64()),
+                crate::error::Number(reward_std.to_f64()),
+            ),
         }
     }
 }
 
 impl<T: Real, const I: usize> StepReport<T, I> {
     /// The warnings of this step, in a fixed order (reward weights, transition weights,
-    /// GP), without allocating.
+    /// GP, verified plan), without allocating.
     ///
     /// ```
     /// # use awfqi::thesis::{StepReport, Warning};
@@ -181,7 +211,7 @@ impl<T: Real, const I: usize> StepReport<T, I> {
         let share = |x: f64| x / records.max(1) as f64;
         let collapsed = |effective: T| records > 0 && share(effective.to_f64()) < COLLAPSED_SHARE;
         let discarded = |count: usize| records > 0 && share(count as f64) > DISCARDED_SHARE;
-        let mut list = [None; 5];
+        let mut list = [None; 6];
         if collapsed(self.wr_source_eff) {
             list[0] = Some(Warning::WeightsCollapsed {
                 weights: Weights::Reward,
@@ -217,6 +247,13 @@ impl<T: Real, const I: usize> StepReport<T, I> {
                 fits: self.gp_refused_fits,
             });
         }
+        let limit = T::from_f64(crate::adaptive::safeguard::SHORTFALL_LIMIT);
+        if self.reward_std > T::ZERO && self.plan_shortfall > limit * self.reward_std {
+            list[5] = Some(Warning::PlanVerifiedShort {
+                shortfall: self.plan_shortfall,
+                reward_std: self.reward_std,
+            });
+        }
         Warnings { list, next: 0 }
     }
 }
@@ -224,7 +261,7 @@ impl<T: Real, const I: usize> StepReport<T, I> {
 /// The warnings of a [`StepReport`], an iterator over [`Warning`]s held inline.
 #[derive(Debug, Clone)]
 pub struct Warnings<T> {
-    list: [Option<Warning<T>>; 5],
+    list: [Option<Warning<T>>; 6],
     next: usize,
 }
 
@@ -271,7 +308,33 @@ mod tests {
             ws_source_eff: 700.0,
             ws_discarded: 0,
             ws_capped: 0,
+            plan_shortfall: 0.1,
+            reward_std: 1.0,
         }
+    }
+
+    #[test]
+    fn a_plan_short_of_its_promise_is_named() {
+        let mut r = healthy();
+        r.plan_shortfall = 0.6;
+        let w: Vec<_> = r.warnings().collect();
+        assert_eq!(
+            w,
+            [Warning::PlanVerifiedShort {
+                shortfall: 0.6,
+                reward_std: 1.0
+            }]
+        );
+        assert!(
+            w[0].to_string()
+                .starts_with("the greedy policy verified short")
+        );
+        r.plan_shortfall = 0.5;
+        assert_eq!(r.warnings().count(), 0);
+        // Learners that do not verify report a zero std: never a warning.
+        r.plan_shortfall = 5.0;
+        r.reward_std = 0.0;
+        assert_eq!(r.warnings().count(), 0);
     }
 
     #[test]

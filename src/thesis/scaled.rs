@@ -56,13 +56,16 @@ const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_7;
 /// - the rewards' mean `r̄`, variance `σ²_r` and second moment `m₂ = r̄² + σ²_r` (the scale
 ///   of what a zero-mean GP must explain);
 /// - a **local noise** `ν` of the rewards and of each next-state coordinate: for each
-///   record, the nearest record of the same source and action (distance in units of the
-///   spans), and `ν = median(Δ²) / (2 · 0.4549)` over those pairs' differences `Δ` — the
-///   noise variance for Gaussian noise (`Δ²/2ν` is then χ²₁, median 0.4549), plus what the
-///   output varies over the distance to a neighbour; the median keeps a jump (a puddle's
-///   edge, a flood threshold) from dominating it. Three passes of O(n²/A) distance
-///   computations per source and output, once, in no memory (a microcontroller measures
-///   700 records of a 3-D plant in well under a second).
+///   record, a linear fit to its `min(2(D + 1), 16)` nearest records of the same source and
+///   action (distance in units of the spans) and the record's residual `ε` from it, scaled
+///   by the fit's own variance at the record (`ε²/(1 + h)`, variance `ν` for Gaussian
+///   noise); `ν = median(ε²/(1 + h)) / 0.4549` (the median of χ²₁). The fit removes what
+///   the output varies between neighbours to first order (a slope, the state carried into
+///   the next state), which in four and more dimensions, where neighbours are far apart, is
+///   most of a neighbour difference; curvature over that distance remains. With fewer than
+///   `D + 2` such records the nearest one's difference `Δ` stands in (`Δ²/2`). The median
+///   keeps a jump (a puddle's edge, a flood threshold) from dominating it. Three passes of
+///   O(n²/A) distance computations per source and output, once, in no memory.
 ///
 /// **The rules** ([`AwfqiConfig::scaled`]):
 /// - every GP input `i` (each state coordinate, then the action): length-scale start
@@ -338,37 +341,35 @@ impl<T: Real, const I: usize> AwfqiConfig<T, I> {
 /// Bins of each of the two histogram passes that locate the median.
 const BINS: usize = 128;
 
-/// The local noise `median(Δ²)/(2·0.4549)` of `output` over each record's nearest record of
-/// the same source and action (distance in units of `span`); 0 without any pair.
+/// Most neighbours of the local linear fit (see [`local_residual`]).
+const MAX_NEIGHBOURS: usize = 16;
+
+/// The local noise of `output`: the median over the records of `ε²/(1 + h)`, divided by
+/// 0.4549 (the median of χ²₁), with `ε` the record's output minus a linear fit to its
+/// `min(2(D + 1), 16)` nearest records of the same source and action (distance in units
+/// of `span`) and `h` that fit's variance at the record relative to the noise
+/// ([`local_residual`]); where a record has fewer than `D + 2` such neighbours, the
+/// difference `Δ` to its nearest one (`ε²/(1 + h)` replaced by `Δ²/2`). The fit removes
+/// what the output varies over the distance to the neighbours (a slope, or the state
+/// carried into the next state), which in four and more dimensions, where neighbours are
+/// far apart, is most of a neighbour difference. 0 without any neighbour.
 ///
-/// Nothing is stored: the median is located by two histogram passes over the pairs, the
-/// first over `log₂(Δ²/max)` in half-octave bins (64 octaves; smaller values in the first
-/// bin), the second linear inside the bin that holds the median, whose midpoint is taken
-/// (relative error below 0.3 %). Three passes over the pairs in all.
+/// Nothing is stored: the median is located by two histogram passes over the records,
+/// the first over `log₂(x/max)` in half-octave bins (64 octaves; smaller values in the
+/// first bin), the second linear inside the bin that holds the median, whose midpoint is
+/// taken (relative error below 0.3 %). Three passes over the records in all.
 fn local_noise<T: Real, const D: usize>(
     sources: &[&[Transition<[T; D], T>]],
     span: &[T; D],
     output: impl Fn(&Transition<[T; D], T>) -> T,
 ) -> T {
-    // The squared output difference of every record to its nearest neighbour.
+    // Twice each record's noise estimate (so that the median is that of `Δ²` for a pair,
+    // whose half is the noise variance).
     let visit = |f: &mut dyn FnMut(T)| {
         for source in sources {
             for (i, r) in source.iter().enumerate() {
-                let mut best: Option<(T, T)> = None;
-                for (j, q) in source.iter().enumerate() {
-                    if i == j || q.action != r.action {
-                        continue;
-                    }
-                    let mut d2 = T::ZERO;
-                    for ((&a, &b), &s) in r.state.iter().zip(&q.state).zip(span) {
-                        d2 += ((a - b) / s).squared();
-                    }
-                    if best.is_none_or(|(bd, _)| d2 < bd) {
-                        best = Some((d2, (output(r) - output(q)).squared()));
-                    }
-                }
-                if let Some((_, delta2)) = best {
-                    f(delta2);
+                if let Some(x) = local_residual(source, i, r, span, &output) {
+                    f(x);
                 }
             }
         }
@@ -435,6 +436,163 @@ fn local_noise<T: Real, const D: usize>(
     median / T::from_f64(2.0 * CHI2_1_MEDIAN)
 }
 
+/// Twice the noise estimate of record `i` (`r`) of `source`: `2ε²/(1 + h)` from a linear
+/// fit to its nearest records of the same action, or `Δ²` to the nearest one where there
+/// are too few for a fit ([`local_noise`]); `None` without any neighbour.
+///
+/// The fit is centred least squares on the `K` neighbours' offsets `xⱼ` from `r` (in units
+/// of `span`): slope `g = S⁻¹ Σ (xⱼ − x̄)(yⱼ − ȳ)` with `S = Σ (xⱼ − x̄)(xⱼ − x̄)ᵀ`,
+/// prediction at `r` (offset 0) `ŷ = ȳ − g·x̄`, whose error has variance `ν(1/K + x̄ᵀS⁻¹x̄)`;
+/// so `ε = y − ŷ` has variance `ν(1 + h)`, `h = 1/K + x̄ᵀS⁻¹x̄`.
+fn local_residual<T: Real, const D: usize>(
+    source: &[Transition<[T; D], T>],
+    i: usize,
+    r: &Transition<[T; D], T>,
+    span: &[T; D],
+    output: &impl Fn(&Transition<[T; D], T>) -> T,
+) -> Option<T> {
+    let k = (2 * (D + 1)).min(MAX_NEIGHBOURS);
+    // The k nearest, sorted by distance: (squared distance, index).
+    let mut near = [(T::INFINITY, usize::MAX); MAX_NEIGHBOURS];
+    let mut found = 0usize;
+    let offset = |q: &Transition<[T; D], T>| {
+        let mut x = [T::ZERO; D];
+        for ((o, (&a, &b)), &s) in x.iter_mut().zip(q.state.iter().zip(&r.state)).zip(span) {
+            *o = (a - b) / s;
+        }
+        x
+    };
+    for (j, q) in source.iter().enumerate() {
+        if i == j || q.action != r.action {
+            continue;
+        }
+        let d2 = offset(q).iter().fold(T::ZERO, |a, &x| a + x * x);
+        let slots = near.get_mut(..k)?;
+        if found < k || slots.last().is_some_and(|&(far, _)| d2 < far) {
+            // Insert in order, dropping the farthest.
+            let mut item = (d2, j);
+            for slot in slots.iter_mut() {
+                if item.0 < slot.0 {
+                    core::mem::swap(slot, &mut item);
+                }
+            }
+            found = (found + 1).min(k);
+        }
+    }
+    let y = output(r);
+    let (_, nearest) = *near.first()?;
+    let nearest = source.get(nearest)?;
+    if found < D + 2 {
+        return Some((y - output(nearest)).squared());
+    }
+    let members = near.get(..found)?;
+    let kt = T::from_usize(found);
+    let (mut mean_x, mut mean_y) = ([T::ZERO; D], T::ZERO);
+    for &(_, j) in members {
+        let q = source.get(j)?;
+        for (m, x) in mean_x.iter_mut().zip(offset(q)) {
+            *m += x / kt;
+        }
+        mean_y += output(q) / kt;
+    }
+    let mut gram = [[T::ZERO; D]; D];
+    let mut cross = [T::ZERO; D];
+    for &(_, j) in members {
+        let q = source.get(j)?;
+        let x = offset(q);
+        let dy = output(q) - mean_y;
+        for (a, row) in gram.iter_mut().enumerate() {
+            let xa = x.get(a).copied().unwrap_or(T::ZERO) - mean_x.get(a).copied()?;
+            if let Some(c) = cross.get_mut(a) {
+                *c += xa * dy;
+            }
+            for (b, cell) in row.iter_mut().enumerate() {
+                let xb = x.get(b).copied().unwrap_or(T::ZERO) - mean_x.get(b).copied()?;
+                *cell += xa * xb;
+            }
+        }
+    }
+    // A ridge of 10⁻⁶ of the mean diagonal keeps a flat neighbourhood solvable.
+    let trace = (0..D).fold(T::ZERO, |t, a| {
+        t + gram
+            .get(a)
+            .and_then(|row| row.get(a))
+            .copied()
+            .unwrap_or(T::ZERO)
+    });
+    let ridge = (trace / T::from_usize(D.max(1))) * T::from_f64(1e-6) + T::MIN_POSITIVE;
+    for (a, row) in gram.iter_mut().enumerate() {
+        if let Some(cell) = row.get_mut(a) {
+            *cell += ridge;
+        }
+    }
+    let chol = cholesky(gram)?;
+    let slope = solve(&chol, cross);
+    let at_mean = solve(&chol, mean_x);
+    let fit = mean_y
+        - slope
+            .iter()
+            .zip(&mean_x)
+            .fold(T::ZERO, |a, (&g, &m)| a + g * m);
+    let leverage = T::ONE / kt
+        + mean_x
+            .iter()
+            .zip(&at_mean)
+            .fold(T::ZERO, |a, (&m, &z)| a + m * z);
+    let e = y - fit;
+    let x = T::from_f64(2.0) * e.squared() / (T::ONE + leverage);
+    x.is_finite().then_some(x)
+}
+
+/// The lower Cholesky factor of a symmetric positive-definite `a`; `None` when a pivot is
+/// not positive.
+fn cholesky<T: Real, const D: usize>(a: [[T; D]; D]) -> Option<[[T; D]; D]> {
+    let mut l = [[T::ZERO; D]; D];
+    for i in 0..D {
+        for j in 0..=i {
+            let mut sum = *a.get(i)?.get(j)?;
+            for k in 0..j {
+                sum -= *l.get(i)?.get(k)? * *l.get(j)?.get(k)?;
+            }
+            if i == j {
+                if !sum.is_finite() || sum <= T::ZERO {
+                    return None;
+                }
+                *l.get_mut(i)?.get_mut(j)? = sum.sqrt();
+            } else {
+                let d = *l.get(j)?.get(j)?;
+                *l.get_mut(i)?.get_mut(j)? = sum / d;
+            }
+        }
+    }
+    Some(l)
+}
+
+/// `x` with `L Lᵀ x = b` for a lower Cholesky factor `l` with a positive diagonal.
+fn solve<T: Real, const D: usize>(l: &[[T; D]; D], b: [T; D]) -> [T; D] {
+    let at = |i: usize, j: usize| l.get(i).and_then(|r| r.get(j)).copied().unwrap_or(T::ONE);
+    let mut y = b;
+    for i in 0..D {
+        let mut sum = y.get(i).copied().unwrap_or(T::ZERO);
+        for k in 0..i {
+            sum -= at(i, k) * y.get(k).copied().unwrap_or(T::ZERO);
+        }
+        if let Some(v) = y.get_mut(i) {
+            *v = sum / at(i, i);
+        }
+    }
+    for i in (0..D).rev() {
+        let mut sum = y.get(i).copied().unwrap_or(T::ZERO);
+        for k in i + 1..D {
+            sum -= at(k, i) * y.get(k).copied().unwrap_or(T::ZERO);
+        }
+        if let Some(v) = y.get_mut(i) {
+            *v = sum / at(i, i);
+        }
+    }
+    y
+}
+
 /// The first bin at which the running count reaches `rank`, and the count before it.
 fn median_bin(histogram: &[usize], rank: usize) -> (usize, usize) {
     let mut before = 0usize;
@@ -465,29 +623,57 @@ mod tests {
         }
     }
 
-    /// The nearest-neighbour squared differences, by brute force with a sort: the median
-    /// the histogram passes must find.
+    /// Twice each record's noise estimate by brute force (all same-action neighbours
+    /// sorted, the nearest 6 fitted by a 2 × 2 inverse, the nearest difference with fewer
+    /// than 4), sorted: the median the histogram passes must find.
     fn brute_median(sources: &[&[Transition<[f64; 2], f64>]], span: [f64; 2]) -> f64 {
         let mut all = Vec::new();
         for s in sources {
             for (i, r) in s.iter().enumerate() {
-                let best = s
+                let mut near: Vec<(f64, [f64; 2], f64)> = s
                     .iter()
                     .enumerate()
                     .filter(|&(j, q)| j != i && q.action == r.action)
                     .map(|(_, q)| {
-                        let d2: f64 = (0..2)
-                            .map(|k| ((r.state[k] - q.state[k]) / span[k]).powi(2))
-                            .sum();
-                        (d2, (r.reward - q.reward).powi(2))
+                        let x = [
+                            (q.state[0] - r.state[0]) / span[0],
+                            (q.state[1] - r.state[1]) / span[1],
+                        ];
+                        (x[0] * x[0] + x[1] * x[1], x, q.reward)
                     })
-                    .fold(None, |b: Option<(f64, f64)>, x| match b {
-                        Some(b) if b.0 <= x.0 => Some(b),
-                        _ => Some(x),
-                    });
-                if let Some((_, delta2)) = best {
-                    all.push(delta2);
+                    .collect();
+                near.sort_by(|a, b| a.0.total_cmp(&b.0));
+                if near.is_empty() {
+                    continue;
                 }
+                if near.len() < 4 {
+                    all.push((r.reward - near[0].2).powi(2));
+                    continue;
+                }
+                near.truncate(6);
+                let k = near.len() as f64;
+                let mx = [0, 1].map(|d| near.iter().map(|n| n.1[d]).sum::<f64>() / k);
+                let my = near.iter().map(|n| n.2).sum::<f64>() / k;
+                let (mut sxx, mut sxy, mut syy, mut bx, mut by) = (0.0, 0.0, 0.0, 0.0, 0.0);
+                for n in &near {
+                    let (u, v, w) = (n.1[0] - mx[0], n.1[1] - mx[1], n.2 - my);
+                    sxx += u * u;
+                    sxy += u * v;
+                    syy += v * v;
+                    bx += u * w;
+                    by += v * w;
+                }
+                let det = sxx * syy - sxy * sxy;
+                let inv = [[syy / det, -sxy / det], [-sxy / det, sxx / det]];
+                let g = [
+                    inv[0][0] * bx + inv[0][1] * by,
+                    inv[1][0] * bx + inv[1][1] * by,
+                ];
+                let fit = my - g[0] * mx[0] - g[1] * mx[1];
+                let h = 1.0 / k
+                    + mx[0] * (inv[0][0] * mx[0] + inv[0][1] * mx[1])
+                    + mx[1] * (inv[1][0] * mx[0] + inv[1][1] * mx[1]);
+                all.push(2.0 * (r.reward - fit).powi(2) / (1.0 + h));
             }
         }
         all.sort_by(f64::total_cmp);
@@ -527,7 +713,7 @@ mod tests {
     }
 
     #[test]
-    fn the_local_noise_is_the_median_of_the_neighbours_differences() {
+    fn the_local_noise_is_the_median_of_the_local_fits_residuals() {
         // Irregular states and rewards: the histogram passes find the sorted median.
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let make = |rng: &mut ChaCha8Rng, n: usize| -> Vec<Transition<[f64; 2], f64>> {
@@ -567,10 +753,10 @@ mod tests {
             "{}",
             scales.reward_noise
         );
-        // x' = x + 1 exactly: the next states differ only by the neighbours' distance
-        // (about 1/2000 apart), y' not at all.
-        assert!(scales.next_state_noise[0] < 1e-5);
-        assert_eq!(scales.next_state_noise[1], 0.0);
+        // x' = x + 1 exactly and y' constant: a local linear fit explains both up to
+        // rounding.
+        assert!(scales.next_state_noise[0] < 1e-12);
+        assert!(scales.next_state_noise[1] < 1e-12);
     }
 
     #[test]
@@ -644,6 +830,62 @@ mod tests {
         assert_eq!(config.subset, thesis.subset);
         assert_eq!(config.noise_subtraction, thesis.noise_subtraction);
         config.validate().unwrap();
+    }
+
+    /// A 4-D pump-and-tank plant's logs: two tank levels and two flows in [0, 1], three
+    /// pump settings; next states drift smoothly with noise of variance `0.05² = 0.0025`
+    /// on every coordinate, rewards are a smooth tracking cost with noise of variance
+    /// `0.02² = 0.0004`. Three sources of 400 records from uniform states.
+    fn four_d_logs() -> Vec<Vec<Transition<[f64; 4], f64>>> {
+        let mut rng = ChaCha8Rng::seed_from_u64(40);
+        (0..3)
+            .map(|k| {
+                (0..400)
+                    .map(|i| {
+                        let s = [(); 4].map(|_| crate::rng::uniform::<f64, _>(&mut rng));
+                        let a = i % 3;
+                        let pump = 0.5 * a as f64 - 0.5;
+                        let drift = [
+                            0.1 * s[2] - 0.05 * s[0] + 0.05 * pump,
+                            0.05 * s[0] - 0.1 * s[3] + 0.02 * k as f64,
+                            0.2 * (pump - s[2]),
+                            0.1 * (s[0] - s[1]) - 0.05 * s[3],
+                        ];
+                        let mut next = s;
+                        for (n, d) in next.iter_mut().zip(drift) {
+                            *n += d + 0.05 * crate::rng::standard_normal::<f64, _>(&mut rng);
+                        }
+                        let cost = 0.5 * (s[0] - 0.6).powi(2)
+                            + 0.3 * (s[1] - 0.4).powi(2)
+                            + 0.1 * pump.abs()
+                            + 0.05 * k as f64 * s[2];
+                        Transition {
+                            state: s,
+                            action: a,
+                            reward: -cost + 0.02 * crate::rng::standard_normal::<f64, _>(&mut rng),
+                            next_state: next,
+                            absorbing: false,
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_noise_of_a_four_dimensional_plant_is_measured_within_a_factor_of_two() {
+        let logs = four_d_logs();
+        let slices: Vec<&[Transition<[f64; 4], f64>]> = logs.iter().map(|l| &l[..]).collect();
+        let scales = SourceScales::measure(&slices).unwrap();
+        let within = |got: f64, truth: f64| got > truth / 2.0 && got < truth * 2.0;
+        assert!(
+            within(scales.reward_noise, 0.0004),
+            "reward noise {}",
+            scales.reward_noise
+        );
+        for (k, &nu) in scales.next_state_noise.iter().enumerate() {
+            assert!(within(nu, 0.0025), "next-state noise {k}: {nu}");
+        }
     }
 
     #[test]

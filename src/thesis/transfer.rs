@@ -201,6 +201,8 @@ where
             ws_source_eff: T::from_usize(self.sources.len()),
             ws_discarded: 0,
             ws_capped: 0,
+            plan_shortfall: T::ZERO,
+            reward_std: T::ZERO,
         }
     }
 }

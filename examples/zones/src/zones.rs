@@ -7,11 +7,13 @@
 //! the crate's own `awfqi::env::Zones`, whose source file shows how one is written), the
 //! sources' scales measured, the recommended adaptive kernel on the scaled settings.
 
+use awfqi::adaptive::{FadeCell, Fading};
 use awfqi::env::{Zones, zones_thermostat};
 use awfqi::prelude::{
-    AdaptiveAwfqi, Approximator, EmptyCells, Evaluation, FqiConfig, GenerativeModel, ModelSweep,
-    MultiStartProtocol, PointGrid, RewardModel, RowSet, SampleSet, SourceScales, StepReport,
-    SweepStorage, Transition, evaluate_greedy_multi_start, evaluate_multi_start,
+    AdaptiveAwfqi, AdaptiveConfig, Approximator, EmptyCells, Evaluation, FqiConfig,
+    GenerativeModel, ModelSweep, MultiStartProtocol, PointGrid, RewardModel, RowSet, SampleSet,
+    SourceScales, StepReport, SweepStorage, Transition, evaluate_greedy_multi_start,
+    evaluate_multi_start,
 };
 use awfqi::rand_core::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -162,14 +164,55 @@ fn log_sources<R: Rng>(
     Ok(())
 }
 
+/// How a run spends its target queries: `steps` steps of `budget` queries (at most
+/// [`BUDGET`] a step and `BUDGET · STEPS` in all), verified from every start state of
+/// [`STARTS`] or from the first alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variant {
+    /// Queries per step.
+    pub budget: usize,
+    /// Steps.
+    pub steps: usize,
+    /// Verify from every start state or from `STARTS[0]` alone (the recommended run).
+    pub all_starts: bool,
+}
+
+/// The run the firmware makes: [`STEPS`] steps of [`BUDGET`] queries, verified from the
+/// first start state (verifying from all four was not better on this plant's tuning seeds:
+/// `docs/active-budget.md`).
+pub const RECOMMENDED: Variant = Variant {
+    budget: BUDGET,
+    steps: STEPS,
+    all_starts: false,
+};
+
 /// One run: the sources' logs, the scaled settings, `STEPS` steps of the adaptive kernel on
 /// our building (`on_step` sees each report), FQI on the same target queries, and the three
 /// policies evaluated over the same episodes.
 pub fn learn_and_compare(
     memory: &mut Memory,
     seed: u64,
+    on_step: impl FnMut(&StepReport<f32, { ZONES + 1 }>),
+) -> awfqi::Result<Outcome> {
+    learn_and_compare_with(memory, seed, RECOMMENDED, |_| {}, None, on_step)
+}
+
+/// [`learn_and_compare`] for another [`Variant`], with the settings passed through
+/// `configure` before they are checked and optionally fading source weights with their
+/// table (the host's ablations).
+pub fn learn_and_compare_with(
+    memory: &mut Memory,
+    seed: u64,
+    variant: Variant,
+    configure: impl FnOnce(&mut AdaptiveConfig<f32, ZONES, { ZONES + 1 }>),
+    fading: Option<(Fading<f32>, &mut [FadeCell<f32>])>,
     mut on_step: impl FnMut(&StepReport<f32, { ZONES + 1 }>),
 ) -> awfqi::Result<Outcome> {
+    if variant.budget > BUDGET || variant.budget.saturating_mul(variant.steps) > BUDGET * STEPS {
+        return Err(awfqi::Error::InvalidParameter {
+            parameter: "variant",
+        });
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let Memory {
         sources,
@@ -189,14 +232,27 @@ pub fn learn_and_compare(
         PointGrid::spanning([0.0; ZONES], [1.0; ZONES], 0.1)?,
         ACTIONS,
     )?;
-    let mut kernel = AdaptiveAwfqi::builder(&plant, &logs, BUDGET, bounds, STARTS[0])
+    let kernel = AdaptiveAwfqi::builder(&plant, &logs, variant.budget, bounds, STARTS[0])
         .horizon(HORIZON)
         .approximator(approximator()?)
         .rows(rows)
-        .configure(|c| c.awfqi.fqi = fqi)
+        .configure(|c| {
+            c.awfqi.fqi = fqi;
+            configure(c);
+        })
         .build(kernel, &mut rng)?;
+    let starts = if variant.all_starts {
+        &STARTS[..]
+    } else {
+        &STARTS[..1]
+    };
+    let kernel = kernel.with_starts(starts)?;
+    let mut kernel = match fading {
+        Some((fading, table)) => kernel.with_fading(fading, table)?,
+        None => kernel,
+    };
     let config = *kernel.config();
-    for _ in 0..STEPS {
+    for _ in 0..variant.steps {
         on_step(&kernel.step(&mut rng)?);
     }
 

@@ -9,10 +9,10 @@ use crate::domains::acrobot;
 
 use awfqi::env::Acrobot;
 
-use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
+use crate::transfer::algorithms::embedded::{EmbeddedDomain, OnPlant};
 
 use super::transfer::{
-    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of,
+    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config,
 };
 
 /// Arguments of `awfqi-harness acrobot`.
@@ -24,10 +24,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let config = Config::resolve(&args.common, args.fixed_gp, &domain, &BASELINES_AND_AWFQI)?;
     // The core's algorithms with settings scaled from the source records.
     let embedded = EmbeddedPath {
-        setup: setup_of::<4, 5>,
+        setup: OnPlant::<Acrobot<f32>, 4, 5>::shared,
         domain: EmbeddedDomain::scaled(&domain, config.iterations),
-        learner: embedded::thesis::with_learner::<Acrobot<f32>, 4, 5>,
-        adaptive_learner: embedded::adaptive::with_learner::<Acrobot<f32>, 4, 5>,
         config: embedded_config(
             &args.embedded,
             &args.adaptive,

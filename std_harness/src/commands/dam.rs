@@ -8,10 +8,10 @@ use crate::domains::dam;
 
 use awfqi::env::Dam;
 
-use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
+use crate::transfer::algorithms::embedded::{EmbeddedDomain, OnPlant};
 
 use super::transfer::{
-    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of,
+    BASELINES_AND_AWFQI, Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config,
 };
 
 /// Arguments of `awfqi-harness dam`.
@@ -23,10 +23,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let config = Config::resolve(&args.common, args.fixed_gp, &domain, &BASELINES_AND_AWFQI)?;
     // The core's algorithms with settings scaled from the source records.
     let embedded = EmbeddedPath {
-        setup: setup_of::<2, 3>,
+        setup: OnPlant::<Dam<f32>, 2, 3>::shared,
         domain: EmbeddedDomain::scaled(&domain, config.iterations),
-        learner: embedded::thesis::with_learner::<Dam<f32>, 2, 3>,
-        adaptive_learner: embedded::adaptive::with_learner::<Dam<f32>, 2, 3>,
         config: embedded_config(
             &args.embedded,
             &args.adaptive,

@@ -10,11 +10,11 @@ use awfqi::env::{Dynamics, PuddleWorld};
 
 use crate::domains::puddle;
 use crate::transfer::algorithms::Algorithm;
-use crate::transfer::algorithms::embedded::{self, EmbeddedDomain};
+use crate::transfer::algorithms::embedded::{EmbeddedDomain, OnPlant};
 
 use super::transfer::{
     AdaptiveArgs, CommonArgs, Config, EmbeddedArgs, EmbeddedPath, FixedGpArgs, SweepDefaults,
-    embedded_config, setup_of,
+    embedded_config,
 };
 
 /// The command's default algorithms, the headline comparison: FQI on the target alone,
@@ -68,10 +68,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let domain = puddle::domain(dynamics);
     let config = Config::resolve(&args.common, FixedGpArgs::default(), &domain, &HEADLINE)?;
     let embedded = EmbeddedPath {
-        setup: setup_of::<2, 3>,
+        setup: OnPlant::<PuddleWorld<f32>, 2, 3>::shared,
         domain: EmbeddedDomain::puddle(),
-        learner: embedded::thesis::with_learner::<PuddleWorld<f32>, 2, 3>,
-        adaptive_learner: embedded::adaptive::with_learner::<PuddleWorld<f32>, 2, 3>,
         config: embedded_config(
             &args.embedded,
             &args.adaptive,

@@ -26,7 +26,7 @@ use awfqi::env::{Tanks, Thermal, Zones};
 use crate::domains::{Domain, unit_box};
 use crate::run_range::RunRange;
 use crate::transfer::algorithms::Algorithm;
-use crate::transfer::algorithms::embedded::{self, EmbeddedDomain, Plant};
+use crate::transfer::algorithms::embedded::{EmbeddedDomain, OnPlant, Plant};
 use crate::transfer::anchors::{self, Estimate, PlanReturn};
 use crate::transfer::domain_data::DomainData;
 use crate::transfer::suite::{
@@ -35,7 +35,7 @@ use crate::transfer::suite::{
 };
 use awfqi::prelude::{Dims, StatePlusAction};
 
-use super::transfer::{Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config, setup_of};
+use super::transfer::{Config, EmbeddedPath, PaperArgs, SweepDefaults, embedded_config};
 
 /// A plant on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -352,10 +352,8 @@ where
 {
     let config = Config::resolve(&args.common, args.fixed_gp, &domain, &[])?;
     let embedded = EmbeddedPath {
-        setup: setup_of::<D, I>,
+        setup: OnPlant::<P, D, I>::shared,
         domain: EmbeddedDomain::scaled(&domain, config.iterations),
-        learner: embedded::thesis::with_learner::<P, D, I>,
-        adaptive_learner: embedded::adaptive::with_learner::<P, D, I>,
         config: embedded_config(
             &args.embedded,
             &args.adaptive,

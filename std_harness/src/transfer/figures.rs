@@ -5,7 +5,11 @@
 
 use crate::plot::{Figure, LegendPosition, Panel, Series, SeriesStyle, XScale};
 
-use super::results::SummaryRow;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use super::algorithms::{Algorithm, Experiment};
+use super::results::{ResultFile, SummaryRow};
 use super::sources::SourceSet;
 use crate::domains::Domain;
 
@@ -250,6 +254,66 @@ pub fn sample_scatter<const D: usize>(
         panel_width: 420,
         height: 460,
     }
+}
+
+/// Writes the experiment's figures in `out`: the learning curves of `curves` under `title`
+/// (`learning_curves`: every algorithm, and FQI with the active ones), one scatter per
+/// algorithm of the first run of `files` that kept its samples (`samples/<algorithm>`) and,
+/// when there are any, FQI's and IWFQI's episodes against every active algorithm's queries
+/// (`target_samples`).
+///
+/// Errors: a figure cannot be written.
+pub fn write_figures<const D: usize>(
+    out: &Path,
+    title: &str,
+    curves: &[(Algorithm, Vec<SummaryRow>)],
+    files: &BTreeMap<Algorithm, ResultFile>,
+    experiment: &Experiment<D>,
+) -> anyhow::Result<()> {
+    let curve = |keep: &dyn Fn(Algorithm) -> bool| -> Vec<(String, usize, Vec<SummaryRow>)> {
+        curves
+            .iter()
+            .filter(|(a, _)| keep(*a))
+            .map(|(a, rows)| (a.name().to_string(), a.color(), rows.clone()))
+            .collect()
+    };
+    let every = curve(&|_| true);
+    let active = curve(&|a| a == Algorithm::Fqi || a.is_active());
+    let clip = experiment.protocol.dynamics.map(|_| PUDDLE_CLIP);
+    learning_curves(title, &every, &active, clip).save(&out.join("learning_curves"))?;
+    let samples: Vec<(Algorithm, String, usize, Vec<[f64; 3]>)> = files
+        .iter()
+        .filter_map(|(a, f)| {
+            let run = f.runs.iter().find(|r| !r.samples.is_empty())?;
+            Some((
+                *a,
+                format!("{} run {}", a.name(), run.run),
+                a.color(),
+                run.samples.clone(),
+            ))
+        })
+        .collect();
+    let dir = out.join("samples");
+    std::fs::create_dir_all(&dir)?;
+    let domain = &*experiment.domain;
+    for (a, name, color, pts) in &samples {
+        sample_scatter(
+            domain,
+            &experiment.sources,
+            &[(name.clone(), *color, pts.clone())],
+        )
+        .save(&dir.join(a.name()))?;
+    }
+    // FQI's and IWFQI's episodes against every active algorithm's queries.
+    let overview: Vec<(String, usize, Vec<[f64; 3]>)> = samples
+        .iter()
+        .filter(|(a, ..)| matches!(a, Algorithm::Fqi | Algorithm::Iwfqi) || a.is_active())
+        .map(|(_, name, color, pts)| (name.clone(), *color, pts.clone()))
+        .collect();
+    if !overview.is_empty() {
+        sample_scatter(domain, &experiment.sources, &overview).save(&out.join("target_samples"))?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -46,6 +46,7 @@ pub mod results;
 pub mod score_tables;
 pub mod sources;
 pub mod suite;
+pub mod summary;
 
 /// Stream purpose: one run of one algorithm.
 pub const RUN: u64 = 1;

@@ -179,6 +179,13 @@ pub struct Diagnostics {
     /// The target reward GP of the step (IWFQI, AWFQI).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reward_gp: Option<super::gp::GpSummary>,
+    /// How far the step's last verified plan fell short of its promise, in standard
+    /// deviations of the target's rewards (the adaptive kernel).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan_shortfall: Option<f64>,
+    /// The step's warnings (`awfqi::StepReport::warnings`), as printed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warnings: Option<Vec<String>>,
     /// Mean discounted return of FQI on this learner's target samples alone, with the
     /// learner's own approximator, evaluated on the same rollouts' noise as the learner
     /// (a paired baseline; `awfqi-adaptive` with `--adaptive-same-samples-fqi`).

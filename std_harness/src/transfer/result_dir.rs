@@ -95,7 +95,8 @@ pub fn result_path(out: &Path, algorithm: Algorithm) -> PathBuf {
 
 impl ResultDir {
     /// Opens `out` (which must exist) for runs `runs` of the configuration `experiment`,
-    /// whose algorithms have the run `parameters`, recorded with `command`.
+    /// whose algorithms have the run `parameters`, recorded with the command line `words`
+    /// without its placement options ([`recorded_command`]).
     ///
     /// Every `<algorithm>.json` in `out` must hold this configuration (and, for the
     /// algorithms of `parameters`, these parameters). Errors: a file that cannot be read or
@@ -108,9 +109,10 @@ impl ResultDir {
         experiment: Value,
         parameters: BTreeMap<Algorithm, Value>,
         runs: &[usize],
-        command: Vec<String>,
+        words: &[String],
         replace: bool,
     ) -> anyhow::Result<(Self, Vec<String>)> {
+        let command = recorded_command(words);
         let _lock = DirLock::acquire(out)?;
         let (present, notes) = inspect(out, &experiment, &parameters, runs, replace)?;
         let dir = Self {
@@ -187,6 +189,20 @@ impl ResultDir {
             }
         }
         Ok(files)
+    }
+
+    /// Takes the directory's lock and loads every result file ([`ResultDir::load`]): the
+    /// runs as they are with no writer half-way, and none until the lock is dropped.
+    ///
+    /// Errors: those of [`ResultDir::lock`] and [`ResultDir::load`].
+    pub fn load_locked(&self) -> anyhow::Result<(DirLock, BTreeMap<Algorithm, ResultFile>)> {
+        let lock = self.lock()?;
+        Ok((lock, self.load()?))
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.out
     }
 
     /// Appends `text` to the log `<out>/<name>` (created with `header` when absent),

@@ -4,7 +4,7 @@
 
 use clap::{Args, ValueEnum};
 
-use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
+use crate::transfer::algorithms::embedded::adaptive::{AdaptiveOptions, GpCapacity};
 use crate::transfer::algorithms::embedded::{
     ADAPTIVE_SWEEP_CELLS, ADAPTIVE_TILES, ADAPTIVE_TILINGS, ADAPTIVE_TREE_NODES, ADAPTIVE_TREES,
     AnchorKnobs, EmbeddedConfig, EmbeddedQ, SweepKnobs, TILINGS, TreeKnobs,
@@ -163,12 +163,32 @@ pub struct AdaptiveArgs {
     /// Depth limit of `--adaptive-q trees` (absent: none; the root is at depth 0).
     #[arg(long)]
     pub adaptive_tree_max_depth: Option<usize>,
-    /// Sub-batches (re-planning points) per step.
-    #[arg(long, default_value_t = AdaptiveOptions::default().sub_batches)]
-    pub adaptive_sub_batches: usize,
-    /// Share of each sub-batch spent verifying the greedy policy.
-    #[arg(long, default_value_t = AdaptiveOptions::default().verify)]
-    pub adaptive_verify: f64,
+    /// Sub-batches (re-planning points) per step (absent: the core's schedule rule from the
+    /// budget per step, `awfqi::adaptive::Schedule::rule`).
+    #[arg(long)]
+    pub adaptive_sub_batches: Option<usize>,
+    /// Share of each sub-batch spent verifying the greedy policy (absent: the schedule
+    /// rule's).
+    #[arg(long)]
+    pub adaptive_verify: Option<f64>,
+    /// Where the verification rollouts start: `all` the domain's distinct evaluation start
+    /// states (each for an equal share of a step's verification), `middle` the middle one
+    /// alone.
+    #[arg(long, value_enum, default_value_t = AdaptiveStartsArg::Middle)]
+    pub adaptive_starts: AdaptiveStartsArg,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short
+    /// of its promise (`AdaptiveConfig::safeguard`).
+    #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().safeguard)]
+    pub adaptive_safeguard: bool,
+    /// Fade the sources' reward weights where the target has records: in a region (a cell
+    /// of `--adaptive-fading-cells` per state coordinate, per action) where the target has
+    /// answered, the source records weigh at most this many records in all (absent: no
+    /// fading; `awfqi::adaptive::Fading`).
+    #[arg(long)]
+    pub adaptive_fading: Option<f64>,
+    /// Cells per state coordinate of the fading's regions.
+    #[arg(long, default_value_t = 10)]
+    pub adaptive_fading_cells: usize,
     /// Score rows by residual surprise.
     #[arg(long, action = clap::ArgAction::Set, default_value_t = AdaptiveOptions::default().surprise)]
     pub adaptive_surprise: bool,
@@ -201,12 +221,21 @@ pub struct AdaptiveArgs {
     pub adaptive_refit_restarts: usize,
     /// Points of the target GPs and of the sources' mean functions (16, 24, 32, 48 or 64).
     #[arg(long, default_value_t = AdaptiveOptions::default().gp_points)]
-    pub adaptive_gp_points: usize,
+    pub adaptive_gp_points: GpCapacity,
     /// Also fit the same approximator on each run's target samples alone after every
     /// step and evaluate it on the same rollouts' noise (`fqi_same_samples` in the step
     /// records): FQI paired with the learner, on the very samples it queried.
     #[arg(long)]
     pub adaptive_same_samples_fqi: bool,
+}
+
+/// Where `awfqi-adaptive`'s verification rollouts start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AdaptiveStartsArg {
+    /// Every distinct evaluation start state of the domain.
+    All,
+    /// The middle one of the evaluation start states alone.
+    Middle,
 }
 
 impl AdaptiveArgs {
@@ -215,6 +244,11 @@ impl AdaptiveArgs {
         AdaptiveOptions {
             sub_batches: self.adaptive_sub_batches,
             verify: self.adaptive_verify,
+            all_starts: self.adaptive_starts == AdaptiveStartsArg::All,
+            safeguard: self.adaptive_safeguard,
+            fading: self
+                .adaptive_fading
+                .map(|kappa| (kappa, self.adaptive_fading_cells)),
             surprise: self.adaptive_surprise,
             uncertainty: self.adaptive_uncertainty,
             decision: self.adaptive_decision,
@@ -419,6 +453,27 @@ mod tests {
             iterations(tiles),
             60,
             "other approximators run FQI's iterations"
+        );
+    }
+
+    fn gp_points(words: &[&str]) -> Result<GpCapacity, clap::Error> {
+        let cli = Cli::try_parse_from([&["cli"], words].concat())?;
+        Ok(cli.adaptive.options().gp_points)
+    }
+
+    #[test]
+    fn the_gp_capacity_is_parsed_once_into_its_variant() {
+        assert_eq!(gp_points(&[]).unwrap(), GpCapacity::P32);
+        for capacity in GpCapacity::ALL {
+            let n = capacity.points().to_string();
+            assert_eq!(gp_points(&["--adaptive-gp-points", &n]).unwrap(), capacity);
+        }
+        let err = gp_points(&["--adaptive-gp-points", "20"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("--adaptive-gp-points") && err.contains("16, 24, 32, 48, 64"),
+            "{err}"
         );
     }
 

@@ -6,38 +6,34 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use awfqi::env::Dynamics;
-use awfqi::prelude::{Dims, StatePlusAction};
+use awfqi::model::Transition;
 use awfqi::weights::NoiseSubtraction;
 use rand_chacha::ChaCha8Rng;
 
 use crate::domains::Domain;
 use crate::transfer::algorithms::embedded::adaptive::AdaptiveOptions;
-use crate::transfer::algorithms::embedded::{
-    EmbeddedConfig, EmbeddedDomain, EmbeddedSetup, GP_POINTS, SharedSetup,
-};
-use crate::transfer::algorithms::{Algorithm, Experiment, ScopedLearner, TransferOptions};
+use crate::transfer::algorithms::embedded::{EmbeddedConfig, EmbeddedDomain, SharedSetup};
+use crate::transfer::algorithms::{Algorithm, Experiment, TransferOptions};
 use crate::transfer::domain_data::DomainData;
 use crate::transfer::protocol::Protocol;
 use crate::transfer::score_tables::{self, ScoreTableData};
-use crate::transfer::sources::SourceSet;
+use crate::transfer::sources::{SourceDataset, SourceSet};
 use crate::transfer::{IDEAL_WEIGHTS, SCORE_TABLE, stream};
 
 use super::Config;
 use super::args::NoiseArg;
 
-/// The core's algorithms on a domain: their set-up, their learners and the configuration
-/// the command line chose.
+/// The core's algorithms on a domain: their set-up on the domain's plant and the
+/// configuration the command line chose.
 #[derive(Debug, Clone, Copy)]
 pub struct EmbeddedPath<const D: usize> {
-    /// Builds the shared set-up from the sources, the configuration (its score table's
-    /// mode and spacing set from the experiment's), the domain and a stream.
+    /// Builds the shared set-up on the domain's plant from the sources, the configuration
+    /// (its score table's mode and spacing set from the experiment's), the domain and a
+    /// stream: [`OnPlant::shared`](crate::transfer::algorithms::embedded::OnPlant::shared)
+    /// of the plant and its dimensions.
     pub setup: SetupFn<D>,
     /// What the core's algorithms need to know of the domain.
     pub domain: EmbeddedDomain<D>,
-    /// Hands one run's `awfqi-embedded` learner to the protocol.
-    pub learner: ScopedLearner<D>,
-    /// Hands one run's `awfqi-adaptive` learner to the protocol.
-    pub adaptive_learner: ScopedLearner<D>,
     /// The approximators.
     pub config: EmbeddedConfig,
     /// `awfqi-adaptive`'s loop.
@@ -50,45 +46,109 @@ pub type SetupFn<const D: usize> = fn(
     EmbeddedConfig,
     EmbeddedDomain<D>,
     &mut ChaCha8Rng,
-) -> anyhow::Result<Arc<dyn SharedSetup>>;
-
-/// [`SetupFn`] of the set-up of state dimension `D` and GP input dimension `I`.
-pub fn setup_of<const D: usize, const I: usize>(
-    sources: &SourceSet<D>,
-    config: EmbeddedConfig,
-    domain: EmbeddedDomain<D>,
-    rng: &mut ChaCha8Rng,
-) -> anyhow::Result<Arc<dyn SharedSetup>>
-where
-    Dims<D, I>: StatePlusAction,
-{
-    let setup = EmbeddedSetup::<GP_POINTS, D, I>::for_domain(sources, config, domain, rng)?;
-    Ok(Arc::new(setup))
-}
+) -> anyhow::Result<Arc<dyn SharedSetup<D>>>;
 
 /// Source data generated earlier in this process, by what determines them (domain, seed,
 /// generation, GP options): the same data, so a process that runs one domain at several
-/// schedules (`awfqi-harness suite`) generates them once.
-static GENERATED: std::sync::Mutex<Vec<(String, Box<dyn std::any::Any + Send>)>> =
-    std::sync::Mutex::new(Vec::new());
+/// schedules (`awfqi-harness suite`) generates them once. States are kept as slices, so one
+/// cache serves every state dimension and a set comes back only at the dimension it has.
+static GENERATED: std::sync::Mutex<Vec<Generated>> = std::sync::Mutex::new(Vec::new());
+
+/// A record's state and next state, whatever the dimension.
+type StatePair = (Vec<f64>, Vec<f64>);
+
+/// One cached set: its key, the set without states, and each source's states.
+type Generated = (String, SourceSet<0>, Vec<Vec<StatePair>>);
+
+/// `set` with its states moved out as slices (the records keep zero-length states).
+fn erase<const D: usize>(set: &SourceSet<D>) -> (SourceSet<0>, Vec<Vec<StatePair>>) {
+    let states = set
+        .sources
+        .iter()
+        .map(|s| {
+            s.records
+                .iter()
+                .map(|r| (r.state.to_vec(), r.next_state.to_vec()))
+                .collect()
+        })
+        .collect();
+    let sources = set
+        .sources
+        .iter()
+        .map(|s| SourceDataset {
+            times: s.times.clone(),
+            records: s
+                .records
+                .iter()
+                .map(|r| Transition {
+                    state: [],
+                    action: r.action,
+                    reward: r.reward,
+                    next_state: [],
+                    absorbing: r.absorbing,
+                })
+                .collect(),
+            reward: s.reward.clone(),
+            next_state: s.next_state.clone(),
+        })
+        .collect();
+    let origin = set.origin.clone();
+    (SourceSet { sources, origin }, states)
+}
+
+/// The set [`erase`] took apart, if its states have `D` coordinates.
+fn restore<const D: usize>(set: &SourceSet<0>, states: &[Vec<StatePair>]) -> Option<SourceSet<D>> {
+    let sources = set
+        .sources
+        .iter()
+        .zip(states)
+        .map(|(s, pairs)| {
+            let records = s
+                .records
+                .iter()
+                .zip(pairs)
+                .map(|(r, (state, next))| {
+                    Some(Transition {
+                        state: <[f64; D]>::try_from(state.as_slice()).ok()?,
+                        action: r.action,
+                        reward: r.reward,
+                        next_state: <[f64; D]>::try_from(next.as_slice()).ok()?,
+                        absorbing: r.absorbing,
+                    })
+                })
+                .collect::<Option<Vec<_>>>()?;
+            Some(SourceDataset {
+                times: s.times.clone(),
+                records,
+                reward: s.reward.clone(),
+                next_state: s.next_state.clone(),
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some(SourceSet {
+        sources,
+        origin: set.origin.clone(),
+    })
+}
 
 /// The data generated under `key`, from the cache or by `generate`.
 fn generated<const D: usize>(
     key: &str,
     generate: impl FnOnce() -> anyhow::Result<SourceSet<D>>,
 ) -> anyhow::Result<SourceSet<D>> {
-    let cached = |cache: &[(String, Box<dyn std::any::Any + Send>)]| {
+    let cached = GENERATED.lock().ok().and_then(|cache| {
         cache
             .iter()
-            .find(|(k, _)| k == key)
-            .and_then(|(_, set)| set.downcast_ref::<SourceSet<D>>().cloned())
-    };
-    if let Some(set) = GENERATED.lock().ok().and_then(|c| cached(&c)) {
+            .filter(|(k, _, _)| k == key)
+            .find_map(|(_, set, states)| restore(set, states))
+    });
+    if let Some(set) = cached {
         return Ok(set);
     }
     let set = generate()?;
     if let Ok(mut cache) = GENERATED.lock() {
-        cache.push((key.to_string(), Box::new(set.clone())));
+        let (erased, states) = erase(&set);
+        cache.push((key.to_string(), erased, states));
     }
     Ok(set)
 }
@@ -239,8 +299,6 @@ pub fn build_experiment<const D: usize>(
         realistic_table,
         ideal_weights: None,
         embedded: setup,
-        embedded_learner: embedded.as_ref().map(|e| e.learner),
-        adaptive_learner: embedded.as_ref().map(|e| e.adaptive_learner),
         adaptive_options: embedded.map_or_else(AdaptiveOptions::default, |e| e.adaptive),
     };
     experiment.variances()?;
@@ -264,8 +322,20 @@ mod tests {
 
     #[test]
     fn generated_sources_are_computed_once_per_key() {
+        let record = |x: f64| Transition {
+            state: [x, -x, 0.5],
+            action: 2,
+            reward: -x,
+            next_state: [x + 0.1, -x, 0.25],
+            absorbing: x > 1.0,
+        };
         let set = || SourceSet::<3> {
-            sources: Vec::new(),
+            sources: vec![SourceDataset {
+                times: vec![0, 1],
+                records: vec![record(0.3), record(1.7)],
+                reward: vec![awfqi::prelude::Posterior::new(-0.3, 0.1); 2],
+                next_state: Vec::new(),
+            }],
             origin: "generated (seed 7)".into(),
         };
         let mut calls = 0;
@@ -280,5 +350,14 @@ mod tests {
         assert_eq!(get("test: a"), set());
         assert_eq!(get("test: b"), set());
         assert_eq!(calls, 2);
+        // The same key at another dimension is not these data: generated anew.
+        let other = generated::<2>("test: a", || {
+            Ok(SourceSet {
+                sources: Vec::new(),
+                origin: "two".into(),
+            })
+        })
+        .unwrap();
+        assert_eq!(other.origin, "two");
     }
 }

@@ -16,6 +16,9 @@ mod args;
 mod config;
 mod embedded;
 mod experiment;
+mod logs;
+mod plan;
+mod progress;
 mod report;
 mod run;
 
@@ -27,6 +30,7 @@ pub use config::{
 pub use embedded::{
     AdaptiveArgs, AdaptiveQArg, EmbeddedArgs, EmbeddedQArg, SweepDefaults, embedded_config,
 };
-pub use experiment::{EmbeddedPath, SetupFn, build_experiment, setup_of};
-pub use report::TIMING_HEADER;
-pub use run::{ensure_writable, run, run_one};
+pub use experiment::{EmbeddedPath, SetupFn, build_experiment};
+pub use logs::TIMING_HEADER;
+pub use plan::ensure_writable;
+pub use run::{run, run_one};

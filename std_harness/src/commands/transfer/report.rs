@@ -1,46 +1,59 @@
-//! What a transfer command prints and logs besides the result files: the Markdown report,
-//! the per-run progress lines, the wall-time log and the GP-search check.
+//! The report stage of a transfer command: the Markdown report (`report.md`), the figures
+//! and what is printed at the end.
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::time::Instant;
 
 use crate::transfer::algorithms::{Algorithm, Experiment};
+use crate::transfer::figures;
 use crate::transfer::gp::GpSearch;
-use crate::transfer::metrics::{TransferMetrics, markdown_table};
+use crate::transfer::metrics::markdown_table;
 use crate::transfer::protocol;
-use crate::transfer::result_dir::ResultDir;
-use crate::transfer::results::{RunRecord, SummaryRow};
+use crate::transfer::results::ResultFile;
+use crate::transfer::summary::Summary;
 
 use super::Config;
+use super::plan::Plan;
 
-/// `[ 3/40] iwfqi run 2: last step -21.35 (6 steps, 5.3 s); 12 s elapsed`: one finished
-/// run, for output that is not a terminal.
-pub(super) fn progress_line(
-    done: usize,
-    total: usize,
-    algorithm: Algorithm,
-    record: &RunRecord,
-    start: Instant,
-) -> String {
-    let width = total.to_string().len();
-    let last = record
-        .steps
-        .last()
-        .map_or(f64::NAN, |s| s.perf_disc_greedy_mean);
-    format!(
-        "[{done:>width$}/{total}] {} run {}: last step {last:.2} ({} steps, {:.1} s); {:.0} s elapsed",
-        algorithm.name(),
-        record.run,
-        record.steps.len(),
-        record.seconds,
-        start.elapsed().as_secs_f64()
-    )
+/// The report stage: writes `report.md` of `summary` and, unless `--no-plots`, the
+/// figures of `files`, in `--out`; then prints the report, the invocation's `timing`
+/// table, the runs `plan` kept and where the outputs are.
+///
+/// Errors: a write fails.
+pub(super) fn publish<const D: usize>(
+    config: &Config,
+    plan: &Plan<D>,
+    summary: &Summary,
+    files: &BTreeMap<Algorithm, ResultFile>,
+    timing: &str,
+) -> anyhow::Result<()> {
+    let out = &config.out;
+    let experiment = &plan.experiment;
+    let title = format!(
+        "{}, setting {}, B = {}, {} run(s)",
+        title(experiment),
+        config.setting.name(),
+        config.episodes_per_step,
+        files.values().map(|f| f.n_runs).max().unwrap_or(0)
+    );
+    let kept = (!plan.kept.is_empty()).then(|| kept_note(&plan.kept, out));
+    let report = report_markdown(config, experiment, summary);
+    crate::store::write_atomic(&out.join("report.md"), report.as_bytes())?;
+    if !config.args.no_plots {
+        figures::write_figures(out, &title, &summary.curves, files, experiment)?;
+    }
+    println!("{report}");
+    println!("{timing}");
+    if let Some(kept) = kept {
+        println!("{kept}");
+    }
+    println!("outputs in {}", out.display());
+    Ok(())
 }
 
 /// "Kept 3 run(s) already in OUT (fqi: 0, 1; iwfqi: 0) …": the runs skipped because a
 /// result file holds them.
-pub(super) fn kept_note(kept: &BTreeMap<Algorithm, Vec<usize>>, out: &Path) -> String {
+fn kept_note(kept: &BTreeMap<Algorithm, Vec<usize>>, out: &Path) -> String {
     let total: usize = kept.values().map(Vec::len).sum();
     let lists: Vec<String> = kept
         .iter()
@@ -57,7 +70,7 @@ pub(super) fn kept_note(kept: &BTreeMap<Algorithm, Vec<usize>>, out: &Path) -> S
 }
 
 /// "Puddle World, shared dynamics", "Dam", "Acrobot".
-pub(super) fn title<const D: usize>(experiment: &Experiment<D>) -> String {
+fn title<const D: usize>(experiment: &Experiment<D>) -> String {
     match experiment.protocol.dynamics {
         Some(d) => format!(
             "Puddle World, {} dynamics",
@@ -71,49 +84,6 @@ pub(super) fn title<const D: usize>(experiment: &Experiment<D>) -> String {
             name
         }
     }
-}
-
-/// Appends this invocation's wall times to `timing.csv` (`algorithm,run,step,seconds`, one
-/// row per step and one with step 0 for the whole run) and returns a Markdown table of the
-/// mean time per run. Wall times are the only output that differs between identical
-/// invocations, so they stay out of every other file.
-pub(super) fn timing_report(
-    store: &ResultDir,
-    finished: &[(Algorithm, RunRecord)],
-    compute_seconds: f64,
-) -> anyhow::Result<String> {
-    use std::fmt::Write as _;
-    let threads = rayon::current_num_threads();
-    let mut rows = String::new();
-    let mut per_algorithm: BTreeMap<Algorithm, Vec<f64>> = BTreeMap::new();
-    for (a, r) in finished {
-        for s in &r.steps {
-            let _ = writeln!(
-                rows,
-                "{},{},{},{:.3},{threads}",
-                a.name(),
-                r.run,
-                s.step,
-                s.seconds
-            );
-        }
-        let _ = writeln!(rows, "{},{},0,{:.3},{threads}", a.name(), r.run, r.seconds);
-        per_algorithm.entry(*a).or_default().push(r.seconds);
-    }
-    {
-        let _lock = store.lock()?;
-        store.append_log("timing.csv", TIMING_HEADER, &rows)?;
-    }
-    let mut out = String::from("| algorithm | runs | wall time per run (s) |\n|---|---:|---:|\n");
-    for (a, secs) in &per_algorithm {
-        let mean = secs.iter().sum::<f64>() / secs.len() as f64;
-        let _ = writeln!(out, "| {} | {} | {mean:.1} |", a.name(), secs.len());
-    }
-    let _ = writeln!(
-        out,
-        "\nThis invocation: {compute_seconds:.1} s on {threads} thread(s) (runs in parallel; a run uses one thread)."
-    );
-    Ok(out)
 }
 
 /// The GP search of the report's header: the one asked for, else the spec's and those of
@@ -138,12 +108,12 @@ fn search_description<const D: usize>(
 }
 
 /// The Markdown report: per-step means ± s.e. and transfer metrics.
-pub(super) fn report_markdown<const D: usize>(
+fn report_markdown<const D: usize>(
     config: &Config,
     experiment: &Experiment<D>,
-    summaries: &[(Algorithm, Vec<SummaryRow>)],
-    metrics: &[TransferMetrics],
+    summary: &Summary,
 ) -> String {
+    let summaries = &summary.curves;
     use std::fmt::Write as _;
     let p = &experiment.protocol;
     let mut out = String::new();
@@ -197,66 +167,6 @@ pub(super) fn report_markdown<const D: usize>(
         out,
         "\nCells: mean ± standard error across runs of `perf_disc_greedy_mean`.\n"
     );
-    out.push_str(&markdown_table(metrics, config.threshold));
+    out.push_str(&markdown_table(&summary.metrics, summary.threshold));
     out
-}
-
-/// Appends one row per checked fit to `gp_search_check.tsv` (header when it is new).
-pub(super) fn write_search_checks(
-    store: &ResultDir,
-    checks: &[crate::transfer::gp::SearchCheck],
-) -> anyhow::Result<()> {
-    use std::fmt::Write as _;
-    let mut tsv = String::new();
-    for c in checks {
-        let m = &c.comparison;
-        let _ = writeln!(
-            tsv,
-            "{:?}\t{}\t{:.12e}\t{:.12e}\t{:.3e}\t{}\t{}\t{:.3}\t{:.3}",
-            c.search,
-            c.points,
-            m.log_marginal_likelihood,
-            m.other_log_marginal_likelihood,
-            m.relative_difference(),
-            m.factorizations,
-            m.other_factorizations,
-            m.seconds,
-            m.other_seconds
-        );
-    }
-    let _lock = store.lock()?;
-    store.append_log("gp_search_check.tsv", SEARCH_CHECK_HEADER, &tsv)
-}
-
-/// The header of `gp_search_check.tsv`.
-const SEARCH_CHECK_HEADER: &str = "kept\tpoints\tlml_kept\tlml_other\trelative_difference\tfactorizations_kept\tfactorizations_other\tseconds_kept\tseconds_other\n";
-
-/// The header of `timing.csv`.
-pub const TIMING_HEADER: &str = "algorithm,run,step,seconds,threads\n";
-
-/// Prints the largest relative log-marginal-likelihood difference of `gp_search_check.tsv`
-/// and the factorisation and time totals of both searches.
-pub(super) fn summarise_search_checks(out: &std::path::Path) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(out.join("gp_search_check.tsv"))?;
-    let (mut fits, mut worst) = (0usize, 0.0f64);
-    let mut totals = [0.0f64; 4];
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split('\t').collect();
-        let num = |i: usize| {
-            f.get(i)
-                .and_then(|v| v.parse::<f64>().ok())
-                .unwrap_or(f64::NAN)
-        };
-        fits += 1;
-        worst = worst.max(num(4));
-        for (t, i) in totals.iter_mut().zip(5..9) {
-            *t += num(i);
-        }
-    }
-    eprintln!(
-        "GP search check: {fits} fits, largest relative LML difference {worst:.3e}; \
-         factorisations kept {} / other {}; seconds kept {:.1} / other {:.1}",
-        totals[0], totals[1], totals[2], totals[3]
-    );
-    Ok(())
 }

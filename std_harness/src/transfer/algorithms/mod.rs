@@ -249,15 +249,6 @@ impl Default for TransferOptions {
     }
 }
 
-/// A learner that borrows run-long storage (the core's memory and source slices):
-/// the hook allocates the storage in its own frame, builds the learner from the stream and
-/// hands it to the continuation, which runs the protocol on it.
-pub type ScopedLearner<const D: usize> = fn(
-    &Experiment<D>,
-    &mut ChaCha8Rng,
-    &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
-) -> anyhow::Result<()>;
-
 /// Everything the runs of one experiment share (read-only, across threads).
 #[derive(Debug, Clone)]
 pub struct Experiment<const D: usize = 2> {
@@ -277,12 +268,9 @@ pub struct Experiment<const D: usize = 2> {
     pub realistic_table: Option<Arc<ScoreTableData<D>>>,
     /// The ideal weights `(w_r, w_s)` of every source record (IWFQI-ideal), computed once.
     pub ideal_weights: Option<Arc<(Vec<f64>, Vec<f64>)>>,
-    /// The embedded algorithms' shared set-up.
-    pub embedded: Option<Arc<dyn embedded::SharedSetup>>,
-    /// `awfqi-embedded`'s learner on this domain (`None`: not available).
-    pub embedded_learner: Option<ScopedLearner<D>>,
-    /// `awfqi-adaptive`'s learner on this domain (`None`: not available).
-    pub adaptive_learner: Option<ScopedLearner<D>>,
+    /// The embedded algorithms' shared set-up on the domain's plant (`None`: no embedded
+    /// algorithm asked for, or none on this domain).
+    pub embedded: Option<Arc<dyn embedded::SharedSetup<D>>>,
     /// `awfqi-adaptive`'s options.
     pub adaptive_options: embedded::adaptive::AdaptiveOptions,
 }
@@ -424,7 +412,7 @@ impl<const D: usize> Experiment<D> {
                     o["embedded"] = e.parameters(e.config().adaptive_q);
                     // The adaptive algorithm's own GPs, not the set-up's.
                     let a = self.adaptive_options;
-                    o["embedded"]["gp_capacity"] = a.gp_points.into();
+                    o["embedded"]["gp_capacity"] = a.gp_points.points().into();
                     let search = e.gp_search();
                     o["embedded"]["gp_search"] = match a.refit {
                         Some((e, r)) => {
@@ -475,23 +463,23 @@ impl<const D: usize> Experiment<D> {
         rng: &mut ChaCha8Rng,
         f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
-        let embedded = match algorithm {
-            Algorithm::AwfqiEmbedded => Some(self.embedded_learner),
-            Algorithm::AwfqiAdaptive => Some(self.adaptive_learner),
-            _ => None,
-        };
-        if let Some(scoped) = embedded {
-            let scoped = scoped.ok_or_else(|| {
+        let embedded = || {
+            self.embedded.as_deref().ok_or_else(|| {
                 anyhow::anyhow!(
-                    "{} is not available on {}",
+                    "{} is not available on {}: no embedded set-up",
                     algorithm.name(),
                     self.domain.name
                 )
-            })?;
-            return scoped(self, rng, f);
+            })
+        };
+        match algorithm {
+            Algorithm::AwfqiEmbedded => embedded()?.with_thesis_learner(self, rng, f),
+            Algorithm::AwfqiAdaptive => embedded()?.with_adaptive_learner(self, rng, f),
+            _ => {
+                let mut learner = self.learner(algorithm)?;
+                f(learner.as_mut(), rng)
+            }
         }
-        let mut learner = self.learner(algorithm)?;
-        f(learner.as_mut(), rng)
     }
 
     /// A fresh learner of `algorithm` for one run (the embedded ones, which borrow their storage

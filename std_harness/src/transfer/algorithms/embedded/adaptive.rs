@@ -20,9 +20,9 @@ use awfqi::prelude::{
     TreeNode, TreeRecord,
 };
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 
-use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, T, after_step, setup_of};
+use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, RunLearner, T, after_step};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 
@@ -30,10 +30,19 @@ use crate::transfer::protocol::{Diagnostics, Learner};
 /// the result files record them. The defaults are the core's recommended configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AdaptiveOptions {
-    /// Sub-batches per step (re-planning points), ≥ 1.
-    pub sub_batches: usize,
-    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1].
-    pub verify: f64,
+    /// Sub-batches per step (re-planning points), ≥ 1 (`None`: the core's schedule rule).
+    pub sub_batches: Option<usize>,
+    /// Share of each sub-batch spent on greedy verification rollouts, in [0, 1] (`None`:
+    /// the schedule rule's).
+    pub verify: Option<f64>,
+    /// Verify from every distinct evaluation start state of the domain (else from the
+    /// middle one alone).
+    pub all_starts: bool,
+    /// Spend a sub-batch's drawn queries on more verification when its plan verified short.
+    pub safeguard: bool,
+    /// Fading source weights: the pseudo-records `κ` and the cells per state coordinate
+    /// (`None`: off).
+    pub fading: Option<(f64, usize)>,
     /// Score rows by residual surprise.
     pub surprise: bool,
     /// Scale scores by the residual GP's remaining variance.
@@ -52,9 +61,8 @@ pub struct AdaptiveOptions {
     /// Warm refits: likelihood evaluations and restarts of every search after a GP's first
     /// in a run (`None`: the thesis's search every time).
     pub refit: Option<(usize, usize)>,
-    /// Capacity of the target GPs and of the sources' mean functions (16, 24, 32, 48 or
-    /// 64).
-    pub gp_points: usize,
+    /// Capacity of the target GPs and of the sources' mean functions.
+    pub gp_points: GpCapacity,
     /// Also fit the same approximator on the run's target samples alone after every step,
     /// as a paired baseline ([`crate::transfer::protocol::Diagnostics::fqi_same_samples`]);
     /// changes nothing of the learner's own run. Absent from the result files when off.
@@ -64,15 +72,105 @@ pub struct AdaptiveOptions {
 
 /// `awfqi-adaptive`'s GP capacity by default (the recommended configuration,
 /// `docs/embedded-adaptive.md`).
-pub const ADAPTIVE_GP_POINTS: usize = 32;
+pub const ADAPTIVE_GP_POINTS: GpCapacity = GpCapacity::P32;
+
+/// The capacities `awfqi-adaptive`'s target GPs and the sources' mean functions are built
+/// for: the core sizes a GP by a type parameter, so each capacity is a variant run by its
+/// own typed instance ([`with_learner`]), and a capacity not listed here is refused where
+/// the user names it ([`GpCapacity::try_from`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum GpCapacity {
+    /// 16 points.
+    P16,
+    /// 24 points.
+    P24,
+    /// 32 points.
+    P32,
+    /// 48 points.
+    P48,
+    /// 64 points: the shared set-up's own capacity ([`GP_POINTS`]), whose source means it
+    /// reuses.
+    P64,
+}
+
+impl GpCapacity {
+    /// Every capacity, smallest first.
+    pub const ALL: [GpCapacity; 5] = [
+        GpCapacity::P16,
+        GpCapacity::P24,
+        GpCapacity::P32,
+        GpCapacity::P48,
+        GpCapacity::P64,
+    ];
+
+    /// The number of points.
+    pub const fn points(self) -> usize {
+        match self {
+            GpCapacity::P16 => 16,
+            GpCapacity::P24 => 24,
+            GpCapacity::P32 => 32,
+            GpCapacity::P48 => 48,
+            GpCapacity::P64 => GP_POINTS,
+        }
+    }
+}
+
+impl TryFrom<usize> for GpCapacity {
+    type Error = anyhow::Error;
+
+    /// The capacity of `points` points.
+    ///
+    /// Errors: a capacity the harness is not built for, naming those it is.
+    fn try_from(points: usize) -> anyhow::Result<Self> {
+        GpCapacity::ALL
+            .into_iter()
+            .find(|c| c.points() == points)
+            .ok_or_else(|| {
+                let all: Vec<String> = GpCapacity::ALL.iter().map(ToString::to_string).collect();
+                anyhow::anyhow!(
+                    "{points} points is not a GP capacity of awfqi-adaptive: it must be one of {}",
+                    all.join(", ")
+                )
+            })
+    }
+}
+
+impl std::str::FromStr for GpCapacity {
+    type Err = anyhow::Error;
+
+    /// A number of points, as the command line gives it.
+    fn from_str(s: &str) -> anyhow::Result<Self> {
+        let points: usize = s
+            .trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("{s:?} is not a number of points"))?;
+        Self::try_from(points)
+    }
+}
+
+impl std::fmt::Display for GpCapacity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.points())
+    }
+}
+
+impl Serialize for GpCapacity {
+    /// The number of points, as the result files record it.
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_u64(self.points() as u64)
+    }
+}
 
 impl Default for AdaptiveOptions {
     /// The core's [`AdaptiveConfig::recommended`].
     fn default() -> Self {
         let c = AdaptiveConfig::<f64, 2, 3>::recommended(1, [0.0; 2], 1, 0.0, [(0.0, 1.0); 2]);
         Self {
-            sub_batches: c.sub_batches,
-            verify: c.verify,
+            sub_batches: None,
+            verify: None,
+            all_starts: false,
+            safeguard: c.safeguard,
+            fading: None,
             surprise: c.surprise,
             uncertainty: c.uncertainty,
             decision: c.decision,
@@ -116,8 +214,13 @@ where
     );
     c.awfqi = setup.awfqi_config(budget);
     c.awfqi.fqi = setup.config.adaptive_q.fqi(c.awfqi.fqi)?;
-    c.sub_batches = o.sub_batches;
-    c.verify = o.verify as T;
+    if let Some(s) = o.sub_batches {
+        c.sub_batches = s;
+    }
+    if let Some(v) = o.verify {
+        c.verify = v as T;
+    }
+    c.safeguard = o.safeguard;
     c.surprise = o.surprise;
     c.uncertainty = o.uncertainty;
     c.decision = o.decision;
@@ -248,31 +351,43 @@ where
     }
 }
 
-/// Hands a fresh learner for one run of `experiment` on the plant `P` to `f` (the core's
-/// adaptive AWFQI borrows its memory and the set-up for the whole run, so they live in this
-/// frame).
+/// Hands a fresh learner for one run of `experiment` on the plant `P`, over `setup`, to `f`
+/// (the core's adaptive AWFQI borrows its memory and the set-up for the whole run, so they
+/// live in this frame), with the experiment's GP capacity: the set-up's source means at
+/// its own capacity, means fitted afresh at the others ([`fitted_means`]).
+///
+/// Errors: a plant the experiment does not run, those of the core's configuration and
+/// constructor, of the means' fits and of `f`.
 pub fn with_learner<P: Plant<D>, const D: usize, const I: usize>(
+    setup: &EmbeddedSetup<GP_POINTS, D, I>,
     experiment: &Experiment<D>,
     rng: &mut ChaCha8Rng,
-    f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+    f: RunLearner<'_, D>,
 ) -> anyhow::Result<()>
 where
     Dims<D, I>: StatePlusAction,
 {
     match experiment.adaptive_options.gp_points {
-        GP_POINTS => with_learner_of::<P, GP_POINTS, D, I>(experiment, rng, f),
-        16 => with_learner_of::<P, 16, D, I>(experiment, rng, f),
-        24 => with_learner_of::<P, 24, D, I>(experiment, rng, f),
-        32 => with_learner_of::<P, 32, D, I>(experiment, rng, f),
-        48 => with_learner_of::<P, 48, D, I>(experiment, rng, f),
-        n => anyhow::bail!("--adaptive-gp-points {n}: 16, 24, 32, 48 or 64"),
+        GpCapacity::P16 => with_learner_of::<P, 16, D, I>(setup, fitted_means, experiment, rng, f),
+        GpCapacity::P24 => with_learner_of::<P, 24, D, I>(setup, fitted_means, experiment, rng, f),
+        GpCapacity::P32 => with_learner_of::<P, 32, D, I>(setup, fitted_means, experiment, rng, f),
+        GpCapacity::P48 => with_learner_of::<P, 48, D, I>(setup, fitted_means, experiment, rng, f),
+        GpCapacity::P64 => with_learner_of::<P, GP_POINTS, D, I>(
+            setup,
+            |setup, _| Ok(setup.means().to_vec()),
+            experiment,
+            rng,
+            f,
+        ),
     }
 }
 
-/// The sources' reward mean functions of capacity `N`: the set-up's when `N` is its GP
-/// capacity, else fitted here as the set-up fits its own (the published training, an even
-/// spread), from a stream of their own so every run has the same.
-fn means_of<const N: usize, const D: usize, const I: usize>(
+/// The sources' reward mean functions of capacity `N`, fitted as the set-up fits its own
+/// (the published training, an even spread), from a stream of their own so every run has
+/// the same.
+///
+/// Errors: those of [`MeanFunction::fit_rewards`].
+fn fitted_means<const N: usize, const D: usize, const I: usize>(
     setup: &EmbeddedSetup<GP_POINTS, D, I>,
     sources: &[&[Record32<D>]],
 ) -> anyhow::Result<Vec<MeanFunction<T, N, I>>>
@@ -280,20 +395,6 @@ where
     Dims<D, I>: StatePlusAction,
 {
     use rand_core::SeedableRng;
-    if N == GP_POINTS {
-        let means: Vec<MeanFunction<T, N, I>> = setup
-            .means()
-            .iter()
-            .map(|m| {
-                // N == GP_POINTS: the same type.
-                let m: &dyn std::any::Any = m;
-                m.downcast_ref::<MeanFunction<T, N, I>>()
-                    .cloned()
-                    .ok_or_else(|| anyhow::anyhow!("mean function capacity"))
-            })
-            .collect::<anyhow::Result<_>>()?;
-        return Ok(means);
-    }
     let mut rng = ChaCha8Rng::seed_from_u64(N as u64);
     let mut gp = Box::new(Gp::<T, N, I>::empty());
     let mut means = vec![MeanFunction::EMPTY; sources.len()];
@@ -310,16 +411,24 @@ where
     Ok(means)
 }
 
+/// The sources' reward mean functions of capacity `N` for a run over `setup`.
+type MeansOf<const N: usize, const D: usize, const I: usize> =
+    fn(
+        &EmbeddedSetup<GP_POINTS, D, I>,
+        &[&[Record32<D>]],
+    ) -> anyhow::Result<Vec<MeanFunction<T, N, I>>>;
+
 /// [`with_learner`] with target GPs and mean functions of `N` points.
 fn with_learner_of<P: Plant<D>, const N: usize, const D: usize, const I: usize>(
+    setup: &EmbeddedSetup<GP_POINTS, D, I>,
+    means: MeansOf<N, D, I>,
     experiment: &Experiment<D>,
     rng: &mut ChaCha8Rng,
-    f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+    f: RunLearner<'_, D>,
 ) -> anyhow::Result<()>
 where
     Dims<D, I>: StatePlusAction,
 {
-    let setup = setup_of::<GP_POINTS, D, I>(experiment)?;
     let plant = P::target(experiment)?;
     let actions = plant.num_actions();
     let config = config(experiment, setup)?.validate()?;
@@ -400,8 +509,21 @@ where
         Some(spare) => Some((approximator.build(actions, spare.storage())?, fqi)),
         None => None,
     };
-    let means = means_of::<N, D, I>(setup, &sources)?;
+    let means = means(setup, &sources)?;
     let means: &[MeanFunction<T, N, I>] = &means;
+    let starts = verification_starts(experiment, setup);
+    let fading = experiment.adaptive_options.fading.map(|(kappa, cells)| {
+        let f = awfqi::adaptive::Fading {
+            pseudo_records: kappa as T,
+            cells,
+        };
+        let len = cells
+            .saturating_pow(D as u32)
+            .saturating_mul(actions)
+            .min(1 << 20);
+        (f, vec![awfqi::adaptive::FadeCell::EMPTY; len.max(1)])
+    });
+    let mut fade_table = fading.as_ref().map(|(_, t)| t.clone()).unwrap_or_default();
     let adaptive = AdaptiveAwfqi::new(
         config,
         approximator,
@@ -410,11 +532,37 @@ where
         rows,
         plant,
         memory.buffers(),
-    )?;
+    )?
+    .with_starts(&starts)?;
+    let adaptive = match fading {
+        Some((f, _)) => adaptive.with_fading(f, &mut fade_table)?,
+        None => adaptive,
+    };
     let mut learner = AdaptiveLearner {
         adaptive,
         collected: Vec::new(),
         baseline,
     };
     f(&mut learner, rng)
+}
+
+/// Where the verification rollouts start: the domain's distinct evaluation start states
+/// ([`AdaptiveOptions::all_starts`]), else the set-up's start alone.
+fn verification_starts<const N: usize, const D: usize, const I: usize>(
+    experiment: &Experiment<D>,
+    setup: &EmbeddedSetup<N, D, I>,
+) -> Vec<[T; D]> {
+    let mut starts: Vec<[T; D]> = Vec::new();
+    if experiment.adaptive_options.all_starts {
+        for s in &experiment.domain.evaluation_starts {
+            let s = s.map(|x| x as T);
+            if !starts.contains(&s) {
+                starts.push(s);
+            }
+        }
+    }
+    if starts.is_empty() {
+        starts.push(setup.domain.start.map(|x| x as T));
+    }
+    starts
 }

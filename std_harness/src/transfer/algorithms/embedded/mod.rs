@@ -11,17 +11,18 @@
 //! and the FQI approximator each runs ([`EmbeddedQ`]). Budget, steps, evaluation and
 //! records are the protocol's: each is a [`Learner`](crate::transfer::protocol::Learner)
 //! that [`protocol::run`](crate::transfer::protocol::run) drives like every other
-//! algorithm. Every domain runs them: what differs between domains (the plant, the
-//! approximators' box, the score table's grid, the GP and weight settings) is an
-//! [`EmbeddedDomain`].
+//! algorithm. Every domain runs them: what differs between domains (the approximators'
+//! box, the score table's grid, the GP and weight settings) is an [`EmbeddedDomain`], and
+//! the plant with its dimensions is a type the command chooses once ([`OnPlant`]), so the
+//! compiler checks that every learner gets the set-up and plant it was built for.
 
 pub mod adaptive;
 pub mod thesis;
 
-use std::time::Instant;
-
-use std::any::Any;
 use std::fmt::Debug;
+use std::marker::PhantomData;
+use std::sync::Arc;
+use std::time::Instant;
 
 use awfqi::env::{Acrobot, Dam, PUDDLE_ACTIONS, PuddleWorld, Tanks, Thermal, Zones};
 use awfqi::model::GenerativeModel;
@@ -35,7 +36,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::domains::{Domain, Rows};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::gp::GpSummary;
-use crate::transfer::protocol::Diagnostics;
+use crate::transfer::protocol::{Diagnostics, Learner};
 use crate::transfer::score_tables::{GridRows, Mode};
 use crate::transfer::sources::SourceSet;
 
@@ -428,8 +429,9 @@ fn middle_start<const D: usize>(domain: &Domain<D>) -> [f64; D] {
     starts.get(starts.len() / 2).copied().unwrap_or([0.0; D])
 }
 
-/// The target plant of a domain as the core queries it, in `f32`.
-pub trait Plant<const D: usize>: GenerativeModel<T, State = [T; D]> + Sized {
+/// The target plant of a domain as the core queries it, in `f32` (a `'static` type: the
+/// experiment holds the set-up on its plant for every run).
+pub trait Plant<const D: usize>: GenerativeModel<T, State = [T; D]> + Sized + 'static {
     /// The target of `experiment`.
     ///
     /// Errors: an experiment this plant does not run (Puddle World without its dynamics).
@@ -476,34 +478,127 @@ impl Plant<4> for Tanks<T> {
     }
 }
 
-/// The shared set-up as the experiment holds it, whatever its state and GP input
-/// dimensions: what the result files record, and the set-up itself for the learners to
-/// take back ([`SharedSetup::as_any`]).
-pub trait SharedSetup: Debug + Send + Sync {
+/// A continuation that runs the protocol on a learner (the embedded learners borrow their
+/// run's memory and the set-up, so they are handed to it rather than returned).
+pub type RunLearner<'f, const D: usize> =
+    &'f mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>;
+
+/// The core's algorithms of an experiment, whatever the plant and its GP input dimension:
+/// the shared set-up on its plant ([`OnPlant`]), chosen once by the command, so each learner
+/// gets its set-up and plant as the types they are.
+pub trait SharedSetup<const D: usize>: Debug + Send + Sync {
     /// The configuration.
     fn config(&self) -> &EmbeddedConfig;
     /// The fixed parameters of an algorithm of this set-up whose FQI approximator is `q`.
     fn parameters(&self, q: EmbeddedQ) -> serde_json::Value;
     /// How the GPs' hyperparameters are searched.
     fn gp_search(&self) -> String;
-    /// The set-up, for a downcast to its [`EmbeddedSetup`] type.
-    fn as_any(&self) -> &dyn Any;
+    /// Hands a fresh `awfqi-embedded` learner for one run of `experiment` to `f`.
+    ///
+    /// Errors: those of [`thesis::with_learner`] and of `f`.
+    fn with_thesis_learner(
+        &self,
+        experiment: &Experiment<D>,
+        rng: &mut ChaCha8Rng,
+        f: RunLearner<'_, D>,
+    ) -> anyhow::Result<()>;
+    /// Hands a fresh `awfqi-adaptive` learner for one run of `experiment` to `f`.
+    ///
+    /// Errors: those of [`adaptive::with_learner`] and of `f`.
+    fn with_adaptive_learner(
+        &self,
+        experiment: &Experiment<D>,
+        rng: &mut ChaCha8Rng,
+        f: RunLearner<'_, D>,
+    ) -> anyhow::Result<()>;
 }
 
-/// The set-up of `experiment` as an [`EmbeddedSetup`] of state dimension `D` and GP input
-/// dimension `I`.
-///
-/// Errors: no set-up, or one of other dimensions.
-fn setup_of<const N: usize, const D: usize, const I: usize>(
-    experiment: &Experiment<D>,
-) -> anyhow::Result<&EmbeddedSetup<N, D, I>> {
-    experiment
-        .embedded
-        .as_deref()
-        .ok_or_else(|| anyhow::anyhow!("no embedded set-up"))?
-        .as_any()
-        .downcast_ref()
-        .ok_or_else(|| anyhow::anyhow!("the embedded set-up has other dimensions"))
+/// The shared set-up ([`EmbeddedSetup`] of [`GP_POINTS`]-point source GPs, states of `D`
+/// coordinates, GP inputs of `I = D + 1`) for runs on the target plant `P`.
+pub struct OnPlant<P, const D: usize, const I: usize> {
+    setup: EmbeddedSetup<GP_POINTS, D, I>,
+    plant: PhantomData<fn() -> P>,
+}
+
+impl<P, const D: usize, const I: usize> Debug for OnPlant<P, D, I> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OnPlant")
+            .field("setup", &self.setup)
+            .finish()
+    }
+}
+
+impl<P: Plant<D>, const D: usize, const I: usize> OnPlant<P, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    /// The set-up for runs on `P` ([`EmbeddedSetup::for_domain`]).
+    ///
+    /// Errors: those of [`EmbeddedSetup::for_domain`].
+    pub fn new(
+        sources: &SourceSet<D>,
+        config: EmbeddedConfig,
+        domain: EmbeddedDomain<D>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Self> {
+        Ok(Self {
+            setup: EmbeddedSetup::for_domain(sources, config, domain, rng)?,
+            plant: PhantomData,
+        })
+    }
+
+    /// [`OnPlant::new`] as the experiment holds it: the one place a command's choice of
+    /// plant and dimensions becomes a set-up.
+    ///
+    /// Errors: those of [`EmbeddedSetup::for_domain`].
+    pub fn shared(
+        sources: &SourceSet<D>,
+        config: EmbeddedConfig,
+        domain: EmbeddedDomain<D>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Arc<dyn SharedSetup<D>>> {
+        Ok(Arc::new(Self::new(sources, config, domain, rng)?))
+    }
+
+    /// The set-up.
+    pub fn setup(&self) -> &EmbeddedSetup<GP_POINTS, D, I> {
+        &self.setup
+    }
+}
+
+impl<P: Plant<D>, const D: usize, const I: usize> SharedSetup<D> for OnPlant<P, D, I>
+where
+    Dims<D, I>: StatePlusAction,
+{
+    fn config(&self) -> &EmbeddedConfig {
+        &self.setup.config
+    }
+
+    fn parameters(&self, q: EmbeddedQ) -> serde_json::Value {
+        self.setup.parameters(q)
+    }
+
+    fn gp_search(&self) -> String {
+        self.setup.gp_search()
+    }
+
+    fn with_thesis_learner(
+        &self,
+        experiment: &Experiment<D>,
+        rng: &mut ChaCha8Rng,
+        f: RunLearner<'_, D>,
+    ) -> anyhow::Result<()> {
+        thesis::with_learner::<P, D, I>(&self.setup, experiment, rng, f)
+    }
+
+    fn with_adaptive_learner(
+        &self,
+        experiment: &Experiment<D>,
+        rng: &mut ChaCha8Rng,
+        f: RunLearner<'_, D>,
+    ) -> anyhow::Result<()> {
+        adaptive::with_learner::<P, D, I>(&self.setup, experiment, rng, f)
+    }
 }
 
 /// What the embedded path builds once per experiment and shares by all runs (§11.2): the
@@ -756,27 +851,6 @@ where
     }
 }
 
-impl<const N: usize, const D: usize, const I: usize> SharedSetup for EmbeddedSetup<N, D, I>
-where
-    Dims<D, I>: StatePlusAction,
-{
-    fn config(&self) -> &EmbeddedConfig {
-        &self.config
-    }
-
-    fn parameters(&self, q: EmbeddedQ) -> serde_json::Value {
-        EmbeddedSetup::parameters(self, q)
-    }
-
-    fn gp_search(&self) -> String {
-        EmbeddedSetup::gp_search(self)
-    }
-
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-}
-
 fn row_set<'a, const D: usize>(
     config: &EmbeddedConfig,
     domain: &EmbeddedDomain<D>,
@@ -813,6 +887,9 @@ fn after_step<const D: usize, const I: usize>(
         ws_mean: transitions(report.ws_mean),
         ws_eff: transitions(report.ws_eff),
         reward_gp: Some(reward_gp_summary(report)),
+        plan_shortfall: (report.reward_std > 0.0)
+            .then(|| f64::from(report.plan_shortfall / report.reward_std)),
+        warnings: Some(report.warnings().map(|w| w.to_string()).collect()),
         ..Diagnostics::default()
     }
 }
@@ -828,3 +905,6 @@ fn reward_gp_summary<const I: usize>(report: &awfqi::thesis::StepReport<T, I>) -
         log_marginal_likelihood: f64::from(report.gp_log_likelihood),
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -14,7 +14,7 @@ use awfqi::prelude::{
 };
 use rand_chacha::ChaCha8Rng;
 
-use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, T, after_step, setup_of};
+use super::{EmbeddedSetup, GP_POINTS, Plant, Record, Record32, RunLearner, T, after_step};
 use crate::transfer::algorithms::Experiment;
 use crate::transfer::protocol::{Diagnostics, Learner};
 
@@ -165,19 +165,22 @@ where
     }
 }
 
-/// Hands a fresh learner for one run of `experiment` on the plant `P` to `f`: the core's
-/// AWFQI borrows its memory and the source data for the whole run, so they live in this
-/// frame while [`protocol::run`](crate::transfer::protocol::run) drives the learner inside
-/// `f`.
+/// Hands a fresh learner for one run of `experiment` on the plant `P`, over `setup`, to
+/// `f`: the core's AWFQI borrows its memory and the source data for the whole run, so they
+/// live in this frame while [`protocol::run`](crate::transfer::protocol::run) drives the
+/// learner inside `f`.
+///
+/// Errors: a plant the experiment does not run, transition weights without the sources'
+/// next-state posteriors, those of the core's builder and of `f`.
 pub fn with_learner<P: Plant<D>, const D: usize, const I: usize>(
+    setup: &EmbeddedSetup<GP_POINTS, D, I>,
     experiment: &Experiment<D>,
     rng: &mut ChaCha8Rng,
-    f: &mut dyn FnMut(&mut dyn Learner<D>, &mut ChaCha8Rng) -> anyhow::Result<()>,
+    f: RunLearner<'_, D>,
 ) -> anyhow::Result<()>
 where
     Dims<D, I>: StatePlusAction,
 {
-    let setup = setup_of::<GP_POINTS, D, I>(experiment)?;
     let plant = P::target(experiment)?;
     let budget = experiment.budget();
     let sources = setup.source_slices();
