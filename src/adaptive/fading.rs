@@ -11,7 +11,7 @@
 //! approximator.
 //!
 //! The cells' sums live in a caller's table of [`FadeCell`]s
-//! ([`crate::AdaptiveAwfqi::with_fading`]); a table shorter than the grid folds cells
+//! ([`crate::adaptive::AdaptiveAwfqi::with_fading`]); a table shorter than the grid folds cells
 //! together (cell index modulo its length), which merges regions but stays correct in
 //! kind. `cells^D × A` entries of 8 bytes (`f32`) make it exact.
 

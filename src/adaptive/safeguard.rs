@@ -3,7 +3,7 @@
 //! return it delivers. A plan whose rollouts fall well short of its promise learned its
 //! values where it went from records the target contradicts; a step whose last plan
 //! verified so warns ([`crate::thesis::Warning::PlanVerifiedShort`]), and with
-//! [`crate::AdaptiveConfig::safeguard`] the step spends the drawn queries of a sub-batch
+//! [`crate::adaptive::AdaptiveConfig::safeguard`] the step spends the drawn queries of a sub-batch
 //! whose plan verified short on more verification of it, so the next re-plan sees more
 //! of the path the plan actually takes.
 

@@ -354,7 +354,7 @@ where
 /// Hands a fresh learner for one run of `experiment` on the plant `P`, over `setup`, to `f`
 /// (the core's adaptive AWFQI borrows its memory and the set-up for the whole run, so they
 /// live in this frame), with the experiment's GP capacity: the set-up's source means at
-/// its own capacity, means fitted afresh at the others ([`fitted_means`]).
+/// its own capacity, means fitted afresh at the others (`fitted_means`).
 ///
 /// Errors: a plant the experiment does not run, those of the core's configuration and
 /// constructor, of the means' fits and of `f`.

@@ -9,7 +9,7 @@
 //! score-table rows, and one `Gp<f32, 64, 3>` reward GP per source whose posterior means
 //! give the realistic score table (`V_r` only) and the adaptive algorithm's source means;
 //! and the FQI approximator each runs ([`EmbeddedQ`]). Budget, steps, evaluation and
-//! records are the protocol's: each is a [`Learner`](crate::transfer::protocol::Learner)
+//! records are the protocol's: each is a [`Learner`]
 //! that [`protocol::run`](crate::transfer::protocol::run) drives like every other
 //! algorithm. Every domain runs them: what differs between domains (the approximators'
 //! box, the score table's grid, the GP and weight settings) is an [`EmbeddedDomain`], and
