@@ -656,7 +656,10 @@ mod tests {
         let fqi = awfqi::fqi::QStorage::default();
         let (report, evaluation) = adaptive_puddle(memory, fqi, run, 4, |kernel| {
             let d0 = kernel.target_samples();
-            let starts = d0.chunks(4).all(|b| b[0].state == [0.0, 0.0]);
+            // The schedule rule at 12 queries a step: one sub-batch (under 16 queries),
+            // round(0.7 · 12) = 8 verified from the one start, so each step's 12 samples
+            // begin at the start and the path holds 8 states.
+            let starts = d0.chunks(12).all(|b| b[0].state == [0.0, 0.0]);
             let finite = d0.iter().all(|t| {
                 t.reward.is_finite() && t.action < 4 && t.state.iter().all(|x| x.is_finite())
             });
@@ -671,7 +674,7 @@ mod tests {
                 && finite
                 && (total - 1.0).abs() < 1e-5
                 && weights
-                && kernel.path().len() == 9;
+                && kernel.path().len() == 8;
         })
         .unwrap();
         assert!(checked);
