@@ -127,11 +127,10 @@ pub fn fade<'s, T: Real + 's, const D: usize>(
     }
     let kappa = fading.pseudo_records;
     for (r, w) in records.zip(weights.iter_mut()) {
-        if let Some(c) = table.get(at(r))
-            && c.target > T::ZERO
-            && c.source > kappa
-        {
-            *w *= kappa / c.source;
+        if let Some(c) = table.get(at(r)) {
+            if c.target > T::ZERO && c.source > kappa {
+                *w *= kappa / c.source;
+            }
         }
     }
     Ok(())
