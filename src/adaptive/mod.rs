@@ -163,7 +163,7 @@ impl<T: Real, const D: usize, const I: usize> AdaptiveConfig<T, D, I> {
     /// cells per axis with pooled rewards
     /// (`ModelSweep::cube(0.0, 10.0, 12)?.with_rewards(RewardModel::Pooled)`): RAM and
     /// instructions per step measured in `docs/embedded-adaptive.md` (footprint image
-    /// `adaptive_puddle`: 39 884 B; `m4_adaptive`: 1.054·10⁸ instructions for the largest
+    /// `adaptive_puddle`: 40 036 B; `m4_adaptive`: 1.054·10⁸ instructions for the largest
     /// step). `RewardModel::Pooled` assumes a
     /// reward that depends on the state only; otherwise `RewardModel::Backfilled`.
     pub fn recommended(
