@@ -2,8 +2,8 @@
 //!
 //! [`StepReport::warnings`] is an iterator; firmware that keeps the warnings past the
 //! report, queues them for a logger task or serialises them wants a bounded vector of
-//! its own capacity. At most five warnings exist per step (one per kind and weights), so
-//! `N = 5` always suffices; a smaller `N` is refused with a typed error when the step
+//! its own capacity. At most six warnings exist per step (one per kind and weights), so
+//! `N = 6` always suffices; a smaller `N` is refused with a typed error when the step
 //! has more warnings than fit, never cut short.
 //!
 //! ```
@@ -64,6 +64,8 @@ mod tests {
             ws_source_eff: 15.0,
             ws_discarded: 100,
             ws_capped: 0,
+            plan_shortfall: 0.0,
+            reward_std: 0.0,
         }
     }
 
